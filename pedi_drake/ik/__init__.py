@@ -1,0 +1,1 @@
+"""pedi_drake.ik."""
