@@ -76,7 +76,9 @@ def joint_frames(geometry: LegGeometry, q_leg: np.ndarray) -> tuple[list[np.ndar
     R = np.eye(3)
     p = geometry.p_BH.copy()
     positions, rotations = [p.copy()], []
-    for offset_next, axis, angle in zip((geometry.p_HT, geometry.p_TC, geometry.p_CF), geometry.axes, q_leg):
+    for offset_next, axis, angle in zip(
+        (geometry.p_HT, geometry.p_TC, geometry.p_CF), geometry.axes, q_leg, strict=True
+    ):
         R = R @ _axis_rotation(axis, float(angle))
         rotations.append(R.copy())
         p = p + R @ offset_next
