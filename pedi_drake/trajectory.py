@@ -1,0 +1,155 @@
+"""Quintic reference segments (paper 000, Eq. 2): rest-to-rest, zero velocity and acceleration at both ends.
+
+A segment goes from a start value to an end value over a duration T [s], starting at time
+t0 [s]. Its time law is the minimum-jerk quintic s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5 with
+tau = (t - t0) / T, whose first and second derivatives vanish at tau = 0 and tau = 1, so
+
+    x(t) = x0 + (x1 - x0) s(tau)
+
+is exactly Eq. 2 with a0 = x0, a1 = a2 = 0 and a3..a5 fixed by the end conditions. Before t0
+the segment holds x0, after t0 + T it holds x1 (velocity and acceleration zero).
+
+Orientations are interpolated on SO(3) along the geodesic: R(t) = R0 exp(s(tau) theta [k]x) with
+theta k the axis-angle of R0^T R1, so the angular velocity is parallel to the fixed axis R0 k.
+"""
+
+import dataclasses
+
+import numpy as np
+from pydrake.common.eigen_geometry import AngleAxis
+from pydrake.math import RotationMatrix
+
+from pedi_drake.exceptions import PediError
+
+
+def quintic_time_law(t: float, t0: float, duration: float) -> tuple[float, float, float]:
+    """(s, ds/dt [1/s], d2s/dt2 [1/s^2]) of the rest-to-rest quintic at time `t` [s]."""
+    if not duration > 0.0:
+        raise PediError(f"quintic duration must be > 0 s, got {duration!r}")
+    tau = (t - t0) / duration
+    if tau <= 0.0:
+        return 0.0, 0.0, 0.0
+    if tau >= 1.0:
+        return 1.0, 0.0, 0.0
+    s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
+    ds = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration
+    dds = 60.0 * tau * (1.0 - 3.0 * tau + 2.0 * tau**2) / duration**2
+    return s, ds, dds
+
+
+def quintic_coefficients(x0: float, x1: float, duration: float) -> np.ndarray:
+    """Coefficients a0..a5 of Eq. 2 for a rest-to-rest move from x0 to x1 in `duration` [s]."""
+    d = x1 - x0
+    T = duration
+    return np.array([x0, 0.0, 0.0, 10.0 * d / T**3, -15.0 * d / T**4, 6.0 * d / T**5])
+
+
+@dataclasses.dataclass(frozen=True)
+class TrajectorySample:
+    """Reference at one instant: value, first and second time derivatives (units of the segment)."""
+
+    position: np.ndarray
+    velocity: np.ndarray
+    acceleration: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class QuinticSegment:
+    """Rest-to-rest quintic between two vectors (scalars, positions [m] or joint angles [rad]).
+
+    Sampled values have the units of `start`; velocities per second, accelerations per second^2.
+    """
+
+    start: np.ndarray
+    end: np.ndarray
+    t0: float  # start time [s]
+    duration: float  # [s], > 0
+
+    def __post_init__(self) -> None:
+        start = np.atleast_1d(np.asarray(self.start, dtype=float))
+        end = np.atleast_1d(np.asarray(self.end, dtype=float))
+        if start.shape != end.shape:
+            raise PediError(f"quintic start {start.shape} and end {end.shape} differ in shape")
+        if not (np.all(np.isfinite(start)) and np.all(np.isfinite(end))):
+            raise PediError("quintic start and end must be finite")
+        if not (np.isfinite(self.duration) and self.duration > 0.0):
+            raise PediError(f"quintic duration must be a finite number > 0 s, got {self.duration!r}")
+        object.__setattr__(self, "start", start)
+        object.__setattr__(self, "end", end)
+
+    @property
+    def t_end(self) -> float:
+        """Time at which the segment arrives [s]."""
+        return self.t0 + self.duration
+
+    def sample(self, t: float) -> TrajectorySample:
+        """Position, velocity and acceleration at time `t` [s]."""
+        s, ds, dds = quintic_time_law(t, self.t0, self.duration)
+        delta = self.end - self.start
+        return TrajectorySample(self.start + s * delta, ds * delta, dds * delta)
+
+
+@dataclasses.dataclass(frozen=True)
+class OrientationSample:
+    """Orientation reference: R_WB, angular velocity and acceleration expressed in W [rad/s, rad/s^2]."""
+
+    rotation: RotationMatrix
+    angular_velocity: np.ndarray
+    angular_acceleration: np.ndarray
+
+
+@dataclasses.dataclass(frozen=True)
+class QuinticOrientationSegment:
+    """Rest-to-rest geodesic move on SO(3) from R_start to R_end with the quintic time law."""
+
+    start: RotationMatrix
+    end: RotationMatrix
+    t0: float  # [s]
+    duration: float  # [s], > 0
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.duration) and self.duration > 0.0):
+            raise PediError(f"quintic duration must be a finite number > 0 s, got {self.duration!r}")
+
+    @property
+    def t_end(self) -> float:
+        return self.t0 + self.duration
+
+    def _axis_angle(self) -> tuple[np.ndarray, float]:
+        # Relative rotation expressed in the start frame: R_end = R_start * R_rel.
+        rel = AngleAxis(self.start.inverse().multiply(self.end).ToQuaternion())
+        return np.asarray(rel.axis()), float(rel.angle())
+
+    def sample(self, t: float) -> OrientationSample:
+        """Orientation, angular velocity and acceleration (in the world frame) at time `t` [s]."""
+        axis, angle = self._axis_angle()
+        s, ds, dds = quintic_time_law(t, self.t0, self.duration)
+        rotation = self.start.multiply(RotationMatrix(AngleAxis(s * angle, axis)))
+        axis_W = self.start.multiply(axis)
+        return OrientationSample(rotation, ds * angle * axis_W, dds * angle * axis_W)
+
+
+@dataclasses.dataclass(frozen=True)
+class PiecewiseQuintic:
+    """Consecutive vector quintic segments through waypoints; holds the last waypoint afterwards."""
+
+    segments: tuple[QuinticSegment, ...]
+
+    @staticmethod
+    def through(waypoints: np.ndarray, t0: float, durations: list[float]) -> "PiecewiseQuintic":
+        """Rest-to-rest segments from waypoints[0] through waypoints[k] with the given durations [s]."""
+        waypoints = np.asarray(waypoints, dtype=float)
+        if len(waypoints) != len(durations) + 1:
+            raise PediError(f"{len(waypoints)} waypoints need {len(waypoints) - 1} durations, got {len(durations)}")
+        segments, t = [], t0
+        for k, duration in enumerate(durations):
+            segments.append(QuinticSegment(waypoints[k], waypoints[k + 1], t, duration))
+            t += duration
+        return PiecewiseQuintic(tuple(segments))
+
+    def sample(self, t: float) -> TrajectorySample:
+        """Sample of the segment active at `t` [s] (the first before it starts, the last after)."""
+        for segment in self.segments:
+            if t < segment.t_end:
+                return segment.sample(t)
+        return self.segments[-1].sample(t)

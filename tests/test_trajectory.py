@@ -1,0 +1,80 @@
+"""Quintic references (Eq. 2): boundary conditions, derivatives, SO(3) interpolation."""
+
+import numpy as np
+import pytest
+from pydrake.math import RollPitchYaw, RotationMatrix
+
+from pedi_drake.exceptions import PediError
+from pedi_drake.trajectory import (
+    PiecewiseQuintic,
+    QuinticOrientationSegment,
+    QuinticSegment,
+    quintic_coefficients,
+)
+
+
+def test_quintic_matches_eq2_polynomial():
+    x0, x1, T = 0.3, -0.7, 1.7
+    a = quintic_coefficients(x0, x1, T)
+    segment = QuinticSegment([x0], [x1], 0.0, T)
+    for t in np.linspace(0.0, T, 11):
+        powers = np.array([t**k for k in range(6)])
+        dpowers = np.array([k * t ** max(k - 1, 0) for k in range(6)])
+        ddpowers = np.array([k * (k - 1) * t ** max(k - 2, 0) for k in range(6)])
+        sample = segment.sample(t)
+        assert sample.position[0] == pytest.approx(a @ powers, abs=1e-12)
+        assert sample.velocity[0] == pytest.approx(a @ dpowers, abs=1e-12)
+        assert sample.acceleration[0] == pytest.approx(a @ ddpowers, abs=1e-12)
+
+
+def test_quintic_rest_at_both_ends_and_holds_outside():
+    segment = QuinticSegment([0.0, 1.0, 2.0], [1.0, -1.0, 2.5], 2.0, 0.5)
+    for t, expected in ((1.0, segment.start), (2.0, segment.start), (2.5, segment.end), (9.0, segment.end)):
+        sample = segment.sample(t)
+        np.testing.assert_allclose(sample.position, expected, atol=1e-12)
+        np.testing.assert_allclose(sample.velocity, 0.0, atol=1e-12)
+        np.testing.assert_allclose(sample.acceleration, 0.0, atol=1e-12)
+
+
+def test_quintic_derivatives_match_finite_differences():
+    segment = QuinticSegment([0.1, -0.2], [0.4, 0.3], 0.3, 1.2)
+    h = 1e-6
+    for t in np.linspace(0.35, 1.45, 9):
+        dp = (segment.sample(t + h).position - segment.sample(t - h).position) / (2 * h)
+        dv = (segment.sample(t + h).velocity - segment.sample(t - h).velocity) / (2 * h)
+        np.testing.assert_allclose(segment.sample(t).velocity, dp, atol=1e-6)
+        np.testing.assert_allclose(segment.sample(t).acceleration, dv, atol=1e-5)
+
+
+def test_orientation_segment_endpoints_and_angular_velocity():
+    R0 = RotationMatrix(RollPitchYaw(0.1, -0.2, 0.3))
+    R1 = RotationMatrix(RollPitchYaw(-0.3, 0.25, 1.0))
+    segment = QuinticOrientationSegment(R0, R1, 0.0, 2.0)
+    np.testing.assert_allclose(segment.sample(0.0).rotation.matrix(), R0.matrix(), atol=1e-12)
+    np.testing.assert_allclose(segment.sample(2.0).rotation.matrix(), R1.matrix(), atol=1e-9)
+    h = 1e-6
+    for t in (0.3, 1.0, 1.7):
+        Rm, Rp = segment.sample(t - h).rotation.matrix(), segment.sample(t + h).rotation.matrix()
+        Rdot = (Rp - Rm) / (2 * h)
+        W = Rdot @ segment.sample(t).rotation.matrix().T  # skew(w_W)
+        w_fd = np.array([W[2, 1], W[0, 2], W[1, 0]])
+        np.testing.assert_allclose(segment.sample(t).angular_velocity, w_fd, atol=1e-6)
+        wdot_fd = (segment.sample(t + h).angular_velocity - segment.sample(t - h).angular_velocity) / (2 * h)
+        np.testing.assert_allclose(segment.sample(t).angular_acceleration, wdot_fd, atol=1e-5)
+
+
+def test_piecewise_passes_through_waypoints_at_rest():
+    waypoints = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 2.0]])
+    path = PiecewiseQuintic.through(waypoints, 1.0, [0.5, 1.0])
+    np.testing.assert_allclose(path.sample(1.5).position, waypoints[1], atol=1e-12)
+    np.testing.assert_allclose(path.sample(1.5).velocity, 0.0, atol=1e-12)
+    np.testing.assert_allclose(path.sample(5.0).position, waypoints[2], atol=1e-12)
+
+
+def test_invalid_segments_are_rejected():
+    with pytest.raises(PediError):
+        QuinticSegment([0.0], [1.0], 0.0, 0.0)
+    with pytest.raises(PediError):
+        QuinticSegment([0.0], [np.nan], 0.0, 1.0)
+    with pytest.raises(PediError):
+        QuinticSegment([0.0, 1.0], [1.0], 0.0, 1.0)
