@@ -58,13 +58,13 @@ COLORS = {"trunk": "0.15 0.15 0.17 1", "leg": "0.75 0.75 0.78 1", "rotor": "0.25
 
 
 def _mirror(props: dict, *, left: bool, rear: bool) -> dict:
-    """Mirrors FR inertial data: left legs flip y (COM y, Ixy, Iyz); rear hips flip x (COM x, Ixz)."""
+    """Mirrors FR inertial data: left legs flip y (COM y, Ixy, Iyz); rear hips flip x (COM x, Ixy, Ixz)."""
     x, y, z = props["com"]
     ixx, iyy, izz, ixy, ixz, iyz = props["inertia"]
     if left:
         y, ixy, iyz = -y, -ixy, -iyz
     if rear:
-        x, ixz = -x, -ixz
+        x, ixy, ixz = -x, -ixy, -ixz
     return dict(mass=props["mass"], com=(x, y, z), inertia=(ixx, iyy, izz, ixy, ixz, iyz))
 
 
@@ -167,7 +167,8 @@ def make_urdf() -> str:
         )
         out.append(_rotor_link(f"{thigh}_rotor", spin_axis=1))
         out.append(_joint(f"{thigh}_rotor_joint", "fixed", hip, f"{thigh}_rotor", (0, -side * 0.00015, 0)))
-        calf_body = _inertial(_mirror(CALF, left=left, rear=False))
+        # The reference description uses the FR calf's inertial values on every leg.
+        calf_body = _inertial(CALF)
         calf_body += _shape(
             "visual", '<box size="0.016 0.016 0.213"/>', (0, 0, -LINK_LENGTH / 2), (0, 0, 0), COLORS["leg"]
         )

@@ -65,6 +65,10 @@ class SceneObject:
     yaw: float = 0.0
     # Door only: initial opening angle [rad] (0 = closed).
     initial_angle: float = 0.0
+    # Optional model file replacing the kind's shipped model: a `package://pedi_drake/...` URL or a
+    # path (relative paths are taken from the scenario file's folder). It must have the bodies and
+    # joints the kind expects (see pedi_drake/station/scene.py).
+    model: str = ""
 
 
 @dataclasses.dataclass
@@ -131,8 +135,11 @@ class Scenario:
     # Meshcat publish period for the live view and the HTML replay [s].
     visualization_period: float = 1.0 / 32.0
 
-    def validate(self, where: str = "scenario") -> None:
-        """Raises ScenarioError naming the field when a value is out of its allowed set or range."""
+    def validate(self, where: str = "scenario", base_dir: Path | None = None) -> None:
+        """Raises ScenarioError naming the field when a value is out of its allowed set or range.
+
+        `base_dir` is the folder relative model paths are resolved from (the scenario file's).
+        """
 
         def need(condition: bool, field: str, problem: str) -> None:
             if not condition:
@@ -151,6 +158,8 @@ class Scenario:
         for i, obj in enumerate(self.scene):
             need(obj.kind in SCENE_OBJECT_KINDS, f"scene[{i}].kind", f"must be one of {SCENE_OBJECT_KINDS}, got {obj.kind!r}")
             need(len(obj.position) == 3, f"scene[{i}].position", "expected [x, y, z] in metres")
+            if obj.model:
+                need(resolve_model_path(obj.model, base_dir).exists(), f"scene[{i}].model", f"model file not found: {obj.model!r}")
             name = obj.name or obj.kind
             need(name not in names, f"scene[{i}].name", f"duplicate object name {name!r}")
             names.add(name)
@@ -163,8 +172,26 @@ class Scenario:
             need(math.isfinite(getattr(self, number_field)), number_field, "must be finite")
 
 
+def resolve_model_path(model: str, base_dir: Path | None = None) -> Path:
+    """The file behind a scene object's `model` (a package://pedi_drake/ URL or a path)."""
+    from pedi_drake.robot import models_dir
+
+    prefix = "package://pedi_drake/"
+    if model.startswith(prefix):
+        return models_dir() / model[len(prefix) :]
+    path = Path(model)
+    if not path.is_absolute() and base_dir is not None:
+        path = base_dir / path
+    return path
+
+
 def _scenarios_dir() -> Path:
-    return Path(__file__).resolve().parents[2] / "scenarios"
+    """<repo>/scenarios in a source checkout, pedi_drake/scenarios in an installed wheel."""
+    package = Path(__file__).resolve().parents[1]
+    for candidate in (package.parent / "scenarios", package / "scenarios"):
+        if candidate.is_dir():
+            return candidate
+    raise ScenarioError(f"the shipped scenarios folder was not found next to {package}")
 
 
 def default_scenario_file() -> Path:
@@ -193,9 +220,16 @@ def load_scenario(*, filename: str | Path | None = None, scenario_name: str = "d
         scenario = yaml_load_typed(schema=Scenario, filename=str(filename), child_name=scenario_name)
     except Exception as error:
         raise ScenarioError(f"{where}: {error}") from None
+    scenario.validate(where=where, base_dir=filename.parent)
     scenario = apply_scenario_text(scenario, scenario_text)
-    scenario.validate(where=where)
+    _make_model_paths_absolute(scenario, filename.parent)
     return scenario
+
+
+def _make_model_paths_absolute(scenario: Scenario, base_dir: Path) -> None:
+    for obj in scenario.scene:
+        if obj.model and not obj.model.startswith("package://"):
+            obj.model = str(resolve_model_path(obj.model, base_dir).resolve())
 
 
 def apply_scenario_text(scenario: Scenario, scenario_text: str) -> Scenario:

@@ -1,0 +1,140 @@
+"""The controller's view of the robot at one instant: the dynamics terms every task is built from.
+
+`ControllerModel` owns a plant (from `make_go1_plant`, never the simulation's) and a scratch
+context. `ControllerModel.update(base_state, q_joints, v_joints)` overwrites that context from
+the state ESTIMATE and the measured joints and returns a `RobotSnapshot` with the mass matrix,
+bias and gravity terms, contact Jacobians and their bias accelerations, the trunk Jacobian and
+the centre of mass. The scratch context holds no information that survives a tick (it is fully
+rewritten from inputs each time), so it is a computation workspace, not controller state.
+
+Velocity coordinates are the plant's: v = [w_WB (3, world); v_WB (3, world); joint rates], with
+the joints at `plant_map.v_index` in Unitree order.
+"""
+
+import dataclasses
+
+import numpy as np
+from pydrake.multibody.tree import JacobianWrtVariable
+from pydrake.systems.framework import Context
+
+from pedi_drake import robot
+from pedi_drake.estimation.base_state import BaseState
+from pedi_drake.prongs import ProngDesign
+
+# Contact names: the four feet (Unitree order) then the prongs.
+FOOT_CONTACTS = robot.LEG_NAMES
+
+
+def contact_names(prongs: ProngDesign | None) -> tuple[str, ...]:
+    """Contact names in the order of the controller's contact vectors: FR, FL, RR, RL, prong_0, ..."""
+    return FOOT_CONTACTS + robot.prong_body_names(prongs)
+
+
+@dataclasses.dataclass
+class RobotSnapshot:
+    """Dynamics terms at the current estimate. Shapes use nv = 18 and nc contacts."""
+
+    q: np.ndarray  # (nq,) plant positions
+    v: np.ndarray  # (nv,) plant velocities
+    M: np.ndarray  # (nv, nv) mass matrix, reflected rotor inertia included [kg, kg m, kg m^2]
+    h: np.ndarray  # (nv,) C(q, v) v - tau_g(q) + joint damping: all but M vdot on the dynamics' left side
+    J_contacts: np.ndarray  # (3 nc, nv) world translational Jacobians of the contact points
+    Jdot_v_contacts: np.ndarray  # (3 nc,) their bias accelerations [m/s^2]
+    p_contacts: np.ndarray  # (nc, 3) contact point positions in world [m]
+    J_trunk: np.ndarray  # (6, nv) trunk spatial Jacobian [angular; translational], world frame
+    Jdot_v_trunk: np.ndarray  # (6,) trunk spatial bias acceleration
+    R_WB: np.ndarray  # (3, 3) trunk orientation
+    p_WB: np.ndarray  # (3,) trunk origin [m]
+    p_com: np.ndarray  # (3,) centre of mass in world [m]
+    J_com: np.ndarray  # (3, nv) centre-of-mass Jacobian
+    Jdot_v_com: np.ndarray  # (3,) centre-of-mass bias acceleration [m/s^2]
+    q_joints: np.ndarray  # (12,) Unitree order [rad]
+    v_joints: np.ndarray  # (12,) Unitree order [rad/s]
+
+    @property
+    def num_contacts(self) -> int:
+        return self.p_contacts.shape[0]
+
+    @property
+    def v_com(self) -> np.ndarray:
+        """Centre-of-mass velocity in world [m/s]."""
+        return self.J_com @ self.v
+
+    @property
+    def V_trunk(self) -> np.ndarray:
+        """Trunk spatial velocity [w; v] in world [rad/s, m/s]."""
+        return self.J_trunk @ self.v
+
+
+class ControllerModel:
+    """Plant, scratch context and contact frames for the whole-body controller."""
+
+    def __init__(self, prongs: ProngDesign | None = None) -> None:
+        self.prongs = prongs
+        self.plant, self.plant_map = robot.make_go1_plant(robot.design_key(prongs))
+        self.context: Context = self.plant.CreateDefaultContext()
+        plant, model = self.plant, self.plant_map.model
+        self.world = plant.world_frame()
+        self.trunk_frame = plant.GetBodyByName(robot.TRUNK_BODY_NAME, model).body_frame()
+        self.contact_names = contact_names(prongs)
+        frames, points = [], []
+        for name in robot.FOOT_BODY_NAMES:
+            frames.append(plant.GetBodyByName(name, model).body_frame())
+            points.append(np.zeros(3))  # the foot sphere's centre
+        for name in robot.prong_body_names(prongs):
+            frames.append(plant.GetBodyByName(name, model).body_frame())
+            points.append(np.array([0.0, 0.0, -prongs.length]))  # the tip sphere's centre
+        self.contact_frames = tuple(frames)
+        self.contact_points = tuple(points)
+        self.nv = plant.num_velocities()
+        self.nq = plant.num_positions()
+        self.total_mass = plant.CalcTotalMass(self.context)
+        # Viscous joint damping of the model [N m s/rad], part of the dynamics the plant integrates
+        # but not of CalcBiasTerm: added to h so torques computed from the QP match the plant.
+        self.damping = np.zeros(self.nv)
+        for name, index in zip(robot.JOINT_NAMES, self.plant_map.v_index, strict=True):
+            self.damping[index] = plant.GetJointByName(name, model).default_damping_vector()[0]
+
+    @property
+    def num_contacts(self) -> int:
+        return len(self.contact_frames)
+
+    def update(self, base_state: np.ndarray, q_joints: np.ndarray, v_joints: np.ndarray) -> RobotSnapshot:
+        """Sets the scratch context from the estimate and measured joints; returns the dynamics terms."""
+        plant, context, pm = self.plant, self.context, self.plant_map
+        base = BaseState.from_vector(base_state)
+        quaternion = base.quaternion_wxyz / np.linalg.norm(base.quaternion_wxyz)
+        q = pm.full_positions(quaternion, base.p_WB, q_joints, self.nq)
+        v = pm.full_velocities(base.w_WB, base.v_WB, v_joints, self.nv)
+        plant.SetPositions(context, q)
+        plant.SetVelocities(context, v)
+        M = plant.CalcMassMatrix(context)
+        h = plant.CalcBiasTerm(context) - plant.CalcGravityGeneralizedForces(context) + self.damping * v
+        kV = JacobianWrtVariable.kV
+        world = self.world
+        Js, biases, positions = [], [], []
+        for frame, point in zip(self.contact_frames, self.contact_points, strict=True):
+            Js.append(plant.CalcJacobianTranslationalVelocity(context, kV, frame, point, world, world))
+            biases.append(plant.CalcBiasTranslationalAcceleration(context, kV, frame, point, world, world).ravel())
+            positions.append(plant.CalcPointsPositions(context, frame, point.reshape(3, 1), world).ravel())
+        J_trunk = plant.CalcJacobianSpatialVelocity(context, kV, self.trunk_frame, np.zeros(3), world, world)
+        Jdot_v_trunk = plant.CalcBiasSpatialAcceleration(context, kV, self.trunk_frame, np.zeros(3), world, world)
+        X_WB = plant.CalcRelativeTransform(context, world, self.trunk_frame)
+        return RobotSnapshot(
+            q=q,
+            v=v,
+            M=M,
+            h=h,
+            J_contacts=np.vstack(Js),
+            Jdot_v_contacts=np.concatenate(biases),
+            p_contacts=np.array(positions),
+            J_trunk=J_trunk,
+            Jdot_v_trunk=np.concatenate([Jdot_v_trunk.rotational(), Jdot_v_trunk.translational()]),
+            R_WB=X_WB.rotation().matrix(),
+            p_WB=X_WB.translation(),
+            p_com=plant.CalcCenterOfMassPositionInWorld(context),
+            J_com=plant.CalcJacobianCenterOfMassTranslationalVelocity(context, kV, world, world),
+            Jdot_v_com=plant.CalcBiasCenterOfMassTranslationalAcceleration(context, kV, world, world),
+            q_joints=np.asarray(q_joints, float),
+            v_joints=np.asarray(v_joints, float),
+        )

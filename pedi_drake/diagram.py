@@ -1,0 +1,84 @@
+"""MakePedipulationDiagram: the one place where a whole run is wired.
+
+Scenario -> station (plant or driver) -> state estimate -> controller -> station command.
+run_sim.py, the tests, the benchmarks and the notebooks all build their diagrams here.
+"""
+
+import dataclasses
+
+from pydrake.geometry import Meshcat
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import VectorLogSink
+
+from pedi_drake.control.stand_controller import StandController
+from pedi_drake.estimation.ground_truth import GroundTruthEstimator
+from pedi_drake.exceptions import ScenarioError
+from pedi_drake.station.scenario import Scenario
+from pedi_drake.station.station import MakeStation
+
+# Signals logged by every run (name -> exported port of the diagram).
+LOGGED_SIGNALS = (
+    "go1.command",
+    "go1.position_measured",
+    "go1.velocity_measured",
+    "go1.torque_estimated",
+    "go1.foot_contact",
+    "base_state",
+)
+SIM_LOGGED_SIGNALS = ("sim.plant_state",)
+
+
+@dataclasses.dataclass
+class PedipulationDiagram:
+    """The built diagram and the names of its parts that a run reads back."""
+
+    diagram: Diagram
+    # Logger subsystem name by signal name (VectorLogSink, read with FindLog(context)).
+    loggers: dict[str, str]
+    hardware: bool
+
+
+def MakePedipulationDiagram(
+    scenario: Scenario, meshcat: Meshcat | None = None, *, hardware: bool = False, log_period: float = 0.002
+) -> PedipulationDiagram:
+    """Wires station, estimator and controller for `scenario`, with loggers of LOGGED_SIGNALS."""
+    builder = DiagramBuilder()
+    station = builder.AddNamedSystem("station", MakeStation(scenario, meshcat, hardware=hardware))
+
+    if scenario.estimator == "ground_truth":
+        if hardware:
+            raise ScenarioError("estimator: ground_truth is for simulation only; use estimator: kalman on hardware")
+        plant = station.GetSubsystemByName("plant")
+        estimator = builder.AddNamedSystem("estimator", GroundTruthEstimator(plant))
+        builder.Connect(station.GetOutputPort("sim.plant_state"), estimator.GetInputPort("plant_state"))
+    else:
+        raise ScenarioError(
+            f"estimator: {scenario.estimator!r} is not available yet (the floating-base Kalman filter of issue 7); "
+            "use estimator: ground_truth in simulation"
+        )
+    base_state = estimator.GetOutputPort("base_state")
+
+    if scenario.controller == "stand_pd":
+        controller = builder.AddNamedSystem("controller", StandController(scenario.stand))
+        builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
+    else:
+        raise ScenarioError(f"controller: {scenario.controller!r} is not available yet (the whole-body QP of issue 4)")
+    command = controller.GetOutputPort("command")
+    builder.Connect(command, station.GetInputPort("go1.command"))
+
+    sources = {"go1.command": command, "base_state": base_state}
+    for name in LOGGED_SIGNALS:
+        if name not in sources:
+            sources[name] = station.GetOutputPort(name)
+    if not hardware:
+        for name in SIM_LOGGED_SIGNALS:
+            sources[name] = station.GetOutputPort(name)
+    loggers = {}
+    for name, port in sources.items():
+        logger = builder.AddNamedSystem(f"log.{name}", VectorLogSink(port.size(), log_period))
+        builder.Connect(port, logger.get_input_port())
+        loggers[name] = logger.get_name()
+        builder.ExportOutput(port, name)
+    diagram = builder.Build()
+    diagram.set_name("pedipulation")
+    return PedipulationDiagram(diagram=diagram, loggers=loggers, hardware=hardware)

@@ -1,0 +1,142 @@
+"""LegIkSystem: the leg IK solver as a Drake LeafSystem (a thin adapter around solve_leg_ik).
+
+Ports:
+    input  foot_target_W  (3)       foot-centre target in the world frame [m]
+    input  X_WB           (7)       estimated trunk pose: quaternion (w, x, y, z), p_WB [m]
+                                    (the first 7 entries of the base-state vector)
+    input  leg            abstract  str, one of FR, FL, RR, RL
+    input  q_measured     (12)      current joint angles, Unitree motor order [rad]
+    output leg_q_goal     (3)       the selected leg's goal (hip, thigh, calf) [rad]
+    output solved         (1)       1.0 if the last solve reached the target within tol, else 0.0
+    output ik_error       (1)       foot-to-target distance of the last solve [m]
+
+The system solves on an initialization event and on periodic discrete updates, and only when
+the target changed: a different leg, or the foot target expressed in the trunk frame moved by
+more than `retarget_tolerance` (a new world target or a trunk displacement; estimator noise
+below the tolerance does not trigger a solve). The solve starts from the measured angles of
+the selected leg. The memo of the last solved target, the goal and the flags live in the
+discrete state, so the system has no mutable Python members and contexts can be cloned.
+A non-finite target or pose gives solved = 0 and holds the measured leg angles as the goal.
+"""
+
+import numpy as np
+from pydrake.common.eigen_geometry import Quaternion
+from pydrake.common.value import AbstractValue
+from pydrake.math import RotationMatrix
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
+
+from pedi_drake import robot
+from pedi_drake.ik.fabrik import DEFAULT_MAX_ITERATIONS, solve_leg_ik
+
+# Layout of the discrete state vector.
+_TARGET_B = slice(0, 3)  # trunk-frame target of the last solve [m] (NaN before the first one)
+_LEG = 3  # index of the leg of the last solve in LEG_NAMES (-1 before the first one)
+_Q_GOAL = slice(4, 7)  # goal (hip, thigh, calf) [rad]
+_SOLVED = 7  # 1.0 or 0.0
+_ERROR = 8  # [m]
+_SOLVE_COUNT = 9  # number of solves so far (diagnostics and tests)
+_STATE_SIZE = 10
+
+
+class LegIkSystem(LeafSystem):
+    """Joint-space goal of the selected leg for a world-frame foot target (see the module doc)."""
+
+    def __init__(
+        self,
+        *,
+        period: float = 0.002,
+        tol: float = 1e-3,
+        max_iterations: int = DEFAULT_MAX_ITERATIONS,
+        retarget_tolerance: float = 1e-4,
+    ):
+        """
+        Args:
+            period: discrete update period [s] at which the inputs are checked for a new target.
+            tol: IK success threshold on the foot-to-target distance [m].
+            max_iterations: FABRIK iteration budget per solve.
+            retarget_tolerance: trunk-frame target motion that triggers a new solve [m].
+        """
+        super().__init__()
+        self._tol = float(tol)
+        self._max_iterations = int(max_iterations)
+        self._retarget_tolerance = float(retarget_tolerance)
+
+        self._foot_target_W = self.DeclareVectorInputPort("foot_target_W", 3)
+        self._X_WB = self.DeclareVectorInputPort("X_WB", 7)
+        self._leg = self.DeclareAbstractInputPort("leg", AbstractValue.Make(""))
+        self._q_measured = self.DeclareVectorInputPort("q_measured", robot.NUM_JOINTS)
+
+        initial = np.zeros(_STATE_SIZE)
+        initial[_TARGET_B] = np.nan
+        initial[_LEG] = -1.0
+        initial[_Q_GOAL] = robot.STANDING_Q[0:3]
+        self._state_index = self.DeclareDiscreteState(initial)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+        self.DeclareInitializationDiscreteUpdateEvent(self._update)
+
+        state_ticket = {self.discrete_state_ticket(self._state_index)}
+        self._leg_q_goal = self.DeclareVectorOutputPort(
+            "leg_q_goal", 3, self._calc_leg_q_goal, prerequisites_of_calc=state_ticket
+        )
+        self._solved = self.DeclareVectorOutputPort("solved", 1, self._calc_solved, prerequisites_of_calc=state_ticket)
+        self._ik_error = self.DeclareVectorOutputPort(
+            "ik_error", 1, self._calc_ik_error, prerequisites_of_calc=state_ticket
+        )
+
+    def _target_in_trunk(self, context: Context) -> np.ndarray:
+        """The foot target in the trunk frame [m]; NaN if the target or pose is not finite."""
+        p_WF = np.asarray(self._foot_target_W.Eval(context), dtype=float)
+        pose = np.asarray(self._X_WB.Eval(context), dtype=float)
+        quaternion = pose[0:4]
+        norm = np.linalg.norm(quaternion)
+        if not (np.all(np.isfinite(p_WF)) and np.all(np.isfinite(pose)) and norm > 1e-9):
+            return np.full(3, np.nan)
+        R_WB = RotationMatrix(Quaternion(quaternion / norm))
+        return R_WB.inverse().multiply(p_WF - pose[4:7])
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
+        leg = self._leg.Eval(context)
+        leg_index = robot.LEG_NAMES.index(leg) if leg in robot.LEG_NAMES else None
+        if leg_index is None:
+            # A wiring error, not a bad target: fail loudly with the offending value.
+            robot.leg_slice(leg)
+        state = context.get_discrete_state(self._state_index).get_value()
+        p_target_B = self._target_in_trunk(context)
+        same_leg = int(state[_LEG]) == leg_index
+        previous = state[_TARGET_B]
+        both_invalid = not np.all(np.isfinite(p_target_B)) and not np.all(np.isfinite(previous))
+        unchanged = both_invalid or bool(np.all(np.abs(p_target_B - previous) <= self._retarget_tolerance))
+        if same_leg and unchanged:
+            return EventStatus.DidNothing()
+
+        q_leg = np.asarray(self._q_measured.Eval(context), dtype=float)[robot.leg_slice(leg)]
+        new_state = state.copy()
+        new_state[_TARGET_B] = p_target_B
+        new_state[_LEG] = leg_index
+        new_state[_SOLVE_COUNT] += 1
+        if np.all(np.isfinite(q_leg)):
+            result = solve_leg_ik(leg, p_target_B, q_leg, tol=self._tol, max_iterations=self._max_iterations)
+            new_state[_Q_GOAL] = result.q
+            new_state[_SOLVED] = 1.0 if result.success else 0.0
+            new_state[_ERROR] = result.error
+        else:  # no trustworthy start: keep the previous goal and report failure
+            new_state[_SOLVED] = 0.0
+            new_state[_ERROR] = np.inf
+        discrete_state.get_mutable_vector(self._state_index).SetFromVector(new_state)
+        return EventStatus.Succeeded()
+
+    def _state(self, context: Context) -> np.ndarray:
+        return context.get_discrete_state(self._state_index).get_value()
+
+    def _calc_leg_q_goal(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._state(context)[_Q_GOAL])
+
+    def _calc_solved(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, self._state(context)[_SOLVED])
+
+    def _calc_ik_error(self, context: Context, output: BasicVector) -> None:
+        output.SetAtIndex(0, self._state(context)[_ERROR])
+
+    def solve_count(self, context: Context) -> int:
+        """How many IK solves this context has seen (diagnostics)."""
+        return int(self._state(context)[_SOLVE_COUNT])

@@ -1,0 +1,68 @@
+"""Scene objects: flat ground and the models of models/scenes, placed as the Scenario says."""
+
+import numpy as np
+from pydrake.geometry import HalfSpace, ProximityProperties, AddContactMaterial, Box
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
+from pydrake.multibody.tree import ModelInstanceIndex, PrismaticSpring
+
+from pedi_drake import robot
+from pedi_drake.station.scenario import SceneObject
+
+# Model file and the body welded to the world (None: the object is free) for each kind.
+SCENE_MODELS = {
+    "door": ("door.sdf", "frame_post"),
+    "box": ("box.sdf", None),
+    "target_panel": ("target_panel.sdf", None),
+    "back_object": ("back_object.sdf", None),
+    "fixed_obstacle": ("fixed_obstacle.sdf", "block"),
+    "soft_obstacle": ("soft_obstacle.sdf", "base"),
+}
+SOFT_OBSTACLE_STIFFNESS = 400.0  # [N/m] spring holding the soft obstacle's plate at rest.
+TRUNK_TOP_Z = 0.057  # [m] top face of the trunk box above the trunk origin.
+
+
+def add_ground(plant: MultibodyPlant, friction: float) -> None:
+    """Flat ground: a half space at z = 0 (collision) and a thin grey slab (visual)."""
+    properties = ProximityProperties()
+    AddContactMaterial(friction=CoulombFriction(friction, friction), properties=properties)
+    plant.RegisterCollisionGeometry(plant.world_body(), RigidTransform(), HalfSpace(), "ground", properties)
+    plant.RegisterVisualGeometry(
+        plant.world_body(), RigidTransform([0, 0, -0.005]), Box(6.0, 6.0, 0.01), "ground", [0.55, 0.6, 0.55, 1.0]
+    )
+
+
+def add_scene_object(plant: MultibodyPlant, obj: SceneObject, X_WB_initial: RigidTransform) -> ModelInstanceIndex:
+    """Adds `obj` to `plant` (before Finalize) and returns its model instance.
+
+    `position` and `yaw` place the model frame in the world, except for `back_object`, whose
+    `position` is an offset from the centre of the trunk's top face in the trunk frame
+    (`X_WB_initial` is the trunk's initial pose).
+    """
+    filename, welded_body = SCENE_MODELS[obj.kind]
+    parser = Parser(plant)
+    parser.SetAutoRenaming(True)
+    robot.ConfigureParser(parser)
+    if obj.model.startswith("package://"):
+        (model,) = parser.AddModels(url=obj.model)
+    elif obj.model:
+        (model,) = parser.AddModels(file_name=obj.model)
+    else:
+        (model,) = parser.AddModels(url=f"package://pedi_drake/scenes/{filename}")
+    plant.RenameModelInstance(model, obj.name or obj.kind)
+    if obj.kind == "back_object":
+        X_BO = RigidTransform(RollPitchYaw(0, 0, obj.yaw), np.asarray(obj.position) + [0, 0, TRUNK_TOP_Z + 0.001])
+        X_WO = X_WB_initial @ X_BO
+    else:
+        X_WO = RigidTransform(RollPitchYaw(0, 0, obj.yaw), obj.position)
+    if welded_body is not None:
+        plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(welded_body, model), X_WO)
+    else:
+        (body_index,) = plant.GetBodyIndices(model)
+        plant.SetDefaultFloatingBaseBodyPose(plant.get_body(body_index), X_WO)
+    if obj.kind == "door":
+        plant.GetJointByName("hinge", model).set_default_angle(obj.initial_angle)
+    if obj.kind == "soft_obstacle":
+        plant.AddForceElement(PrismaticSpring(plant.GetJointByName("slide", model), 0.0, SOFT_OBSTACLE_STIFFNESS))
+    return model

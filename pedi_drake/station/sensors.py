@@ -1,0 +1,138 @@
+"""Simulated Go1 sensors: joint encoders, torque estimate, IMU and foot force sensors.
+
+Outputs follow the station ports of DESIGN.md section 2 (Unitree order). Optional Gaussian
+noise is drawn from a generator seeded by (scenario seed, sample index), so a run is
+deterministic and the sensors keep no hidden state.
+"""
+
+import numpy as np
+from pydrake.math import RotationMatrix
+from pydrake.multibody.plant import ContactResults, MultibodyPlant
+from pydrake.systems.framework import BasicVector, LeafSystem
+
+from pedi_drake import robot
+from pedi_drake.station.scenario import SensorNoiseConfig
+
+IMU_SIZE = 10  # quaternion w, x, y, z; gyro (3); accelerometer (3)
+
+
+def _skew_rotation(axis_angle: np.ndarray) -> np.ndarray:
+    angle = np.linalg.norm(axis_angle)
+    if angle < 1e-12:
+        return np.eye(3)
+    k = axis_angle / angle
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
+class Go1SensorModel(LeafSystem):
+    """Plant signals -> go1.position_measured, velocity_measured, imu, foot_contact (+ noisy torque)."""
+
+    def __init__(
+        self,
+        plant: MultibodyPlant,
+        plant_map: robot.Go1PlantMap,
+        noise: SensorNoiseConfig,
+        seed: int,
+        sample_period: float,
+    ):
+        super().__init__()
+        self._plant = plant
+        self._map = plant_map
+        self._nq = plant.num_positions()
+        self._noise = noise
+        self._seed = int(seed)
+        self._period = sample_period
+        trunk = plant.GetBodyByName(robot.TRUNK_BODY_NAME, plant_map.model)
+        imu = plant.GetBodyByName(robot.IMU_BODY_NAME, plant_map.model)
+        self._trunk_index = int(trunk.index())
+        # The IMU is welded to the trunk with the trunk's orientation; keep its offset p_BI.
+        context = plant.CreateDefaultContext()
+        self._p_BI = plant.CalcRelativeTransform(context, trunk.body_frame(), imu.body_frame()).translation()
+        self._gravity_W = plant.gravity_field().gravity_vector()
+        self._foot_bodies = [plant.GetBodyByName(name, plant_map.model).index() for name in robot.FOOT_BODY_NAMES]
+
+        nx = plant.num_positions() + plant.num_velocities()
+        self._state = self.DeclareVectorInputPort("plant_state", nx)
+        self._poses = self.DeclareAbstractInputPort("body_poses", plant.get_body_poses_output_port().Allocate())
+        self._velocities = self.DeclareAbstractInputPort(
+            "body_spatial_velocities", plant.get_body_spatial_velocities_output_port().Allocate()
+        )
+        self._accelerations = self.DeclareAbstractInputPort(
+            "body_spatial_accelerations", plant.get_body_spatial_accelerations_output_port().Allocate()
+        )
+        self._contacts = self.DeclareAbstractInputPort("contact_results", plant.get_contact_results_output_port().Allocate())
+        self._torque = self.DeclareVectorInputPort("motor_torque", 12)
+        self.DeclareVectorOutputPort("position_measured", 12, self._calc_position)
+        self.DeclareVectorOutputPort("velocity_measured", 12, self._calc_velocity)
+        self.DeclareVectorOutputPort("torque_estimated", 12, self._calc_torque)
+        self.DeclareVectorOutputPort("imu", IMU_SIZE, self._calc_imu)
+        self.DeclareVectorOutputPort("foot_contact", 4, self._calc_foot_contact)
+
+    def _rng(self, context, channel: int) -> np.random.Generator | None:
+        """A generator for this sample and signal channel, or None when noise is off."""
+        if not self._noise.enabled:
+            return None
+        sample = int(round(context.get_time() / self._period))
+        return np.random.default_rng((self._seed, sample, channel))
+
+    def _calc_position(self, context, output: BasicVector) -> None:
+        q = self._map.joint_positions(self._state.Eval(context)[: self._nq])
+        rng = self._rng(context, 0)
+        if rng is not None:
+            q = q + rng.normal(0.0, self._noise.joint_position, 12)
+        output.SetFromVector(q)
+
+    def _calc_velocity(self, context, output: BasicVector) -> None:
+        qd = self._map.joint_velocities(self._state.Eval(context)[self._nq :])
+        rng = self._rng(context, 1)
+        if rng is not None:
+            qd = qd + rng.normal(0.0, self._noise.joint_velocity, 12)
+        output.SetFromVector(qd)
+
+    def _calc_torque(self, context, output: BasicVector) -> None:
+        tau = self._torque.Eval(context).copy()
+        rng = self._rng(context, 2)
+        if rng is not None:
+            tau = tau + rng.normal(0.0, self._noise.joint_torque, 12)
+        output.SetFromVector(tau)
+
+    def _calc_imu(self, context, output: BasicVector) -> None:
+        X_WB = self._poses.Eval(context)[self._trunk_index]
+        V_WB = self._velocities.Eval(context)[self._trunk_index]
+        A_WB = self._accelerations.Eval(context)[self._trunk_index]
+        R_WB = X_WB.rotation().matrix()
+        w_W = V_WB.rotational()
+        alpha_W = A_WB.rotational()
+        p_BI_W = R_WB @ self._p_BI
+        # Acceleration of the IMU point, then the specific force a - g in the trunk frame.
+        a_WI = A_WB.translational() + np.cross(alpha_W, p_BI_W) + np.cross(w_W, np.cross(w_W, p_BI_W))
+        gyro = R_WB.T @ w_W
+        accel = R_WB.T @ (a_WI - self._gravity_W)
+        rng = self._rng(context, 3)
+        if rng is not None:
+            R_WB = R_WB @ _skew_rotation(rng.normal(0.0, self._noise.orientation, 3))
+            gyro = gyro + rng.normal(0.0, self._noise.gyro, 3)
+            accel = accel + rng.normal(0.0, self._noise.accelerometer, 3)
+        quaternion = RotationMatrix(R_WB).ToQuaternion()
+        output.SetFromVector(np.concatenate([[quaternion.w(), quaternion.x(), quaternion.y(), quaternion.z()], gyro, accel]))
+
+    def _calc_foot_contact(self, context, output: BasicVector) -> None:
+        forces = foot_normal_forces(self._contacts.Eval(context), self._foot_bodies)
+        rng = self._rng(context, 4)
+        if rng is not None:
+            forces = np.maximum(forces + rng.normal(0.0, self._noise.foot_force, 4), 0.0)
+        output.SetFromVector(forces)
+
+
+def foot_normal_forces(contact_results: ContactResults, foot_bodies) -> np.ndarray:
+    """Normal contact force magnitude on each foot [N], summed over its point contacts."""
+    forces = np.zeros(len(foot_bodies))
+    for i in range(contact_results.num_point_pair_contacts()):
+        info = contact_results.point_pair_contact_info(i)
+        normal = info.point_pair().nhat_BA_W
+        force = abs(float(np.dot(info.contact_force(), normal)))
+        for k, body in enumerate(foot_bodies):
+            if info.bodyA_index() == body or info.bodyB_index() == body:
+                forces[k] += force
+    return forces

@@ -1,0 +1,32 @@
+"""run_sim.py from the command line: exit codes and the files it writes."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def _run(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "run_sim.py", *args], cwd=REPO, capture_output=True, text=True, timeout=600)
+
+
+def test_run_sim_writes_result_json_replay_and_plots(tmp_path):
+    done = _run("--out", str(tmp_path), "--duration", "2.5")
+    assert done.returncode == 0, done.stderr
+    result = json.loads((tmp_path / "result.json").read_text())
+    for key in ("mission", "scenario", "success", "phases", "fell", "sim_time_s", "wall_time_s", "real_time_factor"):
+        assert key in result
+    assert result["success"] is True and result["fell"] is False
+    assert result["sim_time_s"] == 2.5
+    html = (tmp_path / "replay.html").read_text()
+    assert len(html) > 10_000 and "<html" in html.lower()
+    assert (tmp_path / "joint_positions.png").stat().st_size > 0
+
+
+def test_run_sim_bad_input_exits_2_naming_the_field(tmp_path):
+    done = _run("--out", str(tmp_path), "--scenario_text", "{robot: {initial_pos: lying}}")
+    assert done.returncode == 2
+    assert "robot.initial_pos" in done.stderr
+    assert not (tmp_path / "result.json").exists()

@@ -1,0 +1,100 @@
+"""Every scene object loads, rests on what it should, and moves (or not) as described."""
+
+import numpy as np
+import pytest
+from pydrake.multibody.math import SpatialForce
+from pydrake.multibody.plant import ExternallyAppliedSpatialForce
+from pydrake.systems.analysis import Simulator
+
+from pedi_drake import robot
+from pedi_drake.station.motor_model import pack_command
+from pedi_drake.station.scenario import Scenario, SceneObject
+from pedi_drake.station.station import MakeStation
+
+
+def _simulate(obj: SceneObject, body_name: str, force_W, duration: float, p_BoBq_B=(0.0, 0.0, 0.0)):
+    """Holds the Go1 lying, pushes `body_name` with `force_W` [N] at p_BoBq_B, returns (plant, contexts)."""
+    scenario = Scenario(scene=[obj])
+    station = MakeStation(scenario)
+    plant = station.GetSubsystemByName("plant")
+    context = station.CreateDefaultContext()
+    plant_context = plant.GetMyContextFromRoot(context)
+    model = plant.GetModelInstanceByName(obj.name or obj.kind)
+    body = plant.GetBodyByName(body_name, model)
+    start = body.EvalPoseInWorld(plant_context)
+    station.GetInputPort("go1.command").FixValue(context, pack_command(robot.LYING_Q, 0, 40, 1, 0))
+    push = ExternallyAppliedSpatialForce()
+    push.body_index = body.index()
+    push.p_BoBq_B = np.asarray(p_BoBq_B, float)
+    push.F_Bq_W = SpatialForce(np.zeros(3), np.asarray(force_W, float))
+    station.GetInputPort("sim.applied_spatial_force").FixValue(context, [push])
+    Simulator(station, context).AdvanceTo(duration)
+    return plant, plant_context, model, start, body.EvalPoseInWorld(plant_context)
+
+
+@pytest.mark.parametrize("kind,body", [("box", "box"), ("target_panel", "panel")])
+def test_free_objects_rest_on_the_floor(kind, body):
+    _, _, _, start, end = _simulate(SceneObject(kind=kind, position=[0.6, 0.4, 0.0]), body, [0, 0, 0], 0.5)
+    np.testing.assert_allclose(end.translation(), start.translation(), atol=0.002)
+    # Still upright: its z axis within 2 degrees of the world's.
+    assert end.rotation().matrix()[2, 2] > np.cos(np.radians(2))
+
+
+def _pose_on_trunk(plant, context, pose_W):
+    X_WB = plant.GetBodyByName(robot.TRUNK_BODY_NAME).EvalPoseInWorld(context)
+    return X_WB.inverse() @ pose_W
+
+
+@pytest.mark.parametrize("drop_height", [0.0, 0.05])
+def test_back_object_rests_on_the_trunk(drop_height):
+    obj = SceneObject(kind="back_object", position=[0.02, 0.0, drop_height])
+    plant, context, _, _, end = _simulate(obj, "object", [0, 0, 0], 0.6)
+    X_BO = _pose_on_trunk(plant, context, end)
+    # Its bottom face lies on the trunk's top face (0.057 m above the trunk origin).
+    np.testing.assert_allclose(X_BO.translation(), [0.02, 0.0, 0.057], atol=0.003)
+
+
+def test_door_swings_open_when_pushed():
+    obj = SceneObject(kind="door", position=[0.8, 0.4, 0.0], initial_angle=0.5)
+    plant, context, model, _, _ = _simulate(obj, "leaf", [6.0, 0.0, 0.0], 1.0, p_BoBq_B=(0.0, -0.6, 0.3))
+    angle = plant.GetJointByName("hinge", model).get_angle(context)
+    assert angle > 0.5 + np.radians(20)
+
+
+def test_door_stays_put_without_a_push():
+    obj = SceneObject(kind="door", position=[0.8, 0.4, 0.0], initial_angle=0.5)
+    plant, context, model, _, _ = _simulate(obj, "leaf", [0.0, 0.0, 0.0], 0.5)
+    assert plant.GetJointByName("hinge", model).get_angle(context) == pytest.approx(0.5, abs=0.01)
+
+
+def test_box_slides_when_pushed():
+    # 3 N at mid-height beats the ~2.1 N of friction on the 0.5 kg box.
+    obj = SceneObject(kind="box", position=[0.6, 0.4, 0.0])
+    _, _, _, start, end = _simulate(obj, "box", [3.0, 0, 0], 0.5, p_BoBq_B=(0, 0, 0.075))
+    assert end.translation()[0] - start.translation()[0] > 0.05
+    # It slides on the floor rather than tumbling.
+    assert abs(end.translation()[2] - start.translation()[2]) < 0.01
+    roll, pitch, _ = end.rotation().ToRollPitchYaw().vector()
+    assert abs(roll) < 0.1 and abs(pitch) < 0.1
+
+
+def test_box_stays_put_under_a_push_below_friction():
+    obj = SceneObject(kind="box", position=[0.6, 0.4, 0.0])
+    _, _, _, start, end = _simulate(obj, "box", [1.0, 0, 0], 0.5, p_BoBq_B=(0, 0, 0.075))
+    assert abs(end.translation()[0] - start.translation()[0]) < 0.002
+
+
+def test_soft_obstacle_compresses_under_a_push_and_springs_back():
+    obj = SceneObject(kind="soft_obstacle", position=[-0.6, 0.4, 0.0])
+    plant, context, model, _, _ = _simulate(obj, "plate", [10.0, 0, 0], 1.0)
+    slide = plant.GetJointByName("slide", model)
+    # 10 N on a 400 N/m spring: 2.5 cm.
+    assert slide.get_translation(context) == pytest.approx(10.0 / 400.0, abs=0.003)
+
+
+def test_fixed_obstacle_does_not_move_when_pushed():
+    obj = SceneObject(kind="fixed_obstacle", position=[-0.6, 0.4, 0.0])
+    _, _, _, start, end = _simulate(obj, "block", [50.0, 0, 0], 0.5)
+    np.testing.assert_allclose(end.translation(), start.translation(), atol=1e-9)
+
+

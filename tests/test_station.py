@@ -1,0 +1,113 @@
+"""The simulated station: port parity with DESIGN.md section 2, standing, sensors."""
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from pedi_drake import robot
+from pedi_drake.diagram import MakePedipulationDiagram
+from pedi_drake.station.motor_model import motor_torque, pack_command
+from pedi_drake.station.scenario import Scenario, load_scenario
+from pedi_drake.station.station import STATION_PORTS, MakeStation
+
+STAND_HOLD_START = 2.0  # [s] the stand blend (1.5 s) is over and the trunk has settled.
+STAND_END = 5.0  # [s] 3 s of holding.
+
+
+def _go1_ports(system):
+    ports = {}
+    for i in range(system.num_input_ports()):
+        port = system.get_input_port(i)
+        ports[port.get_name()] = ("input", port.size())
+    for i in range(system.num_output_ports()):
+        port = system.get_output_port(i)
+        ports[port.get_name()] = ("output", port.size())
+    return {name: value for name, value in ports.items() if name.startswith("go1.")}
+
+
+def test_station_exports_exactly_the_documented_go1_ports():
+    station = MakeStation(Scenario())
+    assert _go1_ports(station) == STATION_PORTS
+
+
+def test_hardware_station_exports_the_same_ports_or_names_the_missing_driver():
+    try:
+        from pydrake.lcm import DrakeLcm
+
+        from pedi_drake.station.hardware_station import MakeHardwareStation
+    except ImportError:
+        with pytest.raises(NotImplementedError, match="issue 7"):
+            MakeStation(Scenario(), hardware=True)
+        return
+    station = MakeHardwareStation(Scenario(), lcm=DrakeLcm("memq://"))
+    assert _go1_ports(station) == STATION_PORTS
+
+
+def test_motor_model_clamps_to_effort_limits_and_zeroes_non_finite_commands():
+    q = np.zeros(12)
+    huge = motor_torque(pack_command(np.full(12, 10.0), 0, 1000.0, 0, 0), q, q)
+    np.testing.assert_array_equal(huge, robot.EFFORT_LIMIT)
+    command = pack_command(0, 0, 0, 0, np.full(12, 1.0))
+    command[48] = np.nan
+    tau = motor_torque(command, q, q)
+    assert tau[0] == 0.0 and np.all(tau[1:] == 1.0)
+
+
+@pytest.fixture(scope="module")
+def standing_run():
+    scenario = load_scenario(scenario_text=f"{{simulation_duration: {STAND_END}}}")
+    built = MakePedipulationDiagram(scenario)
+    simulator = Simulator(built.diagram)
+    simulator.AdvanceTo(STAND_END)
+    context = simulator.get_context()
+    log = built.diagram.GetSubsystemByName(built.loggers["sim.plant_state"]).FindLog(context)
+    plant = built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
+    return plant, log.sample_times(), log.data(), built, context
+
+
+def test_standing_holds_trunk_height_within_1cm_of_commanded_pose(standing_run):
+    plant, t, x, _, _ = standing_run
+    plant_map = robot.Go1PlantMap.from_plant(plant)
+    target = robot.trunk_height_for(0.9, -1.8)
+    hold = t >= STAND_HOLD_START
+    height = x[plant_map.base_q_start + 6, hold]
+    assert np.max(np.abs(height - target)) < 0.01, f"height {height.min():.4f}..{height.max():.4f}, target {target:.4f}"
+
+
+def test_standing_feet_stay_within_5mm_of_where_they_landed(standing_run):
+    plant, t, x, _, _ = standing_run
+    context = plant.CreateDefaultContext()
+    hold = np.nonzero(t >= STAND_HOLD_START)[0]
+    feet = []
+    for k in hold:
+        plant.SetPositionsAndVelocities(context, x[:, k])
+        feet.append([plant.GetBodyByName(f).EvalPoseInWorld(context).translation() for f in robot.FOOT_BODY_NAMES])
+    feet = np.array(feet)
+    assert np.max(np.linalg.norm(feet - feet[0], axis=2)) < 0.005
+
+
+def test_standing_sensors_report_weight_on_feet_and_gravity_on_accelerometer(standing_run):
+    _, _, _, built, context = standing_run
+    diagram = built.diagram
+    station = diagram.GetSubsystemByName("station")
+    station_context = station.GetMyContextFromRoot(context)
+    forces = station.GetOutputPort("go1.foot_contact").Eval(station_context)
+    assert np.sum(forces) == pytest.approx(robot.TOTAL_MASS * 9.81, rel=0.03)
+    imu = station.GetOutputPort("go1.imu").Eval(station_context)
+    assert np.linalg.norm(imu[:4]) == pytest.approx(1.0)
+    np.testing.assert_allclose(imu[7:10], [0, 0, 9.81], atol=0.3)
+    np.testing.assert_allclose(imu[4:7], 0.0, atol=0.05)
+
+
+def test_sensor_noise_is_seeded_and_reproducible():
+    def measure(seed):
+        scenario = load_scenario(scenario_text=f"{{random_seed: {seed}, sensor_noise: {{enabled: true}}}}")
+        station = MakeStation(scenario)
+        context = station.CreateDefaultContext()
+        station.GetInputPort("go1.command").FixValue(context, pack_command(robot.LYING_Q, 0, 20, 1, 0))
+        Simulator(station, context).AdvanceTo(0.05)
+        return station.GetOutputPort("go1.position_measured").Eval(context).copy()
+
+    a, b, c = measure(1), measure(1), measure(2)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c)
