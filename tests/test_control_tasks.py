@@ -2,9 +2,10 @@
 
 import numpy as np
 import pytest
+from pydrake.common.eigen_geometry import AngleAxis
+from pydrake.math import RollPitchYaw, RotationMatrix
 from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.plant import ExternallyAppliedSpatialForce
-from pydrake.math import RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
 from pedi_drake.control import tasks
@@ -158,9 +159,6 @@ def test_polygon_halfplanes_contain_inside_points_only():
 def test_orientation_error_is_the_rotation_vector():
     R = RotationMatrix(RollPitchYaw(0.2, -0.1, 0.5))
     theta = np.array([0.1, -0.2, 0.15])
-    R_ref = RotationMatrix.MakeFromOneVector(np.array([0, 0, 1.0]), 2)  # placeholder replaced below
-    from pydrake.common.eigen_geometry import AngleAxis
-
     R_ref = RotationMatrix(AngleAxis(np.linalg.norm(theta), theta / np.linalg.norm(theta))).multiply(R)
     np.testing.assert_allclose(tasks.orientation_error_W(R_ref.matrix(), R.matrix()), theta, atol=1e-12)
 
