@@ -45,9 +45,7 @@ def run(*, scenario: Scenario, scenario_name: str, out_dir: Path, meshcat: Meshc
     (out_dir / "replay.html").write_text(meshcat.StaticHtml())
 
     context = simulator.get_context()
-    logs = {
-        name: diagram.GetSubsystemByName(logger).FindLog(context) for name, logger in built.loggers.items()
-    }
+    logs = {name: diagram.GetSubsystemByName(logger).FindLog(context) for name, logger in built.loggers.items()}
     plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     plant_map = robot.Go1PlantMap.from_plant(plant)
     state_log = logs["sim.plant_state"].data()
@@ -55,7 +53,9 @@ def run(*, scenario: Scenario, scenario_name: str, out_dir: Path, meshcat: Meshc
     command = logs["go1.command"].data()
     position = logs["go1.position_measured"].data()
     plot_joint_tracking(t, command[:12], position, out_dir / "joint_positions.png", title=scenario_name)
-    plot_foot_forces(logs["go1.foot_contact"].sample_times(), logs["go1.foot_contact"].data(), out_dir / "foot_forces.png")
+    plot_foot_forces(
+        logs["go1.foot_contact"].sample_times(), logs["go1.foot_contact"].data(), out_dir / "foot_forces.png"
+    )
 
     fell = trunk_fell(state_log, plant_map, has_prongs=scenario.robot.prongs is not None)
     sim_time = float(context.get_time())

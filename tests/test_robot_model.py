@@ -36,7 +36,10 @@ def _foot_positions_B(plant, q12, trunk="trunk"):
         plant.GetJointByName(name).set_angle(context, angle)
     trunk_frame = plant.GetFrameByName(trunk)
     return np.array(
-        [plant.CalcRelativeTransform(context, trunk_frame, plant.GetFrameByName(f)).translation() for f in robot.FOOT_BODY_NAMES]
+        [
+            plant.CalcRelativeTransform(context, trunk_frame, plant.GetFrameByName(f)).translation()
+            for f in robot.FOOT_BODY_NAMES
+        ]
     )
 
 

@@ -96,5 +96,3 @@ def test_fixed_obstacle_does_not_move_when_pushed():
     obj = SceneObject(kind="fixed_obstacle", position=[-0.6, 0.4, 0.0])
     _, _, _, start, end = _simulate(obj, "block", [50.0, 0, 0], 0.5)
     np.testing.assert_allclose(end.translation(), start.translation(), atol=1e-9)
-
-

@@ -41,12 +41,16 @@ class StandController(LeafSystem):
         # [q_start (12), t_start, captured flag]
         self._start = self.DeclareDiscreteState(14)
         self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._capture_start)
-        self.DeclareVectorOutputPort("command", COMMAND_SIZE, self._calc_command, {self.time_ticket(), self.xd_ticket()})
+        self.DeclareVectorOutputPort(
+            "command", COMMAND_SIZE, self._calc_command, {self.time_ticket(), self.xd_ticket()}
+        )
 
     def _capture_start(self, context, discrete_state: DiscreteValues) -> None:
         x = context.get_discrete_state(self._start).get_value()
         if x[13] == 0.0:
-            discrete_state.set_value(self._start, np.concatenate([self._measured.Eval(context), [context.get_time(), 1.0]]))
+            discrete_state.set_value(
+                self._start, np.concatenate([self._measured.Eval(context), [context.get_time(), 1.0]])
+            )
 
     def _calc_command(self, context, output: BasicVector) -> None:
         x = context.get_discrete_state(self._start).get_value()

@@ -26,7 +26,9 @@ def initial_trunk_pose(config: RobotConfig) -> RigidTransform:
 
 def set_default_go1_state(plant, plant_map: robot.Go1PlantMap, config: RobotConfig) -> None:
     """Sets the plant's default (initial) Go1 pose; call after Finalize, before creating contexts."""
-    plant.SetDefaultFloatingBaseBodyPose(plant.GetBodyByName(robot.TRUNK_BODY_NAME, plant_map.model), initial_trunk_pose(config))
+    plant.SetDefaultFloatingBaseBodyPose(
+        plant.GetBodyByName(robot.TRUNK_BODY_NAME, plant_map.model), initial_trunk_pose(config)
+    )
     q = initial_joint_positions(config)
     for name, angle in zip(robot.JOINT_NAMES, q, strict=True):
         plant.GetJointByName(name, plant_map.model).set_default_angle(float(angle))

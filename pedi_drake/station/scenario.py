@@ -156,10 +156,18 @@ class Scenario:
         need(self.stand.duration > 0 and self.stand.period > 0, "stand", "duration and period must be > 0")
         names = set()
         for i, obj in enumerate(self.scene):
-            need(obj.kind in SCENE_OBJECT_KINDS, f"scene[{i}].kind", f"must be one of {SCENE_OBJECT_KINDS}, got {obj.kind!r}")
+            need(
+                obj.kind in SCENE_OBJECT_KINDS,
+                f"scene[{i}].kind",
+                f"must be one of {SCENE_OBJECT_KINDS}, got {obj.kind!r}",
+            )
             need(len(obj.position) == 3, f"scene[{i}].position", "expected [x, y, z] in metres")
             if obj.model:
-                need(resolve_model_path(obj.model, base_dir).exists(), f"scene[{i}].model", f"model file not found: {obj.model!r}")
+                need(
+                    resolve_model_path(obj.model, base_dir).exists(),
+                    f"scene[{i}].model",
+                    f"model file not found: {obj.model!r}",
+                )
             name = obj.name or obj.kind
             need(name not in names, f"scene[{i}].name", f"duplicate object name {name!r}")
             names.add(name)
@@ -199,7 +207,9 @@ def default_scenario_file() -> Path:
     return _scenarios_dir() / "default.yaml"
 
 
-def load_scenario(*, filename: str | Path | None = None, scenario_name: str = "default", scenario_text: str = "{}") -> Scenario:
+def load_scenario(
+    *, filename: str | Path | None = None, scenario_name: str = "default", scenario_text: str = "{}"
+) -> Scenario:
     """Loads `scenario_name` from `filename` (default: the shipped file), then applies `scenario_text`.
 
     Raises ScenarioError naming the file and field on any problem.

@@ -1,7 +1,7 @@
 """Scene objects: flat ground and the models of models/scenes, placed as the Scenario says."""
 
 import numpy as np
-from pydrake.geometry import HalfSpace, ProximityProperties, AddContactMaterial, Box
+from pydrake.geometry import AddContactMaterial, Box, HalfSpace, ProximityProperties
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import CoulombFriction, MultibodyPlant

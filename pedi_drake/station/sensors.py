@@ -61,7 +61,9 @@ class Go1SensorModel(LeafSystem):
         self._accelerations = self.DeclareAbstractInputPort(
             "body_spatial_accelerations", plant.get_body_spatial_accelerations_output_port().Allocate()
         )
-        self._contacts = self.DeclareAbstractInputPort("contact_results", plant.get_contact_results_output_port().Allocate())
+        self._contacts = self.DeclareAbstractInputPort(
+            "contact_results", plant.get_contact_results_output_port().Allocate()
+        )
         self._torque = self.DeclareVectorInputPort("motor_torque", 12)
         self.DeclareVectorOutputPort("position_measured", 12, self._calc_position)
         self.DeclareVectorOutputPort("velocity_measured", 12, self._calc_velocity)
@@ -115,7 +117,9 @@ class Go1SensorModel(LeafSystem):
             gyro = gyro + rng.normal(0.0, self._noise.gyro, 3)
             accel = accel + rng.normal(0.0, self._noise.accelerometer, 3)
         quaternion = RotationMatrix(R_WB).ToQuaternion()
-        output.SetFromVector(np.concatenate([[quaternion.w(), quaternion.x(), quaternion.y(), quaternion.z()], gyro, accel]))
+        output.SetFromVector(
+            np.concatenate([[quaternion.w(), quaternion.x(), quaternion.y(), quaternion.z()], gyro, accel])
+        )
 
     def _calc_foot_contact(self, context, output: BasicVector) -> None:
         forces = foot_normal_forces(self._contacts.Eval(context), self._foot_bodies)
