@@ -1,0 +1,86 @@
+"""Constants of the Go1 LCM interface (walk-these-ways `lcm_position` bridge).
+
+Channels, message types and their reference fingerprints/sizes, the bridge rate, and the
+conversion between the station's 60-vector `go1.command` and the wire order of
+`pd_tau_targets_lcmt`. Facts from ../shared/reference/go1.md section 2.
+"""
+
+import numpy as np
+
+from pedi_drake.station.lcmtypes import (
+    leg_control_data_lcmt,
+    pd_tau_targets_lcmt,
+    rc_command_lcmt,
+    state_estimator_lcmt,
+)
+
+# Channels (controller <-> robot bridge).
+COMMAND_CHANNEL = "pd_plustau_targets"
+LEG_CONTROL_CHANNEL = "leg_control_data"
+STATE_ESTIMATOR_CHANNEL = "state_estimator_data"
+RC_COMMAND_CHANNEL = "rc_command"
+
+# The bridge ticks at 500 Hz: it publishes every state channel and applies the last command.
+BRIDGE_PERIOD = 0.002  # [s]
+
+# Name of the LCM bus in Scenario.lcm_buses that carries the Go1 traffic.
+GO1_BUS_NAME = "go1"
+
+# Message type by channel.
+CHANNEL_TYPES = {
+    COMMAND_CHANNEL: pd_tau_targets_lcmt,
+    LEG_CONTROL_CHANNEL: leg_control_data_lcmt,
+    STATE_ESTIMATOR_CHANNEL: state_estimator_lcmt,
+    RC_COMMAND_CHANNEL: rc_command_lcmt,
+}
+
+# Base hashes (before lcm-gen's rotate-left) and encoded sizes [bytes] of the bridge's types.
+REFERENCE_BASE_HASH = {
+    "pd_tau_targets_lcmt": 0x6D88128EF1291CC1,
+    "leg_control_data_lcmt": 0xA9A928B534BFC487,
+    "state_estimator_lcmt": 0xEA87C8282EFFE5B6,
+    "rc_command_lcmt": 0xC7726B02EC3E7DE2,
+}
+REFERENCE_ENCODED_SIZE = {
+    "pd_tau_targets_lcmt": 544,
+    "leg_control_data_lcmt": 272,
+    "state_estimator_lcmt": 160,
+    "rc_command_lcmt": 46,
+}
+
+# Raw foot force sensor value above which a foot counts as in contact on the real Go1.
+HARDWARE_CONTACT_THRESHOLD = 200.0
+
+# Remote (rc_command) E-stop: the walk-these-ways remote maps its buttons to these switch fields;
+# any of them non-zero latches damping. L2 + B on the Unitree remote sets right_lower_right_switch.
+RC_ESTOP_FIELDS = ("right_lower_right_switch",)
+
+
+def command_to_message(command: np.ndarray, timestamp_us: int = 0, message_id: int = 0) -> pd_tau_targets_lcmt:
+    """The wire message for a 60-vector `go1.command` (q_des, qd_des, kp, kd, tau_ff; Unitree order).
+
+    The wire order is q_des, qd_des, tau_ff, kp, kd; this is the one place it is converted.
+    """
+    c = np.asarray(command, dtype=float)
+    message = pd_tau_targets_lcmt()
+    message.q_des = c[0:12].tolist()
+    message.qd_des = c[12:24].tolist()
+    message.kp = c[24:36].tolist()
+    message.kd = c[36:48].tolist()
+    message.tau_ff = c[48:60].tolist()
+    message.timestamp_us = int(timestamp_us)
+    message.id = int(message_id)
+    return message
+
+
+def message_to_command(message: pd_tau_targets_lcmt) -> np.ndarray:
+    """The 60-vector `go1.command` (q_des, qd_des, kp, kd, tau_ff) of a wire message."""
+    return np.concatenate(
+        [
+            np.asarray(message.q_des, float),
+            np.asarray(message.qd_des, float),
+            np.asarray(message.kp, float),
+            np.asarray(message.kd, float),
+            np.asarray(message.tau_ff, float),
+        ]
+    )
