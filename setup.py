@@ -1,5 +1,5 @@
-"""Ships the top-level models/ and scenarios/ folders inside the wheel as pedi_drake/models and
-pedi_drake/scenarios.
+"""Ships the top-level models/, scenarios/ and missions/ folders inside the wheel as
+pedi_drake/models, pedi_drake/scenarios and pedi_drake/missions.
 
 Everything else about the package is in pyproject.toml; setuptools cannot express "this folder
 outside the package becomes a subpackage" there, so the package list lives here.
@@ -8,10 +8,16 @@ outside the package becomes a subpackage" there, so the package list lives here.
 from setuptools import find_packages, setup
 
 setup(
-    packages=find_packages(include=["pedi_drake", "pedi_drake.*"]) + ["pedi_drake.models", "pedi_drake.scenarios"],
-    package_dir={"pedi_drake.models": "models", "pedi_drake.scenarios": "scenarios"},
+    packages=find_packages(include=["pedi_drake", "pedi_drake.*"])
+    + [
+        "pedi_drake.models",
+        "pedi_drake.scenarios",
+        "pedi_drake.missions",
+    ],
+    package_dir={"pedi_drake.models": "models", "pedi_drake.scenarios": "scenarios", "pedi_drake.missions": "missions"},
     package_data={
         "pedi_drake.models": ["*.xml", "**/*.urdf", "**/*.sdf", "**/*.obj", "**/*.py"],
         "pedi_drake.scenarios": ["*.yaml"],
+        "pedi_drake.missions": ["*.yaml"],
     },
 )

@@ -1,0 +1,322 @@
+"""Mission files: an ordered list of phases, each of one kind with its own fields.
+
+A mission file is YAML:
+
+    description: Touch the cardboard cat standing in front of the robot with FR.
+    scene:                       # scene objects (pedi_drake.station.scenario.SceneObject)
+      - {kind: target_panel, position: [0.46, -0.13, 0.0], yaw: 3.14159}
+    robot: {prongs: null}        # optional: the robot variant the mission needs
+    phases:
+      - {kind: stand_up}
+      - {kind: leg_to_pedipulation, leg: FR}
+      - {kind: reach, leg: FR, target: [0.40, -0.13, 0.20], tolerance: 0.005}
+      - {kind: leg_to_support, leg: FR}
+
+Every phase has `name` (defaults to "<index>_<kind>") and `timeout` [s]. Loading validates every
+field and raises MissionFileError naming the file, the phase index and the field.
+"""
+
+import dataclasses
+import math
+from pathlib import Path
+
+from pydrake.common.yaml import yaml_load
+
+from pedi_drake.config_validation import check_against_schema
+from pedi_drake.exceptions import MissionFileError
+from pedi_drake.robot import LEG_NAMES
+from pedi_drake.station.scenario import RobotConfig, SceneObject
+
+FRAMES = ("world", "trunk")
+
+
+@dataclasses.dataclass
+class PhaseBase:
+    """Fields every phase has."""
+
+    # Phase name in logs and results; defaults to "<index>_<kind>".
+    name: str = ""
+    # The phase fails if it has not succeeded after this long [s].
+    timeout: float = 10.0
+
+
+@dataclasses.dataclass
+class StandUp(PhaseBase):
+    """From lying (or any pose) to standing on four feet at `height`."""
+
+    # Trunk height above the ground [m].
+    height: float = 0.28
+    # Duration of the quintic reference [s].
+    duration: float = 2.0
+
+
+@dataclasses.dataclass
+class LieDown(PhaseBase):
+    """From standing to lying on the floor."""
+
+    duration: float = 2.0
+
+
+@dataclasses.dataclass
+class BodyMove(PhaseBase):
+    """Moves the trunk by `offset` (world frame, from the phase's start pose) [m]."""
+
+    offset: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+    duration: float = 1.0
+    # Success when the trunk is within this distance of its target [m].
+    tolerance: float = 0.01
+
+
+@dataclasses.dataclass
+class BodyRotate(PhaseBase):
+    """Rotates the trunk to roll, pitch, yaw [rad] relative to its heading at the phase start."""
+
+    rpy: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+    duration: float = 1.0
+    # Success when the orientation error is below this angle [rad].
+    tolerance: float = 0.02
+
+
+@dataclasses.dataclass
+class LegToPedipulation(PhaseBase):
+    """Shifts the support polygon away from `leg`, removes its contact and lifts the foot to the
+    working position `working_depth` below the shoulder (paper 000: 15 cm)."""
+
+    leg: str = "FR"
+    # Foot depth below the hip joint in the working position [m].
+    working_depth: float = 0.15
+    duration: float = 1.5
+
+
+@dataclasses.dataclass
+class LegToSupport(PhaseBase):
+    """Places the foot of `leg` back on the ground under its hip and restores its contact."""
+
+    leg: str = "FR"
+    duration: float = 1.5
+
+
+@dataclasses.dataclass
+class Reach(PhaseBase):
+    """Moves the foot of `leg` to `target` through the IK, optionally via `approach_offset` first."""
+
+    leg: str = "FR"
+    # Foot target [m], in `frame` ("world", or "trunk" at the phase start).
+    target: list[float] = dataclasses.field(default_factory=lambda: [0.4, -0.13, 0.2])
+    frame: str = "world"
+    # If set, first reach target + approach_offset (same frame) [m], then the target.
+    approach_offset: list[float] = dataclasses.field(default_factory=list)
+    # Intermediate targets reached in order before `target` (same frame) [m].
+    via_points: list[list[float]] = dataclasses.field(default_factory=list)
+    # Success when the foot is within this distance of the target [m].
+    tolerance: float = 0.005
+    # Duration of each joint-space quintic segment [s].
+    duration: float = 1.0
+    # Time to stay at the target once reached [s].
+    hold: float = 0.3
+
+
+@dataclasses.dataclass
+class Press(PhaseBase):
+    """Moves the foot of `leg` along `direction` until the foot force or displacement is reached."""
+
+    leg: str = "FR"
+    # Unit push direction in the world [-].
+    direction: list[float] = dataclasses.field(default_factory=lambda: [1.0, 0.0, 0.0])
+    # Stop when the estimated foot force along `direction` reaches this [N].
+    force: float = 10.0
+    # ... or when the foot moved this far [m].
+    max_displacement: float = 0.06
+    # Foot speed along `direction` [m/s].
+    speed: float = 0.05
+
+
+@dataclasses.dataclass
+class LeanOnProngs(PhaseBase):
+    """Lowers the trunk until the prongs touch and carry load, then adds them as contacts."""
+
+    duration: float = 2.0
+
+
+@dataclasses.dataclass
+class LeaveProngs(PhaseBase):
+    """Raises the trunk off the prongs back to standing height."""
+
+    height: float = 0.28
+    duration: float = 2.0
+
+
+@dataclasses.dataclass
+class Wait(PhaseBase):
+    """Holds the current references for `duration` [s]."""
+
+    duration: float = 1.0
+
+
+PHASE_KINDS: dict[str, type[PhaseBase]] = {
+    "stand_up": StandUp,
+    "lie_down": LieDown,
+    "body_move": BodyMove,
+    "body_rotate": BodyRotate,
+    "leg_to_pedipulation": LegToPedipulation,
+    "leg_to_support": LegToSupport,
+    "reach": Reach,
+    "press": Press,
+    "lean_on_prongs": LeanOnProngs,
+    "leave_prongs": LeaveProngs,
+    "wait": Wait,
+}
+
+
+@dataclasses.dataclass
+class MissionSpec:
+    """A loaded, validated mission."""
+
+    name: str
+    description: str
+    phases: list[PhaseBase]
+    scene: list[SceneObject]
+    robot: RobotConfig | None
+    source: str  # the file it came from
+
+
+@dataclasses.dataclass
+class _MissionFile:
+    """Top-level fields of a mission file (phases are checked per kind)."""
+
+    description: str = ""
+    scene: list[SceneObject] = dataclasses.field(default_factory=list)
+    robot: RobotConfig | None = None
+    phases: list[dict] = dataclasses.field(default_factory=list)
+
+
+def missions_dir() -> Path:
+    """<repo>/missions in a source checkout, pedi_drake/missions in an installed wheel."""
+    package = Path(__file__).resolve().parents[1]
+    for candidate in (package.parent / "missions", package / "missions"):
+        if candidate.is_dir():
+            return candidate
+    raise MissionFileError(f"the shipped missions folder was not found next to {package}")
+
+
+def shipped_missions() -> list[str]:
+    """Names of the missions in the shipped library."""
+    return sorted(path.stem for path in missions_dir().glob("*.yaml"))
+
+
+def resolve_mission(name_or_path: str) -> Path:
+    """A shipped mission's file from its name, or the given YAML path."""
+    path = Path(name_or_path)
+    if path.suffix in (".yaml", ".yml"):
+        if not path.exists():
+            raise MissionFileError(f"{path}: mission file not found")
+        return path
+    candidate = missions_dir() / f"{name_or_path}.yaml"
+    if not candidate.exists():
+        raise MissionFileError(
+            f"unknown mission {name_or_path!r}; shipped missions: {', '.join(shipped_missions())}, or give a .yaml path"
+        )
+    return candidate
+
+
+def _object(raw, schema, path: str, where: str):
+    """Builds a dataclass from checked YAML data (numbers in float fields become floats)."""
+    check_against_schema(raw, schema, path, where, MissionFileError)
+    return _build(raw, schema)
+
+
+def _build(raw, schema):
+    import typing
+
+    if dataclasses.is_dataclass(schema):
+        hints = typing.get_type_hints(schema)
+        return schema(**{key: _build(value, hints[key]) for key, value in raw.items()})
+    origin = typing.get_origin(schema)
+    if origin is list:
+        (item,) = typing.get_args(schema)
+        return [_build(v, item) for v in raw]
+    if origin in (typing.Union, __import__("types").UnionType):
+        if raw is None:
+            return None
+        (option,) = [a for a in typing.get_args(schema) if a is not type(None)]
+        return _build(raw, option)
+    if schema is float:
+        return float(raw)
+    return raw
+
+
+def load_mission(name_or_path: str) -> MissionSpec:
+    """Loads and validates a mission by shipped name or YAML path; raises MissionFileError."""
+    path = resolve_mission(name_or_path)
+    where = str(path)
+    try:
+        raw = yaml_load(filename=str(path))
+    except Exception as error:
+        raise MissionFileError(f"{where}: not valid YAML: {error}") from None
+    if not isinstance(raw, dict):
+        raise MissionFileError(f"{where}: expected a mapping with 'phases'")
+    top = {key: value for key, value in raw.items() if key != "phases"}
+    header = _object(top, _MissionFile, "", where)
+    raw_phases = raw.get("phases")
+    if not isinstance(raw_phases, list) or not raw_phases:
+        raise MissionFileError(f"{where}: phases: expected a non-empty list of phases")
+    phases = []
+    for i, raw_phase in enumerate(raw_phases):
+        field = f"phases[{i}]"
+        if not isinstance(raw_phase, dict) or "kind" not in raw_phase:
+            raise MissionFileError(f"{where}: {field}: expected a mapping with a 'kind'")
+        kind = raw_phase["kind"]
+        if kind not in PHASE_KINDS:
+            raise MissionFileError(
+                f"{where}: {field}.kind: unknown phase kind {kind!r}; kinds: {', '.join(PHASE_KINDS)}"
+            )
+        body = {key: value for key, value in raw_phase.items() if key != "kind"}
+        phase = _object(body, PHASE_KINDS[kind], field, where)
+        phase.name = phase.name or f"{i}_{kind}"
+        _check_phase_values(phase, f"{where}: {field}")
+        phases.append(phase)
+    names = [phase.name for phase in phases]
+    duplicates = sorted({name for name in names if names.count(name) > 1})
+    if duplicates:
+        raise MissionFileError(f"{where}: phases: duplicate phase names {duplicates}")
+    return MissionSpec(
+        name=path.stem,
+        description=header.description,
+        phases=phases,
+        scene=header.scene,
+        robot=header.robot,
+        source=where,
+    )
+
+
+def _check_phase_values(phase: PhaseBase, where: str) -> None:
+    def need(condition: bool, field: str, problem: str) -> None:
+        if not condition:
+            raise MissionFileError(f"{where}.{field}: {problem}")
+
+    need(phase.timeout > 0, "timeout", f"must be > 0 s, got {phase.timeout}")
+    for field in ("duration", "tolerance", "hold", "force", "max_displacement", "speed", "working_depth", "height"):
+        value = getattr(phase, field, None)
+        if value is not None:
+            need(math.isfinite(value) and value >= 0, field, f"must be a finite number >= 0, got {value}")
+    for field in ("duration", "speed", "height"):
+        value = getattr(phase, field, None)
+        if value is not None:
+            need(value > 0, field, f"must be > 0, got {value}")
+    leg = getattr(phase, "leg", None)
+    if leg is not None:
+        need(leg in LEG_NAMES, "leg", f"must be one of {LEG_NAMES}, got {leg!r}")
+    if isinstance(phase, Reach):
+        need(phase.frame in FRAMES, "frame", f"must be one of {FRAMES}, got {phase.frame!r}")
+        need(len(phase.target) == 3, "target", f"expected [x, y, z] in metres, got {phase.target}")
+        need(len(phase.approach_offset) in (0, 3), "approach_offset", "expected [] or [x, y, z] in metres")
+        for k, point in enumerate(phase.via_points):
+            need(len(point) == 3, f"via_points[{k}]", f"expected [x, y, z] in metres, got {point}")
+        need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+    if isinstance(phase, Press):
+        norm = math.sqrt(sum(v * v for v in phase.direction)) if len(phase.direction) == 3 else 0.0
+        need(norm > 0.5, "direction", f"expected a unit [x, y, z] vector, got {phase.direction}")
+    for field in ("offset", "rpy"):
+        value = getattr(phase, field, None)
+        if value is not None:
+            need(len(value) == 3, field, f"expected 3 numbers, got {value}")

@@ -1,0 +1,78 @@
+"""Mission files: the shipped library loads; mistakes name the file, the phase index and the field."""
+
+from pathlib import Path
+
+import pytest
+
+from pedi_drake.exceptions import MissionFileError
+from pedi_drake.mission.spec import PHASE_KINDS, Reach, load_mission, shipped_missions
+
+PAPER_MISSIONS = {
+    "hit_target_front",
+    "hit_target_side",
+    "hit_target_behind",
+    "open_door",
+    "remove_object_from_back",
+    "obstacle_sensing",
+    "give_paw",
+    "prong_push_box",
+}
+
+
+def _write(tmp_path: Path, body: str) -> str:
+    path = tmp_path / "m.yaml"
+    path.write_text(body)
+    return str(path)
+
+
+def test_the_shipped_library_has_every_paper_mission():
+    assert PAPER_MISSIONS <= set(shipped_missions())
+
+
+@pytest.mark.parametrize("name", sorted(PAPER_MISSIONS))
+def test_shipped_mission_loads_and_starts_by_standing_up(name):
+    mission = load_mission(name)
+    assert mission.phases[0].__class__.__name__ == "StandUp"
+    assert any(isinstance(phase, Reach) for phase in mission.phases)
+
+
+def test_numbers_are_read_as_floats(tmp_path):
+    mission = load_mission(_write(tmp_path, "phases:\n  - {kind: reach, leg: FL, target: [1, 0, 0]}\n"))
+    assert mission.phases[0].target == [1.0, 0.0, 0.0] and isinstance(mission.phases[0].target[0], float)
+
+
+@pytest.mark.parametrize(
+    "body,pattern",
+    [
+        ("phases:\n  - {kind: fly}\n", r"phases\[0\]\.kind: unknown phase kind 'fly'"),
+        ("phases:\n  - {kind: stand_up}\n  - {kind: reach, leg: FX}\n", r"phases\[1\]\.leg: must be one of"),
+        ("phases:\n  - {kind: reach, target: [1, 2]}\n", r"phases\[0\]\.target: expected \[x, y, z\]"),
+        ("phases:\n  - {kind: reach, targt: [1, 2, 3]}\n", r"phases\[0\]\.targt: unknown field"),
+        ("phases:\n  - {kind: wait, duration: soon}\n", r"phases\[0\]\.duration: expected a number"),
+        ("phases:\n  - {kind: wait, timeout: -1}\n", r"phases\[0\]\.timeout: must be > 0"),
+        ("phases:\n  - {kind: reach, frame: hip}\n", r"phases\[0\]\.frame: must be one of"),
+        ("phases:\n  - {kind: press, direction: [0, 0, 0]}\n", r"phases\[0\]\.direction: expected a unit"),
+        ("phases: []\n", r"phases: expected a non-empty list"),
+        ("phases:\n  - {kind: wait, name: a}\n  - {kind: wait, name: a}\n", r"duplicate phase names \['a'\]"),
+        ("scene:\n  - {kind: box, positon: [0, 0, 0]}\nphases:\n  - {kind: wait}\n", r"scene\[0\]\.positon: unknown"),
+    ],
+)
+def test_mistakes_name_file_phase_and_field(tmp_path, body, pattern):
+    with pytest.raises(MissionFileError, match=r"m\.yaml.*" + pattern):
+        load_mission(_write(tmp_path, body))
+
+
+def test_unknown_mission_name_lists_the_library():
+    with pytest.raises(MissionFileError, match=r"unknown mission 'nope'; shipped missions: .*hit_target_front"):
+        load_mission("nope")
+
+
+def test_missing_mission_file_is_named(tmp_path):
+    with pytest.raises(MissionFileError, match=r"nothere\.yaml: mission file not found"):
+        load_mission(str(tmp_path / "nothere.yaml"))
+
+
+def test_every_phase_kind_has_a_timeout_and_a_name():
+    for kind in PHASE_KINDS.values():
+        phase = kind()
+        assert phase.timeout > 0 and hasattr(phase, "name")
