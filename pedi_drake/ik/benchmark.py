@@ -4,8 +4,8 @@ Paper cube: N targets (default 200) sampled uniformly (seeded) in a 30 x 30 x 30
 10 cm in front of and 20 cm below the FR hip joint, solved from the extended leg (the paper's
 start) and from the standing pose by constrained FABRIK (at the paper's 1 cm threshold and at
 1 mm), the closed-form solver and Drake's InverseKinematics with SNOPT. Every FABRIK miss is
-classified with the closed-form solver: unreachable beyond the leg's length, unreachable because
-of named joint limits, or a solver miss.
+classified with the closed-form solver: unreachable (inside the hip's lateral offset, beyond the
+leg's length, or blocked by named joint limits) or a solver miss.
 
 Workspace: for each leg, joint angles sampled uniformly within the limits, mapped through
 forward kinematics to targets (reachable by construction), solved by FABRIK at 1 mm from both
@@ -49,12 +49,20 @@ def paper_cube_targets(num_targets: int, seed: int) -> np.ndarray:
 
 
 def classify_target(leg: str, p_target_B: np.ndarray) -> str:
-    """'reachable', 'unreachable: beyond the leg' or 'unreachable: joint limits (<joints>)'."""
+    """Why a target is (un)reachable, from the closed-form solver.
+
+    'reachable'; 'unreachable: inside the hip offset' (closer to the hip axis than the lateral
+    thigh offset, so no leg plane passes through it); 'unreachable: beyond the leg' (farther from
+    the thigh joint than the straight leg); or 'unreachable: joint limits (<joints>)' (the chain
+    reaches it only with the named joints outside their limits).
+    """
     if leg_ik_solutions(leg, p_target_B):
         return "reachable"
     unlimited = leg_ik_solutions(leg, p_target_B, respect_limits=False)
     if not unlimited:
-        return "unreachable: beyond the leg"
+        c = leg_chain(leg)
+        _, y, z = c.to_local(p_target_B)
+        return "unreachable: inside the hip offset" if y * y + z * z < c.lateral**2 else "unreachable: beyond the leg"
     c = leg_chain(leg)
     lo, hi = np.array(c.q_lower), np.array(c.q_upper)
 
