@@ -1,0 +1,57 @@
+"""Settings of the Go1 LCM driver: safety bounds, watchdogs, soft start, and the simulator bridge.
+
+Meant to become the Scenario field `hardware: Go1DriverConfig`, so one YAML file tunes both the
+driver (controller side) and `go1_sim_bridge` (robot side).
+"""
+
+import dataclasses
+
+from pedi_drake.station.go1_lcm_constants import BRIDGE_PERIOD, RC_ESTOP_FIELDS
+
+
+@dataclasses.dataclass
+class Go1SafetyConfig:
+    """Bounds the driver enforces on every command before it is published."""
+
+    # Control (and publish) period of the driver [s]: the bridge's 500 Hz.
+    period: float = BRIDGE_PERIOD
+    # Largest position gain sent to a motor [N m/rad].
+    kp_max: float = 150.0
+    # Largest damping gain sent to a motor [N m s/rad].
+    kd_max: float = 10.0
+    # Damping gain of the safe (damping) command [N m s/rad]; must be > 0.
+    damping_kd: float = 2.0
+    # Largest rate of change of a published position target [rad/s].
+    max_target_rate: float = 8.0
+    # Switch to damping when no status message arrived for this long [s]. 40 ms of silence plus
+    # one 2 ms tick keeps "damping on the wire within 50 ms of the last status" (issue 7 floor).
+    status_timeout: float = 0.04
+    # Switch to damping when the driver's own loop has not published for this long [s]: the
+    # controller stopped producing (a hang); the robot-side bridge would hold the last command.
+    command_timeout: float = 0.05
+    # Duration of the soft start that blends targets from the measured pose [s].
+    soft_start_duration: float = 1.0
+    # rc_command fields whose non-zero value latches the E-stop (the remote's button).
+    rc_estop_fields: list[str] = dataclasses.field(default_factory=lambda: list(RC_ESTOP_FIELDS))
+
+
+@dataclasses.dataclass
+class Go1BridgeConfig:
+    """Imperfections of the robot-side simulator bridge (go1_sim_bridge)."""
+
+    # Extra delay of every published status message [s] (0: none).
+    latency: float = 0.0
+    # Probability that a status tick is not published [-].
+    drop_probability: float = 0.0
+
+
+@dataclasses.dataclass
+class Go1DriverConfig:
+    """The Go1 LCM driver (controller side) and its simulator bridge (robot side)."""
+
+    # Wait this long for the first status message when the driver starts [s].
+    first_status_timeout: float = 5.0
+    # Safety layer bounds and watchdogs.
+    safety: Go1SafetyConfig = dataclasses.field(default_factory=Go1SafetyConfig)
+    # The simulator bridge's latency and message drops.
+    bridge: Go1BridgeConfig = dataclasses.field(default_factory=Go1BridgeConfig)
