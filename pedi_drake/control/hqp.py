@@ -85,6 +85,9 @@ class HqpSettings:
     rank_tolerance: float = 1e-9
     # Slack allowed on a fixed soft inequality beyond its optimum, absorbs solver tolerance [-].
     fix_tolerance: float = 1e-7
+    # Level QP backend: "daqp" (called directly) or "osqp" (MathematicalProgram + OsqpSolver, the
+    # baseline: Drake sets up a new OSQP workspace on every solve).
+    backend: str = "daqp"
 
 
 def _stack_equalities(tasks: list[EqualityTask], n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -106,12 +109,32 @@ def _stack_inequalities(tasks: list[InequalityTask], n: int) -> tuple[np.ndarray
     return G, h, w
 
 
+def _solve_osqp(H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, level: str) -> np.ndarray:
+    """The same level QP through MathematicalProgram + OsqpSolver (benchmark baseline)."""
+    from pydrake.solvers import MathematicalProgram, OsqpSolver, SolverOptions
+
+    prog = MathematicalProgram()
+    y = prog.NewContinuousVariables(len(f), "y")
+    prog.AddQuadraticCost(H, f, y, is_convex=True)
+    prog.AddLinearConstraint(C, np.full(len(upper), -np.inf), upper, y)
+    options = SolverOptions()
+    options.SetOption(OsqpSolver.id(), "eps_abs", 1e-6)
+    options.SetOption(OsqpSolver.id(), "eps_rel", 1e-6)
+    options.SetOption(OsqpSolver.id(), "polish", True)
+    result = OsqpSolver().Solve(prog, None, options)
+    if not result.is_success():
+        raise QpInfeasible(f"HQP level {level!r}: OSQP {result.get_solution_result()}")
+    return result.GetSolution(y)
+
+
 def _solve_dense_qp(
-    H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, level: str, eps_prox: float
+    H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, level: str, eps_prox: float, backend: str = "daqp"
 ) -> np.ndarray:
-    """min 0.5 y'Hy + f'y s.t. C y <= upper, by DAQP; raises QpInfeasible on failure."""
+    """min 0.5 y'Hy + f'y s.t. C y <= upper, by DAQP (or OSQP); raises QpInfeasible on failure."""
     if C.shape[0] == 0:
         return np.linalg.lstsq(H, -f, rcond=None)[0]
+    if backend == "osqp":
+        return _solve_osqp(H, f, C, upper, level)
     lower = np.full(len(upper), -_INFINITY)
     # A positive eps_prox makes DAQP run proximal-point iterations, which solve the exact
     # (semi-definite) problem instead of a regularised one: strict priorities stay exact.
@@ -128,6 +151,13 @@ def _solve_dense_qp(
     return np.asarray(y)
 
 
+def _rank_revealing_svd(A: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """(U, sigma, Vt, rank) of A, rank counting singular values above tolerance * max(1, sigma_max)."""
+    U, sigma, Vt = np.linalg.svd(A, full_matrices=True)
+    tol = tolerance * max(1.0, sigma[0] if len(sigma) else 0.0)
+    return U, sigma, Vt, int(np.sum(sigma > tol))
+
+
 def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | None = None) -> HqpSolution:
     """Solves `levels` in strict priority order (level 0 first).
 
@@ -140,59 +170,70 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
     x = np.zeros(n)
     Z = np.eye(n)
     # Inequalities carried down: hard ones and soft ones fixed at their optimal violation.
-    carried_G: list[np.ndarray] = []
-    carried_h: list[np.ndarray] = []
-    for level in levels:
+    G_all = np.zeros((0, n))
+    h_all = np.zeros(0)
+    stacked: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+    for index, level in enumerate(levels):
         A, b = _stack_equalities(level.equalities, n)
-        hard = [t for t in level.inequalities if t.hard]
-        soft = [t for t in level.inequalities if not t.hard]
-        Gh, hh, _ = _stack_inequalities(hard, n)
-        num_from_above = sum(len(h) for h in carried_h)
-        if len(hh):
-            carried_G.append(Gh)
-            carried_h.append(hh)
-        Gs, hs, ws = _stack_inequalities(soft, n)
+        Gl, hl, wl = _stack_inequalities(level.inequalities, n)
+        stacked.append((A, b, Gl, hl))
+        hard_rows = np.array([t.hard for t in level.inequalities for _ in range(len(t.h))], dtype=bool)
+        num_from_above = len(h_all)
+        if np.any(hard_rows):
+            G_all = np.vstack([G_all, Gl[hard_rows]])
+            h_all = np.concatenate([h_all, hl[hard_rows]])
+        soft_rows = ~hard_rows
+        Gs, hs, ws = Gl[soft_rows], hl[soft_rows], wl[soft_rows]
         nz = Z.shape[1]
         ms = len(hs)
         if nz == 0 and ms == 0:
             continue
         Az = A @ Z
         rz = b - A @ x
-        # Variables y = [z; v], with the soft violations v of this level.
-        H = np.zeros((nz + ms, nz + ms))
-        H[:nz, :nz] = Az.T @ Az + settings.regularization * np.eye(nz)
-        H[nz:, nz:] = np.diag(ws**2) + settings.regularization * np.eye(ms)
-        f = np.concatenate([-Az.T @ rz, np.zeros(ms)])
-        G_all = np.vstack(carried_G) if carried_G else np.zeros((0, n))
-        h_all = np.concatenate(carried_h) if carried_h else np.zeros(0)
-        C = np.vstack(
-            [
-                np.hstack([G_all @ Z, np.zeros((len(h_all), ms))]),
-                np.hstack([Gs @ Z, -np.eye(ms)]),
-            ]
-        )
-        upper = np.concatenate([h_all - G_all @ x, hs - Gs @ x])
-        # The current x solved the level above, so it meets the rows from above up to the solver's
-        # tolerance; clipping at zero keeps z = 0 feasible instead of failing on a 1e-7 residue.
-        upper[:num_from_above] = np.maximum(upper[:num_from_above], 0.0)
-        if len(upper) == 0:
-            # No inequality anywhere yet: the exact minimum-norm least-squares step.
-            z = np.linalg.lstsq(Az, rz, rcond=None)[0] if Az.shape[0] else np.zeros(nz)
+        svd = None
+        if len(h_all) == 0 and ms == 0:
+            # No inequality anywhere yet: the exact minimum-norm least-squares step, from the same
+            # SVD that gives the null space below.
+            z = np.zeros(nz)
+            if Az.shape[0]:
+                svd = _rank_revealing_svd(Az, settings.rank_tolerance)
+                U, sigma, Vt, rank = svd
+                z = Vt[:rank].T @ ((U[:, :rank].T @ rz) / sigma[:rank])
         else:
-            z = _solve_dense_qp(H, f, C, upper, level.name, settings.proximal_weight)[:nz]
+            # Variables y = [z; v], with the soft violations v of this level.
+            H = np.zeros((nz + ms, nz + ms))
+            H[:nz, :nz] = Az.T @ Az
+            H[nz:, nz:] = np.diag(ws**2)
+            if settings.regularization:
+                H += settings.regularization * np.eye(nz + ms)
+            f = np.zeros(nz + ms)
+            f[:nz] = -Az.T @ rz
+            C = np.zeros((len(h_all) + ms, nz + ms))
+            C[: len(h_all), :nz] = G_all @ Z
+            upper = np.empty(len(h_all) + ms)
+            upper[: len(h_all)] = h_all - G_all @ x
+            if ms:
+                C[len(h_all) :, :nz] = Gs @ Z
+                C[len(h_all) :, nz:] = -np.eye(ms)
+                upper[len(h_all) :] = hs - Gs @ x
+            # The current x solved the level above, so it meets the rows from above up to the
+            # solver's tolerance; clipping at zero keeps z = 0 feasible instead of failing on a
+            # 1e-7 residue.
+            upper[:num_from_above] = np.maximum(upper[:num_from_above], 0.0)
+            z = _solve_dense_qp(H, f, C, upper, level.name, settings.proximal_weight, settings.backend)[:nz]
         x = x + Z @ z
         if ms:
             # The level's optimal violation becomes a bound for every level below.
             violation = np.maximum(Gs @ x - hs, 0.0)
-            carried_G.append(Gs)
-            carried_h.append(hs + violation + settings.fix_tolerance)
-        if Az.shape[0] and nz:
-            _, sigma, Vt = np.linalg.svd(Az, full_matrices=True)
-            tol = settings.rank_tolerance * max(1.0, sigma[0] if len(sigma) else 0.0)
-            rank = int(np.sum(sigma > tol))
+            G_all = np.vstack([G_all, Gs])
+            h_all = np.concatenate([h_all, hs + violation + settings.fix_tolerance])
+        if Az.shape[0] and nz and index + 1 < len(levels):
+            _, _, Vt, rank = svd or _rank_revealing_svd(Az, settings.rank_tolerance)
             Z = Z @ Vt[rank:].T
     solve_time = time.perf_counter() - start
-    return HqpSolution(x, *_level_errors(levels, x, n), solve_time)
+    residuals = [float(np.linalg.norm(A @ x - b)) if len(b) else 0.0 for A, b, _, _ in stacked]
+    violations = [float(np.max(G @ x - h)) if len(h) else -np.inf for _, _, G, h in stacked]
+    return HqpSolution(x, residuals, violations, solve_time)
 
 
 def solve_weighted(
@@ -230,14 +271,16 @@ def solve_weighted(
         Hfull[n:, n:] = np.diag(np.concatenate(soft_w)) + settings.regularization * np.eye(ms)
     C = np.vstack([np.hstack([Gh, np.zeros((len(hh), ms))]), np.hstack([Gs, -np.eye(ms)])])
     upper = np.concatenate([hh, hs])
-    y = _solve_dense_qp(Hfull, np.concatenate([f, np.zeros(ms)]), C, upper, "weighted", settings.proximal_weight)
+    y = _solve_dense_qp(
+        Hfull, np.concatenate([f, np.zeros(ms)]), C, upper, "weighted", settings.proximal_weight, settings.backend
+    )
     x = y[:n]
     return HqpSolution(x, *_level_errors(levels, x, n), time.perf_counter() - start)
 
 
 def _level_errors(levels: list[Level], x: np.ndarray, n: int) -> tuple[list[float], list[float]]:
     residuals, violations = [], []
-    for level in levels:
+    for index, level in enumerate(levels):
         A, b = _stack_equalities(level.equalities, n)
         residuals.append(float(np.linalg.norm(A @ x - b)) if len(b) else 0.0)
         G, h, _ = _stack_inequalities(level.inequalities, n)

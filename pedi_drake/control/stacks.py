@@ -1,0 +1,137 @@
+"""Task stacks of the two papers, as presets that turn one control instant into HQP levels.
+
+The paper's level 0 is solved as two sub-levels: "physics" (floating-base dynamics and contact
+no-motion, equalities that some x always meets exactly, so solving them first by null-space
+projection loses nothing and halves the size of every QP below) then "feasibility".
+
+paper000 (Sec. III-B, two TSID levels, here strict):
+    level 0 "physics" + "feasibility": floating-base dynamics, contact no-motion; contact force
+        limits and friction pyramid, torque limits, joint limits (hard), capture point in the
+        safety polygon (soft);
+    level 1 "pose": trunk position and attitude, pedipulation foot / leg joint reference, idle legs;
+    level 2 "regularisation" (added so the optimum is unique): posture, contact forces, torques.
+paper003 (Sec. VI, five levels):
+    0 dynamic feasibility (as above; the capture point optionally, `paper003_balance`),
+    1 torso angular acceleration, 2 torso translational acceleration, 3 swing foot acceleration
+    (and leg joint references, idle legs), 4 torque minimisation (with light posture and force terms).
+Prong contacts sit in the same augmented contact Jacobian as the feet (paper 003).
+"""
+
+import dataclasses
+
+import numpy as np
+
+from pedi_drake import robot
+from pedi_drake.control import tasks
+from pedi_drake.control.config import WholeBodyControllerConfig
+from pedi_drake.control.hqp import EqualityTask, Level
+from pedi_drake.control.references import LEG_MODE_FOOT, LEG_MODE_JOINTS, BodyReference, LegReference
+from pedi_drake.control.robot_model import RobotSnapshot
+
+
+@dataclasses.dataclass
+class ResolvedInputs:
+    """Every reference of one control instant, defaults applied."""
+
+    body: BodyReference
+    legs: list[LegReference]  # 4, Unitree order
+    ramp: np.ndarray  # (nc,) contact activation in [0, 1]
+    no_motion: np.ndarray  # (nc,) bool: contacts held still
+    polygon_N: np.ndarray  # (k, 2) safety polygon half-planes N xi <= d
+    polygon_d: np.ndarray  # (k,) [m]
+    friction: float  # [-]
+    ground_height: float  # height of the contact plane [m]
+
+
+class StackBuilder:
+    """Builds the HQP levels of the configured stack from a snapshot and resolved inputs."""
+
+    def __init__(self, config: WholeBodyControllerConfig, layout: tasks.VariableLayout, total_mass: float) -> None:
+        self.config = config
+        self.layout = layout
+        self.total_weight = total_mass * tasks.GRAVITY
+        c = config
+        self.dynamics = tasks.FloatingBaseDynamics()
+        self.no_motion = tasks.ContactNoMotion(c.contact_damping)
+        self.forces = tasks.ContactForceLimits(c.min_normal_force, c.max_normal_force, c.friction_pyramid_inscribed)
+        self.torque_limits = tasks.TorqueLimits(c.torque_limit_scale)
+        self.joint_limits = tasks.JointLimits(c.joint_limit_horizon, c.joint_limit_margin)
+        self.balance = tasks.CapturePointBalance(c.balance_horizon)
+        self.trunk_orientation = tasks.TrunkOrientation(tasks.PdGains(c.trunk_orientation.kp, c.trunk_orientation.kd))
+        self.trunk_position = tasks.TrunkPosition(tasks.PdGains(c.trunk_position.kp, c.trunk_position.kd))
+        self.foot = tasks.FootPosition(tasks.PdGains(c.foot_position.kp, c.foot_position.kd))
+        self.leg_joints = tasks.JointPosture(tasks.PdGains(c.leg_joints.kp, c.leg_joints.kd), "leg_joints")
+        self.posture = tasks.JointPosture(tasks.PdGains(c.posture.kp, c.posture.kd), "posture")
+        self.force_regularization = tasks.ContactForceRegularization()
+        self.torque_min = tasks.TorqueMinimization()
+        self.nominal_q = np.tile(np.asarray(c.nominal_leg_posture, float), 4)
+
+    def physics(self, s: RobotSnapshot, inputs: ResolvedInputs) -> Level:
+        """Floating-base dynamics and contact no-motion: equalities that some x always meets exactly."""
+        return Level(
+            "physics", [self.dynamics.rows(s, self.layout), self.no_motion.rows(s, self.layout, inputs.no_motion)]
+        )
+
+    def feasibility(self, s: RobotSnapshot, inputs: ResolvedInputs, balance: bool) -> Level:
+        lay = self.layout
+        level = Level(
+            "feasibility",
+            [],
+            [
+                self.forces.rows(lay, inputs.ramp, inputs.friction),
+                self.torque_limits.rows(s, lay, robot.EFFORT_LIMIT),
+                self.joint_limits.rows(s, lay, robot.Q_LOWER, robot.Q_UPPER, robot.VELOCITY_LIMIT),
+            ],
+        )
+        if balance:
+            level.inequalities.append(
+                self.balance.rows(s, lay, inputs.polygon_N, inputs.polygon_d, inputs.ground_height)
+            )
+        return level
+
+    def leg_tasks(self, s: RobotSnapshot, inputs: ResolvedInputs) -> list[EqualityTask]:
+        """Pedipulation legs (foot or joint reference) and idle swing legs (held at the nominal posture)."""
+        rows = []
+        for i, (leg, ref) in enumerate(zip(robot.LEG_NAMES, inputs.legs, strict=True)):
+            joints = np.arange(3 * i, 3 * i + 3)
+            if ref.mode == LEG_MODE_FOOT:
+                rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, ref.acceleration))
+                rows[-1].name = f"foot_{leg}"
+            elif ref.mode == LEG_MODE_JOINTS:
+                rows.append(self.leg_joints.rows(s, self.layout, joints, ref.position, ref.velocity, ref.acceleration))
+                rows[-1].name = f"joints_{leg}"
+            elif not inputs.no_motion[i]:
+                zero = np.zeros(3)
+                rows.append(self.leg_joints.rows(s, self.layout, joints, self.nominal_q[joints], zero, zero))
+                rows[-1].name = f"idle_{leg}"
+        return rows
+
+    def regularisation(self, s: RobotSnapshot, inputs: ResolvedInputs) -> list[EqualityTask]:
+        c = self.config
+        zero = np.zeros(12)
+        return [
+            self.posture.rows(s, self.layout, np.arange(12), self.nominal_q, zero, zero, c.posture_weight),
+            self.force_regularization.rows(self.layout, inputs.ramp, self.total_weight, c.force_regularization_weight),
+            self.torque_min.rows(s, self.layout, c.torque_weight),
+        ]
+
+    def levels(self, s: RobotSnapshot, inputs: ResolvedInputs) -> list[Level]:
+        lay, body = self.layout, inputs.body
+        orientation = self.trunk_orientation.rows(s, lay, body.R, body.w, body.alpha)
+        position = self.trunk_position.rows(s, lay, body.p, body.v, body.a)
+        legs = self.leg_tasks(s, inputs)
+        if self.config.stack == "paper003":
+            return [
+                self.physics(s, inputs),
+                self.feasibility(s, inputs, self.config.paper003_balance),
+                Level("torso_angular", [orientation]),
+                Level("torso_linear", [position]),
+                Level("swing_foot", legs),
+                Level("torque_minimisation", self.regularisation(s, inputs)),
+            ]
+        return [
+            self.physics(s, inputs),
+            self.feasibility(s, inputs, True),
+            Level("pose", [orientation, position] + legs),
+            Level("regularisation", self.regularisation(s, inputs)),
+        ]

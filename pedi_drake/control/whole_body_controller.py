@@ -1,0 +1,260 @@
+"""WholeBodyController: the task-priority QP controller as a Drake LeafSystem.
+
+Every `period` [s] a discrete update reads the state estimate, the measured joints and the task
+references, builds the configured stack (`stacks.py`) on the controller's own plant
+(`robot_model.py`), solves it with the hierarchical QP (`hqp.py`) and stores the next
+`go1.command` in the Context; the `command` output is that state (a zero-order hold).
+
+Inputs (all numeric vectors; reference layouts in `pedi_drake.control.references`):
+    base_state (13)         floating-base estimate [quat wxyz, p_WB, w_WB, v_WB], world frame
+    position_measured (12)  joint angles [rad], Unitree order
+    velocity_measured (12)  joint rates [rad/s], Unitree order
+    body_reference (19)     trunk pose trajectory sample; unconnected: hold the first-tick pose
+    leg_reference (40)      per-leg foot / joint references; unconnected: no leg task
+    contact_set (4 + prongs) loaded contacts 0/1; unconnected: the four feet
+    safety_polygon (6)      capture-point polygon; unconnected: the shrunk support polygon
+    friction (1)            ground friction coefficient; unconnected: `config.friction`
+Outputs:
+    command (60)            go1.command: q_des, qd_des, kp, kd, tau_ff (Unitree order)
+    diagnostics             see DIAGNOSTICS_LAYOUT
+
+Discrete state (nothing that changes lives in Python members): the command, the integrated
+joint reference (q, qd), the contact ramps, the held trunk pose, the diagnostics.
+
+Commands: tau_ff is the QP's torque (tau = M_a vdot + h_a - J_a^T f); q_des, qd_des integrate the
+QP's joint accelerations (kept near the measurement) under low PD gains, so the motor PD only
+corrects what the feed-forward misses. A failed QP or a non-finite input never emits NaN: the
+last good command is held with zero velocity target and `failure_kd` damping, and reported.
+"""
+
+import time
+
+import numpy as np
+from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
+
+from pedi_drake import robot
+from pedi_drake.control import references, tasks
+from pedi_drake.control.config import HQP_MODES, QP_BACKENDS, STACKS, WholeBodyControllerConfig
+from pedi_drake.control.hqp import HqpSettings, solve_hqp, solve_weighted
+from pedi_drake.control.robot_model import ControllerModel
+from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
+from pedi_drake.estimation.base_state import BASE_STATE_SIZE
+from pedi_drake.exceptions import ConfigError, QpInfeasible
+from pedi_drake.prongs import ProngDesign
+
+COMMAND_SIZE = 60
+STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0
+MAX_LEVELS = 5
+
+
+def diagnostics_layout(num_contacts: int) -> dict[str, slice]:
+    """Named slices of the diagnostics vector."""
+    sizes = [
+        ("status", 1),  # 0 ok, 1 QP failed (last command held), 2 non-finite input
+        ("solve_time", 1),  # wall time of the HQP solve [s]
+        ("tick_time", 1),  # wall time of the whole update [s]
+        ("consecutive_failures", 1),
+        ("total_failures", 1),
+        ("capture_point", 2),  # [m], world xy
+        ("trunk_position_error", 3),  # p_ref - p [m]
+        ("trunk_orientation_error", 3),  # rotation vector of R_ref R^T [rad]
+        ("foot_errors", 4),  # |p_ref - p_foot| of legs in foot mode, else 0 [m]
+        ("level_residuals", MAX_LEVELS),  # equality residual per level (padded)
+        ("contact_forces", 3 * num_contacts),  # [N], world frame
+        ("tau_ff", 12),  # [N m]
+        ("contact_ramp", num_contacts),  # [-]
+    ]
+    layout, start = {}, 0
+    for name, size in sizes:
+        layout[name] = slice(start, start + size)
+        start += size
+    return layout
+
+
+class WholeBodyController(LeafSystem):
+    """Hierarchical whole-body QP controller for the Go1 (and its prongs)."""
+
+    def __init__(self, config: WholeBodyControllerConfig, prongs: ProngDesign | None = None) -> None:
+        super().__init__()
+        if config.stack not in STACKS:
+            raise ConfigError(f"whole_body.stack: must be one of {STACKS}, got {config.stack!r}")
+        if config.hqp_mode not in HQP_MODES:
+            raise ConfigError(f"whole_body.hqp_mode: must be one of {HQP_MODES}, got {config.hqp_mode!r}")
+        if config.qp_backend not in QP_BACKENDS:
+            raise ConfigError(f"whole_body.qp_backend: must be one of {QP_BACKENDS}, got {config.qp_backend!r}")
+        if not config.period > 0.0:
+            raise ConfigError(f"whole_body.period: must be > 0 s, got {config.period!r}")
+        self.config = config
+        # Constant after construction: the model (its scratch context is rewritten every tick).
+        self.model = ControllerModel(prongs)
+        nc = self.model.num_contacts
+        self.num_contacts = nc
+        self.layout = tasks.VariableLayout(self.model.nv, nc, self.model.plant_map.v_index)
+        self.builder = StackBuilder(config, self.layout, self.model.total_mass)
+        self.hqp_settings = HqpSettings(backend=config.qp_backend)
+        self.diag = diagnostics_layout(nc)
+        self.default_contact_set = references.contact_set_vector(num_prongs=nc - 4)
+
+        self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
+        self.position_port = self.DeclareVectorInputPort("position_measured", 12)
+        self.velocity_port = self.DeclareVectorInputPort("velocity_measured", 12)
+        self.body_reference_port = self.DeclareVectorInputPort("body_reference", references.BODY_REFERENCE_SIZE)
+        self.leg_reference_port = self.DeclareVectorInputPort("leg_reference", references.LEG_REFERENCE_SIZE)
+        self.contact_set_port = self.DeclareVectorInputPort("contact_set", nc)
+        self.safety_polygon_port = self.DeclareVectorInputPort("safety_polygon", references.SAFETY_POLYGON_SIZE)
+        self.friction_port = self.DeclareVectorInputPort("friction", 1)
+
+        self.command_state = self.DeclareDiscreteState(COMMAND_SIZE)
+        self.reference_state = self.DeclareDiscreteState(24)  # q_ref (12), qd_ref (12)
+        self.ramp_state = self.DeclareDiscreteState(nc)
+        self.hold_state = self.DeclareDiscreteState(8)  # initialised flag, p_WB (3), quat (4)
+        self.diagnostics_state = self.DeclareDiscreteState(self.diag["contact_ramp"].stop)
+        self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
+        # The same tick on demand (CalcForcedDiscreteVariableUpdate): tests and the benchmark.
+        self.DeclareForcedDiscreteUpdateEvent(self._update)
+        self.command_port = self.DeclareStateOutputPort("command", self.command_state)
+        self.diagnostics_port = self.DeclareStateOutputPort("diagnostics", self.diagnostics_state)
+
+    # ---------------------------------------------------------------------------------------------
+    def _optional(self, port, context: Context, default: np.ndarray) -> np.ndarray:
+        return np.asarray(port.Eval(context), float) if port.HasValue(context) else default
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        start = time.perf_counter()
+        c = self.config
+        base = np.asarray(self.base_state_port.Eval(context), float)
+        q = np.asarray(self.position_port.Eval(context), float)
+        qd = np.asarray(self.velocity_port.Eval(context), float)
+        hold = context.get_discrete_state(self.hold_state).value().copy()
+        ramp = context.get_discrete_state(self.ramp_state).value().copy()
+        q_ref = context.get_discrete_state(self.reference_state).value()[:12].copy()
+        qd_ref = context.get_discrete_state(self.reference_state).value()[12:].copy()
+        last_command = context.get_discrete_state(self.command_state).value().copy()
+        diag = context.get_discrete_state(self.diagnostics_state).value().copy()
+
+        contact_set = np.clip(self._optional(self.contact_set_port, context, self.default_contact_set), 0.0, 1.0)
+        if not np.all(np.isfinite(np.concatenate([base, q, qd, contact_set]))):
+            self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
+            return
+        if hold[0] == 0.0:
+            # First tick: hold the current trunk pose, start the reference at the measurement and
+            # the contact ramps at the commanded contact set (the robot starts on its feet).
+            hold = np.concatenate([[1.0], base[4:7], base[0:4]])
+            q_ref, qd_ref = q.copy(), qd.copy()
+            ramp = contact_set.copy()
+        step = c.period / max(c.contact_ramp_time, 1e-9)
+        ramp = np.clip(ramp + np.clip(contact_set - ramp, -step, step), 0.0, 1.0)
+
+        default_body = np.concatenate([hold[1:4], hold[4:8], np.zeros(12)])
+        body_x = self._optional(self.body_reference_port, context, default_body)
+        leg_x = self._optional(self.leg_reference_port, context, np.zeros(references.LEG_REFERENCE_SIZE))
+        polygon_x = self._optional(self.safety_polygon_port, context, np.zeros(references.SAFETY_POLYGON_SIZE))
+        mu_x = self._optional(self.friction_port, context, np.array([c.friction]))
+        if not all(np.all(np.isfinite(x)) for x in (body_x, leg_x, polygon_x, mu_x)) or mu_x[0] <= 0.0:
+            self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
+            return
+
+        snapshot = self.model.update(base, q, qd)
+        no_motion = (contact_set > 0.5) | (ramp > 0.0)
+        loaded = contact_set > 0.5
+        if np.any(loaded):
+            ground = float(np.mean(snapshot.p_contacts[loaded, 2])) - robot.FOOT_RADIUS
+        else:
+            ground = 0.0
+        if polygon_x[0] > 0.5:
+            N, d = tasks.rectangle_halfplanes(polygon_x[1:3], polygon_x[3:5], polygon_x[5])
+        elif np.count_nonzero(loaded) >= 3:
+            N, d = tasks.polygon_halfplanes(snapshot.p_contacts[loaded, :2], c.safety_margin)
+        else:
+            N, d = np.zeros((0, 2)), np.zeros(0)
+        inputs = ResolvedInputs(
+            body=references.parse_body_reference(body_x),
+            legs=references.parse_leg_reference(leg_x),
+            ramp=ramp,
+            no_motion=no_motion,
+            polygon_N=N,
+            polygon_d=d,
+            friction=float(mu_x[0]),
+            ground_height=ground,
+        )
+        try:
+            levels = self.builder.levels(snapshot, inputs)
+            if c.hqp_mode == "weighted":
+                weights = list(c.level_weights) + [1e-3] * len(levels)
+                solution = solve_weighted(levels, self.layout.size, weights[: len(levels)], self.hqp_settings)
+            else:
+                solution = solve_hqp(levels, self.layout.size, self.hqp_settings)
+            x = solution.x
+            if not np.all(np.isfinite(x)):
+                raise QpInfeasible("non-finite QP solution")
+        except (QpInfeasible, np.linalg.LinAlgError):
+            self._fail(discrete_state, last_command, q, diag, STATUS_QP_FAILED, start, ramp=ramp, hold=hold)
+            return
+
+        vdot, forces = self.layout.split(x)
+        T, t0 = tasks.torque_map(snapshot, self.layout)
+        tau = T @ x + t0
+        qdd = vdot[self.layout.v_joints]
+        # Integrate the QP's accelerations into the joint reference, kept near the measurement so
+        # a long stall (e.g. contact with an obstacle) cannot wind up the PD.
+        qd_ref = np.clip(
+            qd_ref + qdd * c.period, qd - c.max_reference_rate_deviation, qd + c.max_reference_rate_deviation
+        )
+        q_ref = np.clip(q_ref + qd_ref * c.period, q - c.max_reference_deviation, q + c.max_reference_deviation)
+        command = np.concatenate([q_ref, qd_ref, np.full(12, c.joint_kp), np.full(12, c.joint_kd), tau])
+
+        diag[self.diag["status"]] = STATUS_OK
+        diag[self.diag["solve_time"]] = solution.solve_time
+        diag[self.diag["consecutive_failures"]] = 0.0
+        xi, _ = self.builder.balance.capture_point(snapshot, ground)
+        diag[self.diag["capture_point"]] = xi
+        diag[self.diag["trunk_position_error"]] = inputs.body.p - snapshot.p_WB
+        diag[self.diag["trunk_orientation_error"]] = tasks.orientation_error_W(inputs.body.R, snapshot.R_WB)
+        foot_errors = np.zeros(4)
+        for i, leg in enumerate(inputs.legs):
+            if leg.mode == references.LEG_MODE_FOOT:
+                foot_errors[i] = np.linalg.norm(leg.position - snapshot.p_contacts[i])
+        diag[self.diag["foot_errors"]] = foot_errors
+        residuals = np.zeros(MAX_LEVELS)
+        residuals[: min(MAX_LEVELS, len(solution.equality_residuals))] = solution.equality_residuals[:MAX_LEVELS]
+        diag[self.diag["level_residuals"]] = residuals
+        diag[self.diag["contact_forces"]] = forces.ravel()
+        diag[self.diag["tau_ff"]] = tau
+        diag[self.diag["contact_ramp"]] = ramp
+        diag[self.diag["tick_time"]] = time.perf_counter() - start
+
+        discrete_state.get_mutable_vector(self.command_state).SetFromVector(command)
+        discrete_state.get_mutable_vector(self.reference_state).SetFromVector(np.concatenate([q_ref, qd_ref]))
+        discrete_state.get_mutable_vector(self.ramp_state).SetFromVector(ramp)
+        discrete_state.get_mutable_vector(self.hold_state).SetFromVector(hold)
+        discrete_state.get_mutable_vector(self.diagnostics_state).SetFromVector(diag)
+
+    def _fail(
+        self,
+        discrete_state: DiscreteValues,
+        last_command: np.ndarray,
+        q: np.ndarray,
+        diag: np.ndarray,
+        status: float,
+        start: float,
+        ramp: np.ndarray | None = None,
+        hold: np.ndarray | None = None,
+    ) -> None:
+        """Holds the last good command with zero velocity target and damping; records the failure."""
+        c = self.config
+        command = last_command.copy()
+        if not np.any(command[24:36]) and np.all(np.isfinite(q)):
+            command[0:12] = q  # no good command yet: hold where the joints are
+        command[12:24] = 0.0
+        command[36:48] = np.maximum(command[36:48], c.failure_kd)
+        command = np.nan_to_num(command, nan=0.0, posinf=0.0, neginf=0.0)
+        diag[self.diag["status"]] = status
+        diag[self.diag["consecutive_failures"]] += 1.0
+        diag[self.diag["total_failures"]] += 1.0
+        diag[self.diag["tick_time"]] = time.perf_counter() - start
+        discrete_state.get_mutable_vector(self.command_state).SetFromVector(command)
+        discrete_state.get_mutable_vector(self.diagnostics_state).SetFromVector(diag)
+        if ramp is not None:
+            discrete_state.get_mutable_vector(self.ramp_state).SetFromVector(ramp)
+        if hold is not None:
+            discrete_state.get_mutable_vector(self.hold_state).SetFromVector(hold)
