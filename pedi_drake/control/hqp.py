@@ -280,7 +280,7 @@ def solve_weighted(
 
 def _level_errors(levels: list[Level], x: np.ndarray, n: int) -> tuple[list[float], list[float]]:
     residuals, violations = [], []
-    for index, level in enumerate(levels):
+    for level in levels:
         A, b = _stack_equalities(level.equalities, n)
         residuals.append(float(np.linalg.norm(A @ x - b)) if len(b) else 0.0)
         G, h, _ = _stack_inequalities(level.inequalities, n)
