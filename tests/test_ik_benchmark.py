@@ -3,6 +3,7 @@
 import json
 
 import numpy as np
+import pytest
 
 from pedi_drake.ik import benchmark, leg_ik_solutions
 
@@ -46,3 +47,34 @@ def test_benchmark_writes_consistent_json(tmp_path, capsys):
         "mean_iterations_at_most_1_76",
         "median_time_below_100us",
     }
+
+
+@pytest.fixture(scope="module")
+def paper_cube():
+    """The paper's 200 targets, FABRIK and closed form only (SNOPT is covered above)."""
+    return benchmark.run_paper_cube(200, seed=0, snopt=False)
+
+
+def _fabrik_rows(cube, threshold):
+    return [r for r in cube["rows"] if r["solver"] == "fabrik" and r["threshold_m"] == threshold]
+
+
+def test_paper_cube_has_no_solver_misses(paper_cube):
+    assert not [m for m in paper_cube["misses"] if m["class"] == "solver miss"]
+    for row in _fabrik_rows(paper_cube, 1e-3):
+        assert row["reached"] == paper_cube["reachable"]
+
+
+def test_paper_cube_mean_iterations_at_1cm_beat_the_paper(paper_cube):
+    for row in _fabrik_rows(paper_cube, 1e-2):
+        assert row["mean_iterations_reached"] <= benchmark.PAPER["mean_iterations"]
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="issue 3 floor not met: FABRIK's knee converges linearly (about x0.05-0.2 per iteration), "
+    "so stopping at the first iterate under 1 mm leaves a mean of 0.27-0.29 mm",
+)
+def test_paper_cube_mean_error_at_1mm_is_below_0_2mm(paper_cube):
+    for row in _fabrik_rows(paper_cube, 1e-3):
+        assert row["mean_error_reached_m"] < 2e-4

@@ -21,11 +21,13 @@ One Go1 leg is a fixed-base chain from the hip: hip joint H (abduction, axis e0)
    the joint axis, skip it below 1e-4 rad, saturate, and update the downstream joints.
 
 The iteration stops within the tolerance, at `max_iterations`, or when an iteration no longer
-makes progress. A stall is the failure the paper reports ("the forward phase positioned the
-elbow in a location that, upon projection, returned it to its previous iteration point"); here it
-happens when the target is near the hip's height and the hip chose the tangent whose leg plane
-puts the target out of the thigh's range, so on a stall the solver once switches to the other
-tangent and continues. The best configuration seen is returned; it is always within the limits.
+changes the error (a stall). A stall is the failure the paper reports ("the forward phase
+positioned the elbow in a location that, upon projection, returned it to its previous iteration
+point"). Here it happens when the target is near the hip's height and the hip chose the tangent
+whose leg plane puts the target out of the thigh's range, so on a stall the solver switches to
+the other tangent (and back on a second stall); if it is still stuck, which happens only from
+starts far from the goal (about 1 in 10^4 random starts), it restarts once from the standing
+pose. The best configuration seen is returned; it is always within the limits.
 
 Every joint plane here is spanned by two of the leg's basis vectors (see `analytic.LegChain`),
 so the projection matrix of Algorithm 1 reduces to taking two coordinates, written as a complex
@@ -49,7 +51,8 @@ from pedi_drake.ik.analytic import LegChain, leg_chain
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
 _MIN_ROTATION = 1e-4  # [rad] Algorithm 1, line 6: smaller compensation rotations are skipped.
-_MIN_PROGRESS = 1e-8  # [m] an iteration that improves the error by less than this has stalled.
+_MIN_PROGRESS = 1e-8  # [m] an iteration that changes the error by less than this has stalled.
+_MAX_BRANCH_SWITCHES = 2  # stalls after which the hip tangent is switched before giving up
 DEFAULT_MAX_ITERATIONS = 50
 
 
@@ -110,6 +113,7 @@ class _Chain:
     phase_CF: float  # direction of the calf link at zero calf angle [rad]
     lower: tuple[float, float, float]
     upper: tuple[float, float, float]
+    restart_q: tuple[float, float, float]  # the standing pose of the leg [rad]
 
 
 @functools.lru_cache(maxsize=4)
@@ -127,6 +131,7 @@ def _chain(leg: str) -> _Chain:
         phase_CF=cmath.phase(c.w_CF),
         lower=c.q_lower,
         upper=c.q_upper,
+        restart_q=tuple(float(v) for v in robot.STANDING_Q[robot.leg_slice(leg)]),
     )
 
 
@@ -254,7 +259,8 @@ def solve_leg_ik(
     tx, ty, tz = ch.base.to_local(p)
     error = _foot_error(ch, tx, ty, tz, q0, q1, q2)
     best = (error, q0, q1, q2)
-    branch, flipped, just_flipped = 0, False, False
+    branch, switches, just_switched = 0, 0, False
+    restarted = (q0, q1, q2) == ch.restart_q  # a restart from the start itself would repeat it
     iterations = 0
     while error > tol and iterations < max_iterations:
         iterations += 1
@@ -263,15 +269,27 @@ def solve_leg_ik(
         error = _foot_error(ch, tx, ty, tz, q0, q1, q2)
         if error < best[0]:
             best = (error, q0, q1, q2)
-        if just_flipped:  # the first iteration on the other tangent may move away first
-            just_flipped = False
-        elif error > tol and previous - error < _MIN_PROGRESS:
-            if flipped:
-                break
-            # Stalled: use the leg plane on the other side of the target (see module doc):
-            # the target's z in the current leg plane tells which tangent is in use.
-            z_target = (cmath.exp(-1j * q0) * complex(ty, tz)).imag
-            branch = -1 if z_target > 0.0 else 1
-            flipped = just_flipped = True
+        if just_switched:  # the first iteration on the other tangent may move away first
+            just_switched = False
+        elif error > tol and abs(previous - error) < _MIN_PROGRESS:
+            # Stalled: the iteration returned to where it was (an iteration that moves away,
+            # e.g. the first one from a poor start, is not a stall; `best` keeps the best).
+            if switches == _MAX_BRANCH_SWITCHES:
+                if restarted:
+                    break
+                # Still stuck (the compensation phase can hold the hip in a local minimum when
+                # the start is far from the goal): restart once from the standing pose.
+                q0, q1, q2 = ch.restart_q
+                branch, switches, just_switched, restarted = 0, 0, True, True
+                continue
+            # Switch the leg plane to the other side of the target (see module doc); the
+            # target's z in the current leg plane tells which tangent is in use. A second
+            # stall switches back.
+            if branch == 0:
+                branch = -1 if (cmath.exp(-1j * q0) * complex(ty, tz)).imag > 0.0 else 1
+            else:
+                branch = -branch
+            switches += 1
+            just_switched = True
     error, q0, q1, q2 = best
     return LegIkResult(q=np.array([q0, q1, q2]), success=error <= tol, error=error, iterations=iterations)
