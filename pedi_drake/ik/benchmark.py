@@ -117,6 +117,7 @@ class SnoptLegIk:
 
 def _summary(errors: list[float], iterations: list[int] | None, times: list[float], threshold: float) -> dict:
     e = np.array(errors)
+    finite = e[np.isfinite(e)]
     reached = e <= threshold
     out = {
         "threshold_m": threshold,
@@ -124,8 +125,9 @@ def _summary(errors: list[float], iterations: list[int] | None, times: list[floa
         "reached": int(reached.sum()),
         "mean_error_reached_m": float(e[reached].mean()) if reached.any() else None,
         "max_error_reached_m": float(e[reached].max()) if reached.any() else None,
-        "mean_error_all_m": float(e[np.isfinite(e)].mean()),
-        "max_error_all_m": float(e[np.isfinite(e)].max()),
+        # Over the targets with a finite error (the closed-form solver has none when unreachable).
+        "mean_error_all_m": float(finite.mean()) if finite.size else None,
+        "max_error_all_m": float(finite.max()) if finite.size else None,
         "median_time_us": 1e6 * statistics.median(times),
     }
     if iterations is not None:

@@ -5,6 +5,8 @@ One Go1 leg is a fixed-base chain from the hip: hip joint H (abduction, axis e0)
 
 1. Forward reaching (foot to base), as in FABRIK: the foot is put on the target t and the calf
    joint on the segment towards its previous position, at the calf length: C' = t + L2 u(C - t).
+   The pass stops there: the thigh joint's position depends on the hip angle alone, so the
+   backward pass places it from the hip.
 2. Backward reaching (base to foot), projecting each joint onto the constraint plane of the
    joint before it and saturating every joint increment at the joint limits:
    - hip: the lateral offset makes the chain non-planar. The thigh and calf move in the leg
