@@ -50,6 +50,8 @@ class RobotSnapshot:
     Jdot_v_com: np.ndarray  # (3,) centre-of-mass bias acceleration [m/s^2]
     q_joints: np.ndarray  # (12,) Unitree order [rad]
     v_joints: np.ndarray  # (12,) Unitree order [rad/s]
+    # (T, t0) of tasks.torque_map, filled on first use.
+    torque_map: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def num_contacts(self) -> int:
@@ -69,8 +71,11 @@ class RobotSnapshot:
 class ControllerModel:
     """Plant, scratch context and contact frames for the whole-body controller."""
 
-    def __init__(self, prongs: ProngDesign | None = None) -> None:
+    def __init__(self, prongs: ProngDesign | None = None, com_bias: bool = True) -> None:
+        """`com_bias` False skips Jdot_com v (returned as zeros): it costs ~70 us a tick and only
+        enters the capture-point prediction scaled by horizon / omega (below 1 mm at standing speeds)."""
         self.prongs = prongs
+        self.com_bias = com_bias
         self.plant, self.plant_map = robot.make_go1_plant(robot.design_key(prongs))
         self.context: Context = self.plant.CreateDefaultContext()
         plant, model = self.plant, self.plant_map.model
@@ -134,7 +139,11 @@ class ControllerModel:
             p_WB=X_WB.translation(),
             p_com=plant.CalcCenterOfMassPositionInWorld(context),
             J_com=plant.CalcJacobianCenterOfMassTranslationalVelocity(context, kV, world, world),
-            Jdot_v_com=plant.CalcBiasCenterOfMassTranslationalAcceleration(context, kV, world, world),
+            Jdot_v_com=(
+                plant.CalcBiasCenterOfMassTranslationalAcceleration(context, kV, world, world)
+                if self.com_bias
+                else np.zeros(3)
+            ),
             q_joints=np.asarray(q_joints, float),
             v_joints=np.asarray(v_joints, float),
         )

@@ -39,6 +39,13 @@ class VariableLayout:
     def size(self) -> int:
         return self.nv + 3 * self.nc
 
+    @property
+    def unactuated(self) -> np.ndarray:
+        """Indices of the floating-base velocities (those that are not joints)."""
+        mask = np.ones(self.nv, dtype=bool)
+        mask[self.v_joints] = False
+        return np.flatnonzero(mask)
+
     def force(self, contact: int) -> slice:
         return slice(self.nv + 3 * contact, self.nv + 3 * contact + 3)
 
@@ -48,17 +55,21 @@ class VariableLayout:
 
 
 def torque_map(s: RobotSnapshot, layout: VariableLayout) -> tuple[np.ndarray, np.ndarray]:
-    """(T, t0) with joint torques tau = T x + t0 in Unitree order [N m] (actuated dynamics rows)."""
-    rows = layout.v_joints
-    T = np.hstack([s.M[rows, :], -s.J_contacts[:, rows].T])
-    return T, s.h[rows].copy()
+    """(T, t0) with joint torques tau = T x + t0 in Unitree order [N m] (actuated dynamics rows).
+
+    Computed once per snapshot (several tasks and the command need it); treat as read-only.
+    """
+    if s.torque_map is None:
+        rows = layout.v_joints
+        s.torque_map = (np.hstack([s.M[rows, :], -s.J_contacts[:, rows].T]), s.h[rows].copy())
+    return s.torque_map
 
 
 class FloatingBaseDynamics:
     """The six unactuated rows of M vdot + h = S^T tau + J_c^T f: M_u vdot - J_c,u^T f = -h_u."""
 
     def rows(self, s: RobotSnapshot, layout: VariableLayout) -> EqualityTask:
-        u = np.setdiff1d(np.arange(layout.nv), layout.v_joints)
+        u = layout.unactuated
         A = np.hstack([s.M[u, :], -s.J_contacts[:, u].T])
         return EqualityTask("floating_base_dynamics", A, -s.h[u])
 
@@ -188,7 +199,7 @@ def convex_hull_ccw(points_xy: np.ndarray) -> np.ndarray:
 def polygon_halfplanes(vertices_xy: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(N, d) with N p <= d: the convex hull of `vertices_xy` (k >= 3, [m]) shrunk by `margin` [m]."""
     hull = convex_hull_ccw(vertices_xy)
-    edges = np.roll(hull, -1, axis=0) - hull
+    edges = np.vstack([hull[1:], hull[:1]]) - hull
     normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # outward for a counter-clockwise ring
     normals /= np.linalg.norm(normals, axis=1, keepdims=True)
     return normals, np.einsum("ij,ij->i", normals, hull) - margin

@@ -86,7 +86,7 @@ class WholeBodyController(LeafSystem):
             raise ConfigError(f"whole_body.period: must be > 0 s, got {config.period!r}")
         self.config = config
         # Constant after construction: the model (its scratch context is rewritten every tick).
-        self.model = ControllerModel(prongs)
+        self.model = ControllerModel(prongs, com_bias=config.balance_com_bias)
         nc = self.model.num_contacts
         self.num_contacts = nc
         self.layout = tasks.VariableLayout(self.model.nv, nc, self.model.plant_map.v_index)
