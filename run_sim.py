@@ -1,13 +1,15 @@
-"""Runs a pedi_drake scenario in simulation (headless by default) and writes its results.
+"""Runs a pedi_drake mission (or scenario) in simulation, headless by default, and writes its results.
 
-Writes to --out: result.json (DESIGN.md section 5), replay.html (a self-contained Meshcat
-replay: open it in a browser) and PNG plots. Exit code 0 on success, 1 on failure (the
-reason is printed), 2 on bad input.
+Writes to --out (default out/<mission or scenario>/): result.json (DESIGN.md section 5),
+replay.html (a self-contained Meshcat replay: open it in a browser) and PNG plots. Exit code 0
+on success, 1 on failure (the reason is printed), 2 on bad input.
 
 Examples:
-    python run_sim.py --out out/default
-    python run_sim.py --scenario_name stand_with_prongs --out out/prongs
-    python run_sim.py --scenario_text "{simulation_duration: 2.0}" --meshcat
+    python run_sim.py                                   # the default mission, hit_target_front
+    python run_sim.py --mission open_door --out out/door
+    python run_sim.py --mission my_mission.yaml --meshcat
+    python run_sim.py --scenario_name stand --out out/stand
+    python run_sim.py --scenario_text "{sensor_noise: {enabled: true}, random_seed: 3}"
 """
 
 import argparse
@@ -18,16 +20,23 @@ from pathlib import Path
 import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import EventStatus
 
 from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.exceptions import ConfigError
+from pedi_drake.mission import results as mission_results
+from pedi_drake.mission.progress import FAILED, SUCCEEDED
+from pedi_drake.mission.spec import load_mission
 from pedi_drake.results import trunk_fell, write_result
 from pedi_drake.station.scenario import Scenario, default_scenario_file, load_scenario
-from pedi_drake.viz.plots import plot_foot_forces, plot_joint_tracking
+from pedi_drake.viz import plots
+
+SETTLE_AFTER_MISSION = 0.5  # [s] simulated after the mission ends, then the run stops
+PROGRESS_EVERY = 2.0  # [s] of simulated time between progress lines
 
 
-def run(*, scenario: Scenario, scenario_name: str, out_dir: Path, meshcat: Meshcat | None = None) -> dict:
+def run(*, scenario: Scenario, name: str, out_dir: Path, meshcat: Meshcat | None = None, quiet: bool = False) -> dict:
     """Simulates `scenario`, writes result.json, replay.html and plots to `out_dir`; returns the result."""
     out_dir.mkdir(parents=True, exist_ok=True)
     # A Meshcat is always made: it records the replay even when nobody watches live.
@@ -35,6 +44,27 @@ def run(*, scenario: Scenario, scenario_name: str, out_dir: Path, meshcat: Meshc
     built = MakePedipulationDiagram(scenario, meshcat)
     diagram = built.diagram
     simulator = Simulator(diagram)
+    manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
+    state = {"next_print": PROGRESS_EVERY, "ended": None}
+
+    def monitor(root_context):
+        t = root_context.get_time()
+        progress = manager.progress(manager.GetMyContextFromRoot(root_context)) if manager else None
+        if not quiet and t >= state["next_print"]:
+            state["next_print"] += PROGRESS_EVERY
+            if progress is not None:
+                phase = progress.records[-1].name if progress.records else "-"
+                count = len(built.mission.phases)
+                print(f"  t = {t:5.1f} s  phase {progress.index + 1}/{count} {phase} ({progress.status})")
+            else:
+                print(f"  t = {t:5.1f} s")
+        if progress is not None and progress.status in (SUCCEEDED, FAILED):
+            state["ended"] = state["ended"] or t
+            if t >= state["ended"] + SETTLE_AFTER_MISSION:
+                return EventStatus.ReachedTermination(diagram, "mission over")
+        return EventStatus.Succeeded()
+
+    simulator.set_monitor(monitor)
     simulator.Initialize()
     meshcat.StartRecording(set_visualizations_while_recording=False)
     wall_start = time.perf_counter()
@@ -48,45 +78,76 @@ def run(*, scenario: Scenario, scenario_name: str, out_dir: Path, meshcat: Meshc
     logs = {name: diagram.GetSubsystemByName(logger).FindLog(context) for name, logger in built.loggers.items()}
     plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     plant_map = robot.Go1PlantMap.from_plant(plant)
-    state_log = logs["sim.plant_state"].data()
-    t = logs["go1.command"].sample_times()
-    command = logs["go1.command"].data()
-    position = logs["go1.position_measured"].data()
-    plot_joint_tracking(t, command[:12], position, out_dir / "joint_positions.png", title=scenario_name)
-    plot_foot_forces(
-        logs["go1.foot_contact"].sample_times(), logs["go1.foot_contact"].data(), out_dir / "foot_forces.png"
-    )
-
-    fell = trunk_fell(state_log, plant_map, has_prongs=scenario.robot.prongs is not None)
+    t_state, states = logs["sim.plant_state"].sample_times(), logs["sim.plant_state"].data()
+    t_cmd, command = logs["go1.command"].sample_times(), logs["go1.command"].data()
+    position, velocity = logs["go1.position_measured"].data(), logs["go1.velocity_measured"].data()
     sim_time = float(context.get_time())
-    final_height = float(state_log[plant_map.base_q_start + 6, -1])
+    fell = trunk_fell(states, plant_map, has_prongs=scenario.robot.prongs is not None)
     result = {
-        "mission": scenario.mission or None,
-        "scenario": scenario_name,
+        "mission": built.mission.name if built.mission else None,
+        "scenario": name,
         "success": not fell,
         "reason": "the trunk fell" if fell else "",
         "phases": [],
         "foot_errors_m": [],
-        "max_base_drift_m": None,
+        "max_base_drift_m": 0.0,
         "fell": fell,
         "sim_time_s": sim_time,
         "wall_time_s": wall_time,
         "real_time_factor": sim_time / wall_time if wall_time > 0 else None,
         "controller_tick_ms": None,
         "controller": scenario.controller,
-        "final_trunk_height_m": final_height,
-        "final_joint_error_rad": float(np.max(np.abs(position[:, -1] - command[:12, -1]))),
+        "random_seed": scenario.random_seed,
+        "sensor_noise": scenario.sensor_noise.enabled,
+        "final_trunk_height_m": float(states[plant_map.base_q_start + 6, -1]),
     }
+    if "controller.diagnostics" in logs:
+        tick_ms = 1e3 * logs["controller.diagnostics"].data()[2]
+        tick_ms = tick_ms[tick_ms > 0]
+        result["controller_tick_ms"] = {
+            "median": float(np.median(tick_ms)),
+            "p99": float(np.percentile(tick_ms, 99)),
+            "max": float(np.max(tick_ms)),
+        }
+    plots.plot_joint_tracking(t_cmd, command[:12], position, out_dir / "joint_positions.png", title=name)
+    plots.plot_foot_forces(
+        logs["go1.foot_contact"].sample_times(), logs["go1.foot_contact"].data(), out_dir / "foot_forces.png"
+    )
+
+    if manager is not None:
+        progress = manager.progress(manager.GetMyContextFromRoot(context))
+        mission_ok = progress.status == SUCCEEDED
+        result["success"] = mission_ok and not fell
+        result["reason"] = progress.reason if not mission_ok else ("the trunk fell" if fell else "")
+        if progress.status not in (SUCCEEDED, FAILED):
+            result["reason"] = f"the simulation ended ({sim_time:.1f} s) before the mission did"
+        result["phases"] = mission_results.phase_table(progress)
+        result["foot_errors_m"] = mission_results.foot_errors(progress, plant, t_state, states)
+        status_log, body_log = logs["mission.status"].data(), logs["mission.body_reference"].data()
+        result["max_base_drift_m"] = mission_results.max_base_drift(plant_map, states, body_log, status_log)
+        result["presses"] = mission_results.press_results(progress)
+        door = mission_results.door_opening(plant, states)
+        if door is not None:
+            result["door"] = door
+        leg = mission_results.pedipulation_leg(logs["mission.leg_reference"].data())
+        if leg is not None:
+            plots.plot_leg_tracking(
+                t_cmd, command, position, velocity, leg, result["phases"], out_dir / "leg_tracking.png"
+            )
+            plots.plot_mission_errors(
+                t_state, states, body_log, status_log, plant, result, out_dir / "mission_errors.png"
+            )
     write_result(out_dir, result)
     return result
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--mission", default=None, help="Mission name (missions/) or YAML file; runs under whole_body.")
     parser.add_argument("--scenario_file", default=str(default_scenario_file()), help="YAML file of named scenarios.")
     parser.add_argument("--scenario_name", default="default", help="Scenario to run from --scenario_file.")
     parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto the scenario.")
-    parser.add_argument("--out", default=None, help="Output folder (default: out/<scenario_name>).")
+    parser.add_argument("--out", default=None, help="Output folder (default: out/<mission or scenario>).")
     parser.add_argument("--duration", type=float, default=None, help="Simulated duration [s] (overrides the scenario).")
     parser.add_argument("--meshcat", action="store_true", help="Serve a live Meshcat view (prints its URL).")
     args = parser.parse_args()
@@ -94,6 +155,11 @@ def main() -> int:
         scenario = load_scenario(
             filename=args.scenario_file, scenario_name=args.scenario_name, scenario_text=args.scenario_text
         )
+        if args.mission is not None:
+            load_mission(args.mission)  # validate now: bad input exits 2 before anything runs
+            scenario.mission, scenario.controller = args.mission, "whole_body"
+        elif scenario.mission:
+            load_mission(scenario.mission)
         if args.duration is not None:
             if not args.duration > 0:
                 raise ConfigError(f"--duration: must be > 0 s, got {args.duration}")
@@ -101,16 +167,21 @@ def main() -> int:
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    out_dir = Path(args.out) if args.out else Path("out") / args.scenario_name
+    name = Path(scenario.mission).stem if scenario.mission else args.scenario_name
+    out_dir = Path(args.out) if args.out else Path("out") / name
     meshcat = None
     if args.meshcat:
         meshcat = Meshcat()
         print(f"Meshcat: {meshcat.web_url()}")
-    result = run(scenario=scenario, scenario_name=args.scenario_name, out_dir=out_dir, meshcat=meshcat)
+    print(f"running {name} ({scenario.simulation_duration:.1f} s max, seed {scenario.random_seed})")
+    result = run(scenario=scenario, name=name, out_dir=out_dir, meshcat=meshcat)
+    errors = [f"{row['phase']} {1000 * row['error']:.1f} mm" for row in result["foot_errors_m"]]
     print(
-        f"{args.scenario_name}: {'succeeded' if result['success'] else 'FAILED: ' + result['reason']}; "
+        f"{name}: {'succeeded' if result['success'] else 'FAILED: ' + result['reason']}; "
         f"sim {result['sim_time_s']:.2f} s in {result['wall_time_s']:.2f} s wall "
-        f"(real-time factor {result['real_time_factor']:.2f}); results in {out_dir}/"
+        f"(real-time factor {result['real_time_factor']:.2f})"
+        + (f"; foot errors: {', '.join(errors)}" if errors else "")
+        + f"; results in {out_dir}/"
     )
     return 0 if result["success"] else 1
 

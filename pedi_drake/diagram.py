@@ -11,8 +11,11 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import VectorLogSink
 
 from pedi_drake.control.stand_controller import StandController
+from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
 from pedi_drake.exceptions import ScenarioError
+from pedi_drake.mission.mission_manager import MissionManager
+from pedi_drake.mission.spec import MissionSpec, load_mission
 from pedi_drake.station.scenario import Scenario
 from pedi_drake.station.station import MakeStation
 
@@ -36,12 +39,27 @@ class PedipulationDiagram:
     # Logger subsystem name by signal name (VectorLogSink, read with FindLog(context)).
     loggers: dict[str, str]
     hardware: bool
+    # The mission being run, if any (its manager is the subsystem "mission").
+    mission: MissionSpec | None = None
+
+
+def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
+    """The scenario with the mission's scene objects added and its robot variant applied."""
+    merged = dataclasses.replace(scenario, scene=list(scenario.scene) + list(mission.scene))
+    if mission.robot is not None:
+        merged.robot = dataclasses.replace(scenario.robot, prongs=mission.robot.prongs)
+    return merged
 
 
 def MakePedipulationDiagram(
     scenario: Scenario, meshcat: Meshcat | None = None, *, hardware: bool = False, log_period: float = 0.002
 ) -> PedipulationDiagram:
     """Wires station, estimator and controller for `scenario`, with loggers of LOGGED_SIGNALS."""
+    mission = load_mission(scenario.mission) if scenario.mission else None
+    if mission is not None:
+        if scenario.controller != "whole_body":
+            raise ScenarioError(f"mission: {scenario.mission!r} needs controller: whole_body")
+        scenario = apply_mission(scenario, mission)
     builder = DiagramBuilder()
     station = builder.AddNamedSystem("station", MakeStation(scenario, meshcat, hardware=hardware))
 
@@ -58,15 +76,35 @@ def MakePedipulationDiagram(
         )
     base_state = estimator.GetOutputPort("base_state")
 
+    extra_logs = {}
     if scenario.controller == "stand_pd":
         controller = builder.AddNamedSystem("controller", StandController(scenario.stand))
         builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
     else:
-        raise ScenarioError(f"controller: {scenario.controller!r} is not available yet (the whole-body QP of issue 4)")
+        controller = builder.AddNamedSystem(
+            "controller", WholeBodyController(scenario.whole_body, scenario.robot.prongs)
+        )
+        builder.Connect(base_state, controller.base_state_port)
+        builder.Connect(station.GetOutputPort("go1.position_measured"), controller.position_port)
+        builder.Connect(station.GetOutputPort("go1.velocity_measured"), controller.velocity_port)
+        extra_logs["controller.diagnostics"] = controller.diagnostics_port
+        if mission is not None:
+            manager = builder.AddNamedSystem(
+                "mission",
+                MissionManager(mission, prongs=scenario.robot.prongs, friction=scenario.ground_friction),
+            )
+            builder.Connect(base_state, manager.GetInputPort("base_state"))
+            for name in ("position_measured", "velocity_measured", "torque_estimated", "foot_contact"):
+                builder.Connect(station.GetOutputPort(f"go1.{name}"), manager.GetInputPort(name))
+            for name in ("body_reference", "leg_reference", "contact_set", "safety_polygon", "friction"):
+                builder.Connect(manager.GetOutputPort(name), controller.GetInputPort(name))
+            extra_logs["mission.status"] = manager.GetOutputPort("mission_status")
+            extra_logs["mission.body_reference"] = manager.GetOutputPort("body_reference")
+            extra_logs["mission.leg_reference"] = manager.GetOutputPort("leg_reference")
     command = controller.GetOutputPort("command")
     builder.Connect(command, station.GetInputPort("go1.command"))
 
-    sources = {"go1.command": command, "base_state": base_state}
+    sources = {"go1.command": command, "base_state": base_state, **extra_logs}
     for name in LOGGED_SIGNALS:
         if name not in sources:
             sources[name] = station.GetOutputPort(name)
@@ -81,4 +119,4 @@ def MakePedipulationDiagram(
         builder.ExportOutput(port, name)
     diagram = builder.Build()
     diagram.set_name("pedipulation")
-    return PedipulationDiagram(diagram=diagram, loggers=loggers, hardware=hardware)
+    return PedipulationDiagram(diagram=diagram, loggers=loggers, hardware=hardware, mission=mission)

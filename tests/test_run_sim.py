@@ -13,7 +13,7 @@ def _run(*args: str) -> subprocess.CompletedProcess:
 
 
 def test_run_sim_writes_result_json_replay_and_plots(tmp_path):
-    done = _run("--out", str(tmp_path), "--duration", "2.5")
+    done = _run("--scenario_name", "stand", "--out", str(tmp_path), "--duration", "2.5")
     assert done.returncode == 0, done.stderr
     result = json.loads((tmp_path / "result.json").read_text())
     for key in ("mission", "scenario", "success", "phases", "fell", "sim_time_s", "wall_time_s", "real_time_factor"):
@@ -23,6 +23,12 @@ def test_run_sim_writes_result_json_replay_and_plots(tmp_path):
     html = (tmp_path / "replay.html").read_text()
     assert len(html) > 10_000 and "<html" in html.lower()
     assert (tmp_path / "joint_positions.png").stat().st_size > 0
+
+
+def test_run_sim_unknown_mission_exits_2_listing_the_library(tmp_path):
+    done = _run("--mission", "fly_to_the_moon", "--out", str(tmp_path))
+    assert done.returncode == 2
+    assert "shipped missions" in done.stderr and "hit_target_front" in done.stderr
 
 
 def test_run_sim_bad_input_exits_2_naming_the_field(tmp_path):

@@ -54,7 +54,7 @@ def test_motor_model_clamps_to_effort_limits_and_zeroes_non_finite_commands():
 
 @pytest.fixture(scope="module")
 def standing_run():
-    scenario = load_scenario(scenario_text=f"{{simulation_duration: {STAND_END}}}")
+    scenario = load_scenario(scenario_name="stand", scenario_text=f"{{simulation_duration: {STAND_END}}}")
     built = MakePedipulationDiagram(scenario)
     simulator = Simulator(built.diagram)
     simulator.AdvanceTo(STAND_END)
@@ -100,7 +100,9 @@ def test_standing_sensors_report_weight_on_feet_and_gravity_on_accelerometer(sta
 
 def test_sensor_noise_is_seeded_and_reproducible():
     def measure(seed):
-        scenario = load_scenario(scenario_text=f"{{random_seed: {seed}, sensor_noise: {{enabled: true}}}}")
+        scenario = load_scenario(
+            scenario_name="stand", scenario_text=f"{{random_seed: {seed}, sensor_noise: {{enabled: true}}}}"
+        )
         station = MakeStation(scenario)
         context = station.CreateDefaultContext()
         station.GetInputPort("go1.command").FixValue(context, pack_command(robot.LYING_Q, 0, 20, 1, 0))

@@ -34,7 +34,7 @@ def _time(simulator: Simulator, duration: float) -> float:
 def real_time_factor(case: str, duration: float) -> float:
     """One run of `case`; returns sim time / wall time."""
     prongs = "robot: {prongs: {}}, " if case.endswith("prongs") else ""
-    scenario = load_scenario(scenario_text=f"{{{prongs}stand: {{period: 0.001}}}}")
+    scenario = load_scenario(scenario_name="stand", scenario_text=f"{{{prongs}stand: {{period: 0.001}}}}")
     if case == "station_fixed_cmd":
         station = MakeStation(scenario)
         context = station.CreateDefaultContext()

@@ -45,3 +45,86 @@ def plot_foot_forces(t: np.ndarray, forces: np.ndarray, path: Path) -> Path:
     fig.savefig(path, dpi=90)
     plt.close(fig)
     return Path(path)
+
+
+def _shade_phases(ax, phases: list[dict]) -> None:
+    """Alternating background bands for the mission phases, labelled at the top."""
+    for k, phase in enumerate(phases):
+        if phase["t_end"] is None or phase["status"] == "skipped":
+            continue
+        if k % 2 == 0:
+            ax.axvspan(phase["t_start"], phase["t_end"], color="0.92", zorder=0)
+
+
+def plot_leg_tracking(t, command, position, velocity, leg: str, phases: list[dict], path: Path) -> Path:
+    """The pedipulation leg's joint positions and velocities, desired vs measured (paper 000, Figs. 3, 4).
+
+    `command` is the logged go1.command (60, N); `position`, `velocity` are (12, N).
+    """
+    k0 = 3 * robot.LEG_NAMES.index(leg)
+    fig, axes = plt.subplots(3, 2, figsize=(12, 8), sharex=True)
+    for j, kind in enumerate(robot.JOINT_KINDS):
+        k = k0 + j
+        for col, (desired, measured, unit) in enumerate(
+            ((command[k], position[k], "rad"), (command[12 + k], velocity[k], "rad/s"))
+        ):
+            ax = axes[j, col]
+            _shade_phases(ax, phases)
+            ax.plot(t, desired, color="tab:blue", label="desired")
+            ax.plot(t, measured[: len(t)], color="tab:red", linewidth=0.8, label="measured")
+            ax.set_ylabel(f"{leg}_{kind} [{unit}]")
+            ax.grid(alpha=0.3)
+    axes[0, 0].set_title("joint positions")
+    axes[0, 1].set_title("joint velocities")
+    axes[0, 0].legend(fontsize=8)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_mission_errors(t, states, body_reference, status, plant, result: dict, path: Path) -> Path:
+    """Foot error to each reach phase's target and trunk drift from its reference, over time."""
+    from pedi_drake.robot import Go1PlantMap
+
+    plant_map = Go1PlantMap.from_plant(plant)
+    context = plant.CreateDefaultContext()
+    n = min(states.shape[1], body_reference.shape[1], status.shape[1], len(t))
+    q0 = plant_map.base_q_start
+    drift = np.linalg.norm(states[q0 + 4 : q0 + 7, :n] - body_reference[0:3, :n], axis=0)
+    fig, (ax_foot, ax_drift) = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    _shade_phases(ax_foot, result["phases"])
+    _shade_phases(ax_drift, result["phases"])
+    targets = {row["phase"]: row for row in result["foot_errors_m"]}
+    for phase in result["phases"]:
+        if phase["name"] not in targets or phase["t_end"] is None:
+            continue
+        window = (t[:n] >= phase["t_start"]) & (t[:n] <= phase["t_end"])
+        leg, target = targets[phase["name"]]["leg"], np.asarray(targets[phase["name"]]["target_W"])
+        error = []
+        for k in np.nonzero(window)[0]:
+            plant.SetPositionsAndVelocities(context, states[:, k])
+            error.append(
+                np.linalg.norm(plant.GetBodyByName(f"{leg}_foot").EvalPoseInWorld(context).translation() - target)
+            )
+        if error:
+            ax_foot.plot(t[:n][window], 1000 * np.asarray(error), label=f"{phase['name']} ({leg})")
+    ax_foot.set_ylabel("foot error [mm]")
+    ax_foot.set_yscale("log")
+    ax_foot.grid(alpha=0.3)
+    ax_foot.legend(fontsize=8)
+    ax_drift.plot(t[:n], 1000 * drift, color="tab:purple")
+    active = status[2, :n] > 0.5
+    ax_drift.fill_between(
+        t[:n], 0, 1000 * drift.max(initial=0.0), where=active, color="tab:orange", alpha=0.15, label="pedipulation"
+    )
+    ax_drift.set_ylabel("trunk drift [mm]")
+    ax_drift.set_xlabel("time [s]")
+    ax_drift.grid(alpha=0.3)
+    ax_drift.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return Path(path)

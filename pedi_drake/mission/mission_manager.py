@@ -1,0 +1,214 @@
+"""MissionManager: runs a mission phase by phase and drives the whole-body controller.
+
+Inputs are the state estimate and `go1.*` measurements; outputs are the controller's reference
+ports (layouts in pedi_drake/control/references.py) and a status vector. The mission's progress
+is one abstract state value (MissionProgress), updated at `period`; references are quintic
+trajectories sampled at output time, so the controller sees smooth references at its own rate.
+
+A failed phase (IK unreachable, timeout, fall) fails the mission with a reason; the manager then
+places any lifted leg back on the ground ("recovering") and holds the robot standing.
+"""
+
+import copy
+import math
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import BasicVector, LeafSystem
+
+from pedi_drake import robot
+from pedi_drake.control import references as controller_refs
+from pedi_drake.estimation.base_state import BASE_STATE_SIZE, BaseState
+from pedi_drake.exceptions import PediError
+from pedi_drake.mission import spec
+from pedi_drake.mission.phases import RUNNERS, MissionEnvironment, ReachRunner, kind_name
+from pedi_drake.mission.progress import (
+    FAILED,
+    LEG_MODE_FOOT,
+    RECOVERING,
+    RUNNING,
+    STATUS_CODES,
+    SUCCEEDED,
+    MissionProgress,
+    PhaseRecord,
+    References,
+)
+from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.prongs import ProngDesign
+
+MISSION_STATUS_SIZE = 4  # [phase index, status code, pedipulation active, number of phases]
+FALL_HEIGHT = 0.07  # [m] trunk below this: the robot fell (or lies flat on its belly)
+FALL_TILT = math.radians(50.0)  # [rad]
+
+
+class MissionManager(LeafSystem):
+    """Mission phases -> controller references. Ports: see the module docstring."""
+
+    def __init__(
+        self,
+        mission: spec.MissionSpec,
+        *,
+        prongs: ProngDesign | None = None,
+        friction: float = 0.8,
+        period: float = 0.01,
+    ):
+        super().__init__()
+        self._mission = mission
+        self._env = MissionEnvironment(prongs)
+        self._friction = friction
+        num_contacts = 4 + self._env.num_prongs
+        self._base_state = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
+        self._position = self.DeclareVectorInputPort("position_measured", 12)
+        self._velocity = self.DeclareVectorInputPort("velocity_measured", 12)
+        self._torque = self.DeclareVectorInputPort("torque_estimated", 12)
+        self._foot_contact = self.DeclareVectorInputPort("foot_contact", 4)
+        self._progress = self.DeclareAbstractState(AbstractValue.Make(MissionProgress()))
+        self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
+        self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
+        deps = {self.time_ticket(), self.abstract_state_ticket(self._progress)}
+        self.DeclareVectorOutputPort(
+            "body_reference", controller_refs.BODY_REFERENCE_SIZE, self._calc_body, prerequisites_of_calc=deps
+        )
+        self.DeclareVectorOutputPort(
+            "leg_reference", controller_refs.LEG_REFERENCE_SIZE, self._calc_legs, prerequisites_of_calc=deps
+        )
+        self.DeclareVectorOutputPort("contact_set", num_contacts, self._calc_contacts, prerequisites_of_calc=deps)
+        self.DeclareVectorOutputPort(
+            "safety_polygon",
+            controller_refs.SAFETY_POLYGON_SIZE,
+            lambda context, output: output.SetFromVector(np.zeros(controller_refs.SAFETY_POLYGON_SIZE)),
+            prerequisites_of_calc={self.nothing_ticket()},
+        )
+        self.DeclareVectorOutputPort(
+            "friction", 1, lambda c, o: o.SetFromVector([self._friction]), prerequisites_of_calc={self.nothing_ticket()}
+        )
+        self.DeclareVectorOutputPort(
+            "mission_status", MISSION_STATUS_SIZE, self._calc_status, prerequisites_of_calc=deps
+        )
+
+    @property
+    def mission(self) -> spec.MissionSpec:
+        return self._mission
+
+    def progress(self, context) -> MissionProgress:
+        """The mission's progress in `context` (this system's context)."""
+        return context.get_abstract_state(self._progress).get_value()
+
+    # Updates ---------------------------------------------------------------------------------
+
+    def _view(self, context) -> RobotView:
+        return RobotView(
+            time=context.get_time(),
+            base=BaseState.from_vector(self._base_state.Eval(context)),
+            q=np.asarray(self._position.Eval(context)),
+            qd=np.asarray(self._velocity.Eval(context)),
+            tau=np.asarray(self._torque.Eval(context)),
+            foot_force=np.asarray(self._foot_contact.Eval(context)),
+        )
+
+    def _initialize(self, context, state) -> None:
+        view = self._view(context)
+        progress = MissionProgress(phase_start=view.time)
+        progress.references = References.holding(view.base.p_WB, view.X_WB.rotation(), view.time, self._env.num_prongs)
+        state.get_mutable_abstract_state(self._progress).set_value(progress)
+
+    def _update(self, context, state) -> None:
+        progress = copy.deepcopy(self.progress(context))
+        if progress.status in (SUCCEEDED, FAILED):
+            return
+        view = self._view(context)
+        phases = self._mission.phases if progress.status == RUNNING else progress.recovery
+        phase = phases[progress.index]
+        runner = RUNNERS[type(phase)]
+        outcome = RUNNING
+        if not progress.started:
+            progress.started, progress.phase_start, progress.memo = True, view.time, {}
+            progress.records.append(PhaseRecord(phase.name, kind_name(phase), RUNNING, view.time))
+            try:
+                runner.start(phase, progress, view, self._env)
+            except PediError as error:
+                outcome, progress.reason = FAILED, str(error)
+        if outcome == RUNNING:
+            try:
+                outcome = runner.step(phase, progress, view, self._env)
+            except PediError as error:
+                outcome, progress.reason = FAILED, str(error)
+        if outcome == RUNNING and view.time - progress.phase_start > phase.timeout:
+            detail = ReachRunner.timeout_reason(phase, progress) if isinstance(phase, spec.Reach) else "not done"
+            outcome, progress.reason = FAILED, f"{phase.name}: timed out after {phase.timeout:.1f} s ({detail})"
+        if outcome == RUNNING and self._fell(view, progress):
+            outcome, progress.reason = FAILED, f"{phase.name}: the robot fell (trunk height or tilt out of range)"
+        if outcome != RUNNING:
+            self._finish_phase(progress, phases, outcome, view)
+        state.get_mutable_abstract_state(self._progress).set_value(progress)
+
+    def _fell(self, view: RobotView, progress: MissionProgress) -> bool:
+        R = view.X_WB.rotation().matrix()
+        tilted = R[2, 2] < math.cos(FALL_TILT)
+        standing_started = any(r.kind == "stand_up" and r.status == SUCCEEDED for r in progress.records)
+        on_prongs = bool(np.any(progress.references.contacts[4:] > 0.5))
+        low = standing_started and view.base.p_WB[2] < FALL_HEIGHT and not on_prongs
+        return tilted or low
+
+    def _finish_phase(self, progress: MissionProgress, phases, outcome: str, view: RobotView) -> None:
+        record = progress.records[-1]
+        record.status, record.t_end = outcome, view.time
+        if outcome == FAILED:
+            record.reason = progress.reason
+        progress.started = False
+        if outcome == SUCCEEDED:
+            progress.index += 1
+            if progress.index < len(phases):
+                return
+            progress.status = SUCCEEDED if progress.status == RUNNING else FAILED
+            return
+        # A failure: mark the rest skipped and, once, put lifted legs back down.
+        if progress.status == RUNNING:
+            for later in self._mission.phases[progress.index + 1 :]:
+                progress.records.append(PhaseRecord(later.name, kind_name(later), "skipped", view.time))
+            lifted = [leg for leg in robot.LEG_NAMES if leg in progress.references.legs]
+            progress.references.press = None
+            if lifted:
+                progress.recovery = [spec.LegToSupport(name=f"recover_{leg}", leg=leg) for leg in lifted]
+                progress.status, progress.index = RECOVERING, 0
+                return
+        progress.status = FAILED
+
+    # Outputs ---------------------------------------------------------------------------------
+
+    def _calc_body(self, context, output: BasicVector) -> None:
+        refs = self.progress(context).references
+        t = context.get_time()
+        p = refs.body_position.sample(t)
+        R = refs.body_orientation.sample(t)
+        output.SetFromVector(
+            controller_refs.body_reference_vector(
+                p.position, R.rotation, p.velocity, p.acceleration, R.angular_velocity, R.angular_acceleration
+            )
+        )
+
+    def _calc_legs(self, context, output: BasicVector) -> None:
+        refs = self.progress(context).references
+        t = context.get_time()
+        entries = {}
+        for leg, leg_traj in refs.legs.items():
+            sample = leg_traj.trajectory.sample(t)
+            entries[leg] = (leg_traj.mode, sample.position, sample.velocity, sample.acceleration)
+        press = refs.press
+        if press is not None and press["frozen_at"] is None:
+            s = press["speed"] * max(t - press["t0"], 0.0)
+            entries[press["leg"]] = (
+                LEG_MODE_FOOT,
+                press["start"] + s * press["direction"],
+                press["speed"] * press["direction"],
+                np.zeros(3),
+            )
+        output.SetFromVector(controller_refs.leg_reference_vector(entries))
+
+    def _calc_contacts(self, context, output: BasicVector) -> None:
+        output.SetFromVector(self.progress(context).references.contacts)
+
+    def _calc_status(self, context, output: BasicVector) -> None:
+        progress = self.progress(context)
+        active = 1.0 if progress.references.legs else 0.0
+        output.SetFromVector([progress.index, STATUS_CODES[progress.status], active, len(self._mission.phases)])

@@ -1,0 +1,388 @@
+"""Phase runners: each phase kind's way to set references, watch progress and judge the outcome.
+
+Paper 000: "each mission phase is represented as a distinct state, equipped with methods to
+update task references, monitor the progress of the phase, and assess its successful completion
+or potential failure". A runner is stateless: `start` and `step` read and write only the
+MissionProgress they are given (held in the MissionManager's Context).
+"""
+
+import math
+
+import numpy as np
+from pydrake.math import RollPitchYaw, RotationMatrix
+
+from pedi_drake import robot
+from pedi_drake.exceptions import UnreachableTarget
+from pedi_drake.ik.fabrik import solve_leg_ik
+from pedi_drake.leg_kinematics import leg_geometry
+from pedi_drake.mission import spec
+from pedi_drake.mission.progress import (
+    FAILED,
+    LEG_MODE_FOOT,
+    LEG_MODE_JOINTS,
+    RUNNING,
+    SUCCEEDED,
+    LegTrajectory,
+    MissionProgress,
+)
+from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.prongs import ProngDesign
+from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment
+
+LYING_HEIGHT = 0.13  # [m] trunk height when lying down under control (legs folded, off the limits)
+CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
+SHIFT_DURATION = 1.0  # [s] trunk shift before lifting a leg
+CONTACT_RAMP_WAIT = 0.3  # [s] wait for the controller to ramp a contact's force away
+
+
+class MissionEnvironment:
+    """Constant facts a phase needs: the robot variant and the controller's contact layout."""
+
+    def __init__(self, prongs: ProngDesign | None):
+        self.prongs = prongs
+        self.num_prongs = 0 if prongs is None else prongs.num_prongs
+
+
+def _fail(progress: MissionProgress, reason: str) -> str:
+    progress.reason = reason
+    return FAILED
+
+
+def _body_sample(progress: MissionProgress, t: float) -> tuple[np.ndarray, RotationMatrix]:
+    refs = progress.references
+    return refs.body_position.sample(t).position, refs.body_orientation.sample(t).rotation
+
+
+def _move_body(progress: MissionProgress, t: float, p_end=None, R_end=None, duration: float = 1.0) -> None:
+    """Quintic from the current body reference to (p_end, R_end), starting at `t`."""
+    p_now, R_now = _body_sample(progress, t)
+    refs = progress.references
+    refs.body_position = QuinticSegment(p_now, p_now if p_end is None else p_end, t, duration)
+    refs.body_orientation = QuinticOrientationSegment(R_now, R_now if R_end is None else R_end, t, duration)
+
+
+def _support_points_W(view: RobotView, env: MissionEnvironment, contacts: np.ndarray, exclude: str = "") -> np.ndarray:
+    """Positions of the loaded contacts (feet, prong tips) in the world, except `exclude` [m]."""
+    points = [view.foot_W(leg) for k, leg in enumerate(robot.LEG_NAMES) if contacts[k] > 0.5 and leg != exclude]
+    if env.prongs is not None:
+        for k, tip_B in enumerate(env.prongs.tip_positions_B()):
+            if contacts[4 + k] > 0.5:
+                points.append(view.X_WB @ tip_B)
+    return np.array(points)
+
+
+def _trunk_target_for_com(view: RobotView, p_body_ref: np.ndarray, com_xy_goal: np.ndarray) -> np.ndarray:
+    """Trunk position reference that puts the CoM's ground projection at `com_xy_goal` [m]."""
+    offset = view.com_W() - view.base.p_WB
+    target = p_body_ref.copy()
+    target[:2] = com_xy_goal - offset[:2]
+    return target
+
+
+def _ik(leg: str, p_B: np.ndarray, q_init: np.ndarray, what: str) -> np.ndarray:
+    result = solve_leg_ik(leg, np.asarray(p_B, float), q_init, tol=5e-4)
+    if not result.success:
+        raise UnreachableTarget(
+            f"{what}: IK for {leg} found no joint angles within the limits for the foot target "
+            f"{np.round(p_B, 3).tolist()} m (trunk frame); closest miss {result.error * 1000:.1f} mm"
+        )
+    return result.q
+
+
+def _to_trunk(view: RobotView, point, frame: str) -> np.ndarray:
+    point = np.asarray(point, float)
+    return view.X_WB.inverse() @ point if frame == "world" else point
+
+
+def _foot_error(view: RobotView, leg: str, target_W: np.ndarray) -> float:
+    return float(np.linalg.norm(view.foot_W(leg) - target_W))
+
+
+class PhaseRunner:
+    """Base class: a phase kind's behaviour. `start` sets references; `step` returns a status."""
+
+    def start(self, phase, progress: MissionProgress, view: RobotView, env: MissionEnvironment) -> None:
+        pass
+
+    def step(self, phase, progress: MissionProgress, view: RobotView, env: MissionEnvironment) -> str:
+        raise NotImplementedError
+
+
+class StandUpRunner(PhaseRunner):
+    """Raises the trunk to `height` over the centroid of the four feet."""
+
+    def start(self, phase, progress, view, env):
+        t = view.time
+        feet = np.array(list(view.feet_W().values()))
+        p_goal = _trunk_target_for_com(view, view.base.p_WB.copy(), feet[:, :2].mean(axis=0))
+        p_goal[2] = phase.height
+        yaw = RollPitchYaw(view.X_WB.rotation()).yaw_angle()
+        _move_body(progress, t, p_goal, RotationMatrix.MakeZRotation(yaw), phase.duration)
+        progress.memo["goal"] = p_goal
+
+    def step(self, phase, progress, view, env):
+        done = view.time >= progress.phase_start + phase.duration
+        if done and np.linalg.norm(view.base.p_WB - progress.memo["goal"]) < 0.01:
+            return SUCCEEDED
+        return RUNNING
+
+
+class LieDownRunner(PhaseRunner):
+    """Lowers the trunk to the lying height."""
+
+    def start(self, phase, progress, view, env):
+        p_now, _ = _body_sample(progress, view.time)
+        goal = p_now.copy()
+        goal[2] = LYING_HEIGHT
+        _move_body(progress, view.time, goal, None, phase.duration)
+        progress.memo["goal"] = goal
+
+    def step(self, phase, progress, view, env):
+        done = view.time >= progress.phase_start + phase.duration
+        return SUCCEEDED if done and abs(view.base.p_WB[2] - LYING_HEIGHT) < 0.015 else RUNNING
+
+
+class BodyMoveRunner(PhaseRunner):
+    def start(self, phase, progress, view, env):
+        p_now, _ = _body_sample(progress, view.time)
+        goal = p_now + np.asarray(phase.offset)
+        _move_body(progress, view.time, goal, None, phase.duration)
+        progress.memo["goal"] = goal
+
+    def step(self, phase, progress, view, env):
+        done = view.time >= progress.phase_start + phase.duration
+        ok = np.linalg.norm(view.base.p_WB - progress.memo["goal"]) < phase.tolerance
+        return SUCCEEDED if done and ok else RUNNING
+
+
+class BodyRotateRunner(PhaseRunner):
+    def start(self, phase, progress, view, env):
+        yaw0 = RollPitchYaw(progress.references.body_orientation.sample(view.time).rotation).yaw_angle()
+        roll, pitch, yaw = phase.rpy
+        goal = RotationMatrix(RollPitchYaw(roll, pitch, yaw0 + yaw))
+        _move_body(progress, view.time, None, goal, phase.duration)
+        progress.memo["goal"] = goal
+
+    def step(self, phase, progress, view, env):
+        done = view.time >= progress.phase_start + phase.duration
+        error = view.X_WB.rotation().inverse().multiply(progress.memo["goal"])
+        angle = abs(error.ToAngleAxis().angle())
+        return SUCCEEDED if done and angle < phase.tolerance else RUNNING
+
+
+class LegToPedipulationRunner(PhaseRunner):
+    """Shift the CoM over the other supports, release the contact, lift the foot to work height."""
+
+    def start(self, phase, progress, view, env):
+        refs = progress.references
+        supports = _support_points_W(view, env, refs.contacts, exclude=phase.leg)
+        if len(supports) < 3:
+            raise UnreachableTarget(f"{phase.name}: lifting {phase.leg} would leave fewer than three supports")
+        p_now, _ = _body_sample(progress, view.time)
+        goal = _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
+        _move_body(progress, view.time, goal, None, SHIFT_DURATION)
+        progress.memo.update(stage="shift")
+
+    def step(self, phase, progress, view, env):
+        t, t0, leg = view.time, progress.phase_start, phase.leg
+        memo, refs = progress.memo, progress.references
+        k = robot.LEG_NAMES.index(leg)
+        if memo["stage"] == "shift" and t >= t0 + SHIFT_DURATION:
+            refs.contacts[k] = 0.0
+            memo.update(stage="release", t_release=t)
+        elif memo["stage"] == "release" and t >= memo["t_release"] + CONTACT_RAMP_WAIT:
+            geometry = leg_geometry(leg)
+            p_work_B = geometry.p_BH + geometry.p_HT - np.array([0.0, 0.0, phase.working_depth])
+            q_goal = _ik(leg, p_work_B, view.leg_q(leg), phase.name)
+            lift = PiecewiseQuintic.through(np.array([view.leg_q(leg), q_goal]), t, [phase.duration])
+            refs.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, lift)
+            memo.update(stage="lift", t_lift_end=t + phase.duration, p_work_B=p_work_B)
+        elif memo["stage"] == "lift" and t >= memo["t_lift_end"]:
+            error = float(np.linalg.norm(view.foot_B(leg) - memo["p_work_B"]))
+            if error < 0.01:
+                progress.records[-1].metrics["working_position_error_m"] = error
+                return SUCCEEDED
+        return RUNNING
+
+
+class ReachRunner(PhaseRunner):
+    """IK to the target (and the approach and via points), then joint-space quintics through them."""
+
+    def start(self, phase, progress, view, env):
+        leg = phase.leg
+        if leg not in progress.references.legs:
+            raise UnreachableTarget(f"{phase.name}: {leg} is not in pedipulation mode (add leg_to_pedipulation first)")
+        points = [np.asarray(p, float) for p in phase.via_points]
+        if phase.approach_offset:
+            points.append(np.asarray(phase.target) + np.asarray(phase.approach_offset))
+        points.append(np.asarray(phase.target, float))
+        q, waypoints = view.leg_q(leg), [view.leg_q(leg)]
+        for point in points:
+            q = _ik(leg, _to_trunk(view, point, phase.frame), q, phase.name)
+            waypoints.append(q)
+        t = view.time
+        trajectory = PiecewiseQuintic.through(np.array(waypoints), t, [phase.duration] * len(points))
+        progress.references.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
+        target_W = np.asarray(phase.target, float) if phase.frame == "world" else view.X_WB @ points[-1]
+        progress.memo.update(t_arrive=t + phase.duration * len(points), target_W=target_W, t_ok=None)
+
+    def step(self, phase, progress, view, env):
+        memo = progress.memo
+        error = _foot_error(view, phase.leg, memo["target_W"])
+        record = progress.records[-1]
+        record.metrics.update(leg=phase.leg, error_m=error, target_W=memo["target_W"].tolist())
+        if view.time < memo["t_arrive"]:
+            return RUNNING
+        if error < phase.tolerance:
+            memo["t_ok"] = memo["t_ok"] if memo["t_ok"] is not None else view.time
+            if view.time - memo["t_ok"] >= phase.hold:
+                return SUCCEEDED
+        else:
+            memo["t_ok"] = None
+        return RUNNING
+
+    @staticmethod
+    def timeout_reason(phase, progress) -> str:
+        error = progress.records[-1].metrics.get("error_m", float("nan"))
+        return f"foot error {error * 1000:.1f} mm still above the {phase.tolerance * 1000:.1f} mm tolerance"
+
+
+class PressRunner(PhaseRunner):
+    """Drives the foot along `direction` until the estimated force or the displacement is reached."""
+
+    def start(self, phase, progress, view, env):
+        if phase.leg not in progress.references.legs:
+            raise UnreachableTarget(f"{phase.name}: {phase.leg} is not in pedipulation mode")
+        direction = np.asarray(phase.direction, float)
+        direction /= np.linalg.norm(direction)
+        start = view.foot_W(phase.leg)
+        trajectory = QuinticSegment(start, start, view.time, 1e-3)
+        progress.references.legs[phase.leg] = LegTrajectory(LEG_MODE_FOOT, trajectory)
+        progress.references.press = dict(
+            leg=phase.leg, start=start, direction=direction, speed=phase.speed, t0=view.time, frozen_at=None
+        )
+        # The force estimate has a bias from model errors; measure it before touching anything.
+        progress.memo.update(start=start, force_bias=float(-view.foot_external_force_W(phase.leg) @ direction))
+
+    def step(self, phase, progress, view, env):
+        memo, press = progress.memo, progress.references.press
+        direction = press["direction"]
+        force = float(-view.foot_external_force_W(phase.leg) @ direction) - memo["force_bias"]
+        displacement = float((view.foot_W(phase.leg) - memo["start"]) @ direction)
+        metrics = progress.records[-1].metrics
+        metrics.update(leg=phase.leg, force_n=force, displacement_m=displacement)
+        if force >= phase.force or displacement >= phase.max_displacement:
+            press["frozen_at"] = view.time
+            metrics["stiffness_n_per_m"] = force / max(displacement, 1e-4)
+            metrics["stopped_by"] = "force" if force >= phase.force else "displacement"
+            # Hold the foot where it is, in joint space, for whatever comes next.
+            hold = PiecewiseQuintic.through(np.array([view.leg_q(phase.leg)] * 2), view.time, [1e-3])
+            progress.references.legs[phase.leg] = LegTrajectory(LEG_MODE_JOINTS, hold)
+            progress.references.press = None
+            return SUCCEEDED
+        return RUNNING
+
+
+class LegToSupportRunner(PhaseRunner):
+    """Places the foot on the ground under its hip, restores the contact, re-centres the trunk."""
+
+    def start(self, phase, progress, view, env):
+        leg = phase.leg
+        geometry = leg_geometry(leg)
+        p_WF = view.X_WB @ (geometry.p_BH + geometry.p_HT)
+        ground = np.array([p_WF[0], p_WF[1], robot.FOOT_RADIUS - 0.004])
+        above = ground + [0.0, 0.0, 0.05]
+        q_above = _ik(leg, view.X_WB.inverse() @ above, view.leg_q(leg), phase.name)
+        q_ground = _ik(leg, view.X_WB.inverse() @ ground, q_above, phase.name)
+        t = view.time
+        trajectory = PiecewiseQuintic.through(
+            np.array([view.leg_q(leg), q_above, q_ground]), t, [phase.duration, 0.6 * phase.duration]
+        )
+        progress.references.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
+        progress.memo.update(stage="place", t_down=t + 1.6 * phase.duration)
+
+    def step(self, phase, progress, view, env):
+        t, leg, memo, refs = view.time, phase.leg, progress.memo, progress.references
+        k = robot.LEG_NAMES.index(leg)
+        touched = view.foot_force[k] > CONTACT_FORCE_THRESHOLD
+        if memo["stage"] == "place" and (touched or t >= memo["t_down"] + 0.3):
+            refs.legs.pop(leg, None)
+            refs.contacts[k] = 1.0
+            memo.update(stage="load", t_loaded=t + CONTACT_RAMP_WAIT)
+        elif memo["stage"] == "load" and t >= memo["t_loaded"]:
+            supports = _support_points_W(view, env, refs.contacts)
+            p_now, _ = _body_sample(progress, t)
+            goal = _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
+            _move_body(progress, t, goal, None, SHIFT_DURATION)
+            memo.update(stage="centre", t_centred=t + SHIFT_DURATION)
+        elif memo["stage"] == "centre" and t >= memo["t_centred"]:
+            return SUCCEEDED if view.foot_force[k] > CONTACT_FORCE_THRESHOLD else RUNNING
+        return RUNNING
+
+
+class LeanOnProngsRunner(PhaseRunner):
+    def start(self, phase, progress, view, env):
+        if env.prongs is None:
+            raise UnreachableTarget(f"{phase.name}: the robot has no prongs (set robot.prongs)")
+        p_now, _ = _body_sample(progress, view.time)
+        goal = p_now.copy()
+        # 5 mm below first touch so the tips carry load.
+        goal[2] = env.prongs.ground_contact_height() - 0.005
+        _move_body(progress, view.time, goal, None, phase.duration)
+        progress.memo.update(goal=goal, loaded=False)
+
+    def step(self, phase, progress, view, env):
+        t, memo = view.time, progress.memo
+        if not memo["loaded"] and t >= progress.phase_start + phase.duration:
+            if view.base.p_WB[2] < env.prongs.ground_contact_height() + 0.01:
+                progress.references.contacts[4:] = 1.0
+                memo.update(loaded=True, t_loaded=t + CONTACT_RAMP_WAIT)
+        if memo["loaded"] and t >= memo["t_loaded"]:
+            return SUCCEEDED
+        return RUNNING
+
+
+class LeaveProngsRunner(PhaseRunner):
+    def start(self, phase, progress, view, env):
+        progress.references.contacts[4:] = 0.0
+        p_now, _ = _body_sample(progress, view.time)
+        goal = p_now.copy()
+        goal[2] = phase.height
+        t = view.time + CONTACT_RAMP_WAIT
+        refs = progress.references
+        refs.body_position = QuinticSegment(p_now, goal, t, phase.duration)
+        progress.memo.update(goal=goal, t_done=t + phase.duration)
+
+    def step(self, phase, progress, view, env):
+        if view.time >= progress.memo["t_done"] and abs(view.base.p_WB[2] - phase.height) < 0.01:
+            return SUCCEEDED
+        return RUNNING
+
+
+class WaitRunner(PhaseRunner):
+    def step(self, phase, progress, view, env):
+        return SUCCEEDED if view.time >= progress.phase_start + phase.duration else RUNNING
+
+
+RUNNERS: dict[type, PhaseRunner] = {
+    spec.StandUp: StandUpRunner(),
+    spec.LieDown: LieDownRunner(),
+    spec.BodyMove: BodyMoveRunner(),
+    spec.BodyRotate: BodyRotateRunner(),
+    spec.LegToPedipulation: LegToPedipulationRunner(),
+    spec.LegToSupport: LegToSupportRunner(),
+    spec.Reach: ReachRunner(),
+    spec.Press: PressRunner(),
+    spec.LeanOnProngs: LeanOnProngsRunner(),
+    spec.LeaveProngs: LeaveProngsRunner(),
+    spec.Wait: WaitRunner(),
+}
+assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a runner"
+
+
+def kind_name(phase) -> str:
+    return next(name for name, cls in spec.PHASE_KINDS.items() if isinstance(phase, cls))
+
+
+def is_finite_reference(value) -> bool:
+    return all(math.isfinite(float(v)) for v in np.ravel(value))

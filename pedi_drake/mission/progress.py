@@ -1,0 +1,75 @@
+"""The mission's changing state, held by the MissionManager as one abstract state value.
+
+It is plain, deep-copyable data: the phase index and timing, the reference trajectories the
+controller is following, the contact set, and the record of finished phases.
+"""
+
+import dataclasses
+
+import numpy as np
+from pydrake.math import RotationMatrix
+
+from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment
+
+RUNNING, SUCCEEDED, FAILED, RECOVERING = "running", "succeeded", "failed", "recovering"
+STATUS_CODES = {RUNNING: 0, SUCCEEDED: 1, FAILED: 2, RECOVERING: 3}
+LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS = 0, 1, 2
+
+
+@dataclasses.dataclass
+class LegTrajectory:
+    """Reference of one pedipulation leg: joint angles (mode 2) or foot position in W (mode 1)."""
+
+    mode: int
+    trajectory: PiecewiseQuintic | QuinticSegment
+
+
+@dataclasses.dataclass
+class References:
+    """What the controller is asked to do, as trajectories sampled at output time."""
+
+    body_position: QuinticSegment  # p_WB [m]
+    body_orientation: QuinticOrientationSegment  # R_WB
+    legs: dict[str, LegTrajectory]  # pedipulation legs only
+    contacts: np.ndarray  # (4 + number of prongs,) 1 = loaded contact
+    # A press phase drives the foot at constant speed: p(t) = start + speed (t - t0) d, until frozen.
+    press: dict | None = None
+
+    @staticmethod
+    def holding(p_WB: np.ndarray, R_WB: RotationMatrix, t: float, num_prongs: int) -> "References":
+        return References(
+            body_position=QuinticSegment(p_WB, p_WB, t, 1e-3),
+            body_orientation=QuinticOrientationSegment(R_WB, R_WB, t, 1e-3),
+            legs={},
+            contacts=np.concatenate([np.ones(4), np.zeros(num_prongs)]),
+        )
+
+
+@dataclasses.dataclass
+class PhaseRecord:
+    """A finished (or running) phase, as reported in result.json."""
+
+    name: str
+    kind: str
+    status: str
+    t_start: float
+    t_end: float | None = None
+    reason: str = ""
+    # Phase-specific measurements (foot error, press force and displacement, ...).
+    metrics: dict = dataclasses.field(default_factory=dict)
+
+
+@dataclasses.dataclass
+class MissionProgress:
+    """Everything about the mission that changes during a run."""
+
+    index: int = 0  # phase being run
+    status: str = RUNNING
+    reason: str = ""
+    started: bool = False  # the current phase's start() has run
+    phase_start: float = 0.0
+    memo: dict = dataclasses.field(default_factory=dict)  # the current phase's private data
+    references: References | None = None
+    records: list[PhaseRecord] = dataclasses.field(default_factory=list)
+    # Recovery after a failure: the phases still to run to reach a safe posture.
+    recovery: list = dataclasses.field(default_factory=list)

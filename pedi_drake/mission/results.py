@@ -1,0 +1,109 @@
+"""Mission results for result.json, judged against simulation ground truth after the run.
+
+The mission manager decides success from the state estimate, as the robot would. These figures
+(foot errors, trunk drift, door angle, ...) are the evaluator's view: they come from the logged
+plant state, which no controller ever reads.
+"""
+
+import numpy as np
+
+from pedi_drake import robot
+from pedi_drake.control.references import LEG_BLOCK
+from pedi_drake.mission.progress import MissionProgress
+
+RIGID_STIFFNESS = 1500.0  # [N/m] a press stiffer than this is a rigid obstacle
+
+
+def _sample_index(times: np.ndarray, t: float) -> int:
+    return int(np.clip(np.searchsorted(times, t), 0, len(times) - 1))
+
+
+def _foot_W(plant, context, x: np.ndarray, leg: str) -> np.ndarray:
+    plant.SetPositionsAndVelocities(context, x)
+    return plant.GetBodyByName(f"{leg}_foot").EvalPoseInWorld(context).translation()
+
+
+def phase_table(progress: MissionProgress) -> list[dict]:
+    """The `phases` list of result.json."""
+    return [
+        {
+            "name": r.name,
+            "kind": r.kind,
+            "status": r.status,
+            "t_start": r.t_start,
+            "t_end": r.t_end,
+            "reason": r.reason,
+        }
+        for r in progress.records
+    ]
+
+
+def foot_errors(progress: MissionProgress, plant, times: np.ndarray, states: np.ndarray) -> list[dict]:
+    """Final foot-to-target distance of every reach phase, from the true foot position [m]."""
+    context = plant.CreateDefaultContext()
+    rows = []
+    for record in progress.records:
+        if record.kind != "reach" or record.t_end is None or "target_W" not in record.metrics:
+            continue
+        leg = record.metrics["leg"]
+        k = _sample_index(times, record.t_end)
+        true_foot = _foot_W(plant, context, states[:, k], leg)
+        error = float(np.linalg.norm(true_foot - np.asarray(record.metrics["target_W"])))
+        rows.append(
+            {
+                "phase": record.name,
+                "leg": leg,
+                "error": error,
+                "estimated_error": record.metrics.get("error_m"),
+                "target_W": list(record.metrics["target_W"]),
+                "status": record.status,
+            }
+        )
+    return rows
+
+
+def max_base_drift(plant_map: robot.Go1PlantMap, states: np.ndarray, body_ref: np.ndarray, status: np.ndarray) -> float:
+    """Largest |p_WB - p_WB_ref| while a leg is in pedipulation mode [m] (0 if never)."""
+    n = min(states.shape[1], body_ref.shape[1], status.shape[1])
+    active = status[2, :n] > 0.5
+    if not np.any(active):
+        return 0.0
+    q0 = plant_map.base_q_start
+    p = states[q0 + 4 : q0 + 7, :n]
+    return float(np.max(np.linalg.norm(p[:, active] - body_ref[0:3, :n][:, active], axis=0)))
+
+
+def press_results(progress: MissionProgress) -> list[dict]:
+    """Each press phase: force, displacement, stiffness and the rigid/soft call."""
+    rows = []
+    for record in progress.records:
+        if record.kind != "press" or "stiffness_n_per_m" not in record.metrics:
+            continue
+        stiffness = record.metrics["stiffness_n_per_m"]
+        rows.append(
+            {
+                "phase": record.name,
+                "force_n": record.metrics["force_n"],
+                "displacement_m": record.metrics["displacement_m"],
+                "stiffness_n_per_m": stiffness,
+                "classified_as": "rigid" if stiffness > RIGID_STIFFNESS else "soft",
+            }
+        )
+    return rows
+
+
+def door_opening(plant, states: np.ndarray) -> dict | None:
+    """Door hinge angle at the start and the end [rad], if the scene has a door."""
+    if not plant.HasModelInstanceNamed("door"):
+        return None
+    hinge = plant.GetJointByName("hinge", plant.GetModelInstanceByName("door"))
+    start, end = states[hinge.position_start(), 0], states[hinge.position_start(), -1]
+    return {"start_rad": float(start), "end_rad": float(end), "opened_deg": float(np.degrees(end - start))}
+
+
+def pedipulation_leg(leg_reference_log: np.ndarray) -> str | None:
+    """The first leg that ever had a task in `leg_reference`."""
+    for k, leg in enumerate(robot.LEG_NAMES):
+        if np.any(leg_reference_log[k * LEG_BLOCK] > 0.5):
+            return leg
+    return None

@@ -1,0 +1,77 @@
+"""What the mission knows about the robot: the state estimate and the `go1.*` measurements.
+
+Everything here is computed from the base-state estimate and the joint sensors through the
+model, never from simulation ground truth.
+"""
+
+import dataclasses
+
+import numpy as np
+from pydrake.math import RigidTransform
+
+from pedi_drake import robot
+from pedi_drake.estimation.base_state import BaseState
+from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
+
+
+@dataclasses.dataclass(frozen=True)
+class RobotView:
+    """One sample of the robot as the mission sees it."""
+
+    time: float  # [s]
+    base: BaseState
+    q: np.ndarray  # (12,) joint angles [rad], Unitree order
+    qd: np.ndarray  # (12,) joint rates [rad/s]
+    tau: np.ndarray  # (12,) estimated joint torques [N m]
+    foot_force: np.ndarray  # (4,) foot sensor values (normal force [N] in simulation)
+
+    @property
+    def X_WB(self) -> RigidTransform:
+        return self.base.pose()
+
+    def leg_q(self, leg: str) -> np.ndarray:
+        return self.q[robot.leg_slice(leg)]
+
+    def foot_B(self, leg: str) -> np.ndarray:
+        """Foot centre in the trunk frame [m]."""
+        return foot_position_B(leg, self.leg_q(leg))
+
+    def foot_W(self, leg: str) -> np.ndarray:
+        """Foot centre in the world [m]."""
+        return self.X_WB @ self.foot_B(leg)
+
+    def feet_W(self) -> dict[str, np.ndarray]:
+        return {leg: self.foot_W(leg) for leg in robot.LEG_NAMES}
+
+    def com_W(self) -> np.ndarray:
+        """Whole-robot centre of mass in the world [m] (plain Go1 model)."""
+        plant, plant_map = robot.make_go1_plant()
+        context = plant.CreateDefaultContext()
+        q = plant_map.full_positions(self.base.quaternion_wxyz, self.base.p_WB, self.q, plant.num_positions())
+        plant.SetPositions(context, q)
+        return plant.CalcCenterOfMassPositionInWorld(context)
+
+    def foot_external_force_W(self, leg: str) -> np.ndarray:
+        """Estimated force of the environment on the foot of `leg`, in the world [N].
+
+        Quasi-static: the leg's motor torques balance the leg's own gravity and the contact force,
+        tau + tau_g + J^T F = 0, so F = -J^-T (tau + tau_g). Valid for slow leg motions.
+        """
+        plant, plant_map = robot.make_go1_plant()
+        context = plant.CreateDefaultContext()
+        q = plant_map.full_positions(self.base.quaternion_wxyz, self.base.p_WB, self.q, plant.num_positions())
+        plant.SetPositions(context, q)
+        tau_g = plant.CalcGravityGeneralizedForces(context)[plant_map.v_index][robot.leg_slice(leg)]
+        J_W = self.X_WB.rotation().matrix() @ foot_jacobian_B(leg, self.leg_q(leg))
+        tau = self.tau[robot.leg_slice(leg)]
+        return -np.linalg.solve(J_W.T, tau + tau_g)
+
+
+def com_offset_from_trunk(view: RobotView) -> np.ndarray:
+    """p_BoCm_W: the CoM relative to the trunk origin, in the world [m]."""
+    return view.com_W() - view.base.p_WB
+
+
+def foot_jacobian_W(view: RobotView, leg: str) -> np.ndarray:
+    """(3, 3) world-frame Jacobian of the foot w.r.t. the leg's joints (trunk fixed)."""
+    return view.X_WB.rotation().matrix() @ foot_jacobian_B(leg, view.leg_q(leg))
