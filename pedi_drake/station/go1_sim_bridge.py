@@ -1,0 +1,231 @@
+"""The robot's side of the Go1 LCM protocol, around the simulated Go1: a stand-in for the real bridge.
+
+    python -m pedi_drake.station.go1_sim_bridge [--scenario_file F] [--scenario_name N]
+        [--scenario_text YAML] [--duration S] [--lcm_url URL] [--latency S] [--drop_probability P]
+
+Runs `MakeStation(scenario, hardware=False)` in real time and, like walk-these-ways' `lcm_position`
+on a Go1, at 500 Hz: publishes `leg_control_data` and `state_estimator_data`, filling only the
+fields the real bridge fills (q, qd, tau_est; quat, rpy, omegaBody, aBody, contact_estimate; the
+world-frame fields stay 0), and applies the last `pd_plustau_targets` it received (holding the
+initial pose until the first one). Optional latency and dropped messages; sensor noise comes
+from the scenario's `sensor_noise`. A controller started with `MakeStation(..., hardware=True)`
+on the same URL (default udpm://239.255.76.67:7667?ttl=0, this host only) drives it over UDP.
+"""
+
+import argparse
+import math
+import signal
+import sys
+
+import numpy as np
+from pydrake.common.eigen_geometry import Quaternion
+from pydrake.lcm import DrakeLcm, DrakeLcmInterface
+from pydrake.math import RollPitchYaw
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import BasicVector, DiagramBuilder, DiscreteValues, LeafSystem
+from pydrake.systems.lcm import LcmInterfaceSystem
+
+from pedi_drake.station import go1_lcm_constants as c
+from pedi_drake.station.go1_driver_config import Go1BridgeConfig
+from pedi_drake.station.go1_status_receiver import Go1LcmReceiver
+from pedi_drake.station.hardware_station import driver_config_for, go1_lcm_for
+from pedi_drake.station.lcmtypes import leg_control_data_lcmt, state_estimator_lcmt
+from pedi_drake.station.motor_model import COMMAND_SIZE, pack_command
+from pedi_drake.station.scenario import Scenario, load_scenario
+from pedi_drake.station.station import MakeStation
+
+# Gains with which the bridge holds the initial pose until the first command [N m/rad], [N m s/rad].
+HOLD_KP = 20.0
+HOLD_KD = 0.5
+
+# One status sample: q, qd, tau_est (12 each), imu (10), foot_contact (4).
+_SAMPLE_SIZE = 50
+
+
+class Go1BridgeCommandHold(LeafSystem):
+    """received command + its message count + measured pose -> the command applied to the motors.
+
+    Before the first command arrives the bridge holds the pose measured at its first tick (as the
+    real bridge does); afterwards it applies the last command received, every tick, unchanged.
+    State: [q_start (12), captured flag].
+    """
+
+    def __init__(self, period: float = c.BRIDGE_PERIOD):
+        super().__init__()
+        self._received = self.DeclareVectorInputPort("received_command", COMMAND_SIZE)
+        self._counts = self.DeclareVectorInputPort("message_counts", 2)
+        self._q = self.DeclareVectorInputPort("position_measured", 12)
+        self._start = self.DeclareDiscreteState(13)
+        self.DeclareInitializationDiscreteUpdateEvent(self._capture)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._capture)
+        # Not a function of the measured pose (only of the pose captured in the state): no loop.
+        self.DeclareVectorOutputPort(
+            "command", COMMAND_SIZE, self._calc, {self._received.ticket(), self._counts.ticket(), self.xd_ticket()}
+        )
+
+    def _capture(self, context, discrete_state: DiscreteValues) -> None:
+        x = context.get_discrete_state(self._start).get_value()
+        if x[12] == 0.0:
+            discrete_state.set_value(self._start, np.concatenate([self._q.Eval(context), [1.0]]))
+
+    def _calc(self, context, output: BasicVector) -> None:
+        if self._counts.Eval(context)[0] > 0:
+            output.SetFromVector(self._received.Eval(context))
+            return
+        q_start = context.get_discrete_state(self._start).get_value()[:12]
+        output.SetFromVector(pack_command(q_start, 0.0, HOLD_KP, HOLD_KD, 0.0))
+
+
+class Go1BridgeStatusPublisher(LeafSystem):
+    """Station outputs -> leg_control_data and state_estimator_data at 500 Hz, optionally late or dropped.
+
+    Latency is modelled in the Context: a ring of the last ceil(latency / period) + 1 samples,
+    of which the oldest is published. A tick is dropped when a draw seeded by (seed, tick) falls
+    below drop_probability, so drops are reproducible and need no random state.
+    """
+
+    def __init__(
+        self, lcm: DrakeLcmInterface, config: Go1BridgeConfig, *, seed: int = 0, period: float = c.BRIDGE_PERIOD
+    ):
+        super().__init__()
+        self._lcm = lcm
+        self._config = config
+        self._seed = seed
+        self._period = period
+        self._depth = int(math.ceil(config.latency / period - 1e-9)) + 1
+        self._inputs = [
+            self.DeclareVectorInputPort(name, size)
+            for name, size in (
+                ("position_measured", 12),
+                ("velocity_measured", 12),
+                ("torque_estimated", 12),
+                ("imu", 10),
+                ("foot_contact", 4),
+            )
+        ]
+        # [ring of samples (depth x 50), newest slot index, tick]
+        self._ring = self.DeclareDiscreteState(self._depth * _SAMPLE_SIZE + 2)
+        self.DeclareInitializationDiscreteUpdateEvent(self._fill)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._push)
+        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
+
+    def _sample(self, context) -> np.ndarray:
+        return np.concatenate([port.Eval(context) for port in self._inputs])
+
+    def _fill(self, context, discrete_state: DiscreteValues) -> None:
+        sample = self._sample(context)
+        discrete_state.set_value(self._ring, np.concatenate([np.tile(sample, self._depth), [0.0, 0.0]]))
+
+    def _push(self, context, discrete_state: DiscreteValues) -> None:
+        x = context.get_discrete_state(self._ring).get_value().copy()
+        newest = (int(x[-2]) + 1) % self._depth
+        x[newest * _SAMPLE_SIZE : (newest + 1) * _SAMPLE_SIZE] = self._sample(context)
+        x[-2] = newest
+        x[-1] += 1
+        discrete_state.set_value(self._ring, x)
+
+    def _publish(self, context) -> None:
+        x = context.get_discrete_state(self._ring).get_value()
+        tick = int(x[-1])
+        p = self._config.drop_probability
+        if p > 0.0 and np.random.default_rng([self._seed, tick]).random() < p:
+            return
+        oldest = (int(x[-2]) + 1) % self._depth
+        sample = x[oldest * _SAMPLE_SIZE : (oldest + 1) * _SAMPLE_SIZE]
+        t = context.get_time()
+        leg, estimator = status_messages(sample, tick)
+        self._lcm.Publish(c.LEG_CONTROL_CHANNEL, leg.encode(), t)
+        self._lcm.Publish(c.STATE_ESTIMATOR_CHANNEL, estimator.encode(), t)
+
+
+def status_messages(sample: np.ndarray, tick: int) -> tuple[leg_control_data_lcmt, state_estimator_lcmt]:
+    """The two status messages of one 50-value sample, filled as the real bridge fills them."""
+    leg = leg_control_data_lcmt()
+    leg.q = sample[0:12].tolist()
+    leg.qd = sample[12:24].tolist()
+    leg.tau_est = sample[24:36].tolist()
+    leg.id = tick
+    imu = sample[36:46]
+    estimator = state_estimator_lcmt()
+    quaternion = imu[0:4] / np.linalg.norm(imu[0:4])
+    estimator.quat = quaternion.tolist()
+    estimator.rpy = RollPitchYaw(Quaternion(quaternion)).vector().tolist()
+    estimator.omegaBody = imu[4:7].tolist()
+    estimator.aBody = imu[7:10].tolist()
+    estimator.contact_estimate = sample[46:50].tolist()
+    estimator.id = tick
+    return leg, estimator
+
+
+def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1BridgeConfig | None = None):
+    """The simulated station ("station") wired to the robot side of the protocol on `lcm`."""
+    config = config if config is not None else driver_config_for(scenario).bridge
+    builder = DiagramBuilder()
+    builder.AddNamedSystem("lcm", LcmInterfaceSystem(lcm))
+    station = builder.AddNamedSystem("station", MakeStation(scenario, hardware=False))
+    receiver = builder.AddNamedSystem(
+        "command_receiver",
+        Go1LcmReceiver(
+            lcm,
+            c.COMMAND_CHANNEL,
+            c.CHANNEL_TYPES[c.COMMAND_CHANNEL],
+            c.message_to_command,
+            np.zeros(COMMAND_SIZE),
+            {"command": slice(0, COMMAND_SIZE)},
+        ),
+    )
+    hold = builder.AddNamedSystem("command_hold", Go1BridgeCommandHold())
+    builder.Connect(receiver.GetOutputPort("command"), hold.GetInputPort("received_command"))
+    builder.Connect(receiver.GetOutputPort("message_counts"), hold.GetInputPort("message_counts"))
+    builder.Connect(station.GetOutputPort("go1.position_measured"), hold.GetInputPort("position_measured"))
+    builder.Connect(hold.GetOutputPort("command"), station.GetInputPort("go1.command"))
+    publisher = builder.AddNamedSystem(
+        "status_publisher", Go1BridgeStatusPublisher(lcm, config, seed=scenario.random_seed)
+    )
+    for name in ("position_measured", "velocity_measured", "torque_estimated", "imu", "foot_contact"):
+        builder.Connect(station.GetOutputPort(f"go1.{name}"), publisher.GetInputPort(name))
+    builder.ExportOutput(hold.GetOutputPort("command"), "bridge.applied_command")
+    builder.ExportOutput(receiver.GetOutputPort("message_counts"), "bridge.command_counts")
+    builder.ExportOutput(station.GetOutputPort("sim.plant_state"), "sim.plant_state")
+    diagram = builder.Build()
+    diagram.set_name("go1_sim_bridge")
+    return diagram
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--scenario_file", default=None, help="scenario YAML (default: the shipped one)")
+    parser.add_argument("--scenario_name", default="default")
+    parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto the scenario")
+    parser.add_argument("--duration", type=float, default=math.inf, help="simulated seconds (default: until killed)")
+    parser.add_argument("--lcm_url", default=None, help="override the scenario's bus 'go1' URL")
+    parser.add_argument("--latency", type=float, default=None, help="status latency [s]")
+    parser.add_argument("--drop_probability", type=float, default=None, help="status drop probability [-]")
+    parser.add_argument("--realtime_rate", type=float, default=1.0)
+    args = parser.parse_args(argv)
+    scenario = load_scenario(
+        filename=args.scenario_file, scenario_name=args.scenario_name, scenario_text=args.scenario_text
+    )
+    config = driver_config_for(scenario).bridge
+    if args.latency is not None:
+        config.latency = args.latency
+    if args.drop_probability is not None:
+        config.drop_probability = args.drop_probability
+    lcm = DrakeLcm(args.lcm_url) if args.lcm_url else go1_lcm_for(scenario)
+    simulator = Simulator(MakeSimBridgeDiagram(scenario, lcm, config))
+    simulator.set_target_realtime_rate(args.realtime_rate)
+    # SIGTERM ends the run like Ctrl-C, so a supervising test or script can stop the bridge cleanly.
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
+    simulator.Initialize()
+    print(f"go1_sim_bridge: running on {lcm.get_lcm_url()}", flush=True)
+    try:
+        # AdvanceTo needs a finite time: advance in 1 s chunks until the duration (or forever).
+        while simulator.get_context().get_time() < args.duration:
+            simulator.AdvanceTo(min(simulator.get_context().get_time() + 1.0, args.duration))
+    except KeyboardInterrupt:
+        pass
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
