@@ -14,131 +14,14 @@ Examples:
 
 import argparse
 import sys
-import time
 from pathlib import Path
 
-import numpy as np
 from pydrake.geometry import Meshcat
-from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import EventStatus
 
-from pedi_drake import robot
-from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.exceptions import ConfigError
-from pedi_drake.mission import results as mission_results
-from pedi_drake.mission.progress import FAILED, SUCCEEDED
 from pedi_drake.mission.spec import load_mission
-from pedi_drake.results import trunk_fell, write_result
-from pedi_drake.station.scenario import Scenario, default_scenario_file, load_scenario
-from pedi_drake.viz import plots
-
-SETTLE_AFTER_MISSION = 0.5  # [s] simulated after the mission ends, then the run stops
-PROGRESS_EVERY = 2.0  # [s] of simulated time between progress lines
-
-
-def run(*, scenario: Scenario, name: str, out_dir: Path, meshcat: Meshcat | None = None, quiet: bool = False) -> dict:
-    """Simulates `scenario`, writes result.json, replay.html and plots to `out_dir`; returns the result."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    # A Meshcat is always made: it records the replay even when nobody watches live.
-    meshcat = meshcat or Meshcat()
-    built = MakePedipulationDiagram(scenario, meshcat)
-    diagram = built.diagram
-    simulator = Simulator(diagram)
-    manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
-    state = {"next_print": PROGRESS_EVERY, "ended": None}
-
-    def monitor(root_context):
-        t = root_context.get_time()
-        progress = manager.progress(manager.GetMyContextFromRoot(root_context)) if manager else None
-        if not quiet and t >= state["next_print"]:
-            state["next_print"] += PROGRESS_EVERY
-            if progress is not None:
-                phase = progress.records[-1].name if progress.records else "-"
-                count = len(built.mission.phases)
-                print(f"  t = {t:5.1f} s  phase {progress.index + 1}/{count} {phase} ({progress.status})")
-            else:
-                print(f"  t = {t:5.1f} s")
-        if progress is not None and progress.status in (SUCCEEDED, FAILED):
-            state["ended"] = state["ended"] or t
-            if t >= state["ended"] + SETTLE_AFTER_MISSION:
-                return EventStatus.ReachedTermination(diagram, "mission over")
-        return EventStatus.Succeeded()
-
-    simulator.set_monitor(monitor)
-    simulator.Initialize()
-    meshcat.StartRecording(set_visualizations_while_recording=False)
-    wall_start = time.perf_counter()
-    simulator.AdvanceTo(scenario.simulation_duration)
-    wall_time = time.perf_counter() - wall_start
-    meshcat.StopRecording()
-    meshcat.PublishRecording()
-    (out_dir / "replay.html").write_text(meshcat.StaticHtml())
-
-    context = simulator.get_context()
-    logs = {name: diagram.GetSubsystemByName(logger).FindLog(context) for name, logger in built.loggers.items()}
-    plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
-    plant_map = robot.Go1PlantMap.from_plant(plant)
-    t_state, states = logs["sim.plant_state"].sample_times(), logs["sim.plant_state"].data()
-    t_cmd, command = logs["go1.command"].sample_times(), logs["go1.command"].data()
-    position, velocity = logs["go1.position_measured"].data(), logs["go1.velocity_measured"].data()
-    sim_time = float(context.get_time())
-    fell = trunk_fell(states, plant_map, has_prongs=scenario.robot.prongs is not None)
-    result = {
-        "mission": built.mission.name if built.mission else None,
-        "scenario": name,
-        "success": not fell,
-        "reason": "the trunk fell" if fell else "",
-        "phases": [],
-        "foot_errors_m": [],
-        "max_base_drift_m": 0.0,
-        "fell": fell,
-        "sim_time_s": sim_time,
-        "wall_time_s": wall_time,
-        "real_time_factor": sim_time / wall_time if wall_time > 0 else None,
-        "controller_tick_ms": None,
-        "controller": scenario.controller,
-        "random_seed": scenario.random_seed,
-        "sensor_noise": scenario.sensor_noise.enabled,
-        "final_trunk_height_m": float(states[plant_map.base_q_start + 6, -1]),
-    }
-    if "controller.diagnostics" in logs:
-        tick_ms = 1e3 * logs["controller.diagnostics"].data()[2]
-        tick_ms = tick_ms[tick_ms > 0]
-        result["controller_tick_ms"] = {
-            "median": float(np.median(tick_ms)),
-            "p99": float(np.percentile(tick_ms, 99)),
-            "max": float(np.max(tick_ms)),
-        }
-    plots.plot_joint_tracking(t_cmd, command[:12], position, out_dir / "joint_positions.png", title=name)
-    plots.plot_foot_forces(
-        logs["go1.foot_contact"].sample_times(), logs["go1.foot_contact"].data(), out_dir / "foot_forces.png"
-    )
-
-    if manager is not None:
-        progress = manager.progress(manager.GetMyContextFromRoot(context))
-        mission_ok = progress.status == SUCCEEDED
-        result["success"] = mission_ok and not fell
-        result["reason"] = progress.reason if not mission_ok else ("the trunk fell" if fell else "")
-        if progress.status not in (SUCCEEDED, FAILED):
-            result["reason"] = f"the simulation ended ({sim_time:.1f} s) before the mission did"
-        result["phases"] = mission_results.phase_table(progress)
-        result["foot_errors_m"] = mission_results.foot_errors(progress, plant, t_state, states)
-        status_log, body_log = logs["mission.status"].data(), logs["mission.body_reference"].data()
-        result["max_base_drift_m"] = mission_results.max_base_drift(plant_map, states, body_log, status_log)
-        result["presses"] = mission_results.press_results(progress)
-        door = mission_results.door_opening(plant, states)
-        if door is not None:
-            result["door"] = door
-        leg = mission_results.pedipulation_leg(logs["mission.leg_reference"].data())
-        if leg is not None:
-            plots.plot_leg_tracking(
-                t_cmd, command, position, velocity, leg, result["phases"], out_dir / "leg_tracking.png"
-            )
-            plots.plot_mission_errors(
-                t_state, states, body_log, status_log, plant, result, out_dir / "mission_errors.png"
-            )
-    write_result(out_dir, result)
-    return result
+from pedi_drake.simulation_run import run
+from pedi_drake.station.scenario import default_scenario_file, load_scenario
 
 
 def main() -> int:

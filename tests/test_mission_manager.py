@@ -1,0 +1,91 @@
+"""MissionManager in closed loop: phase transitions, failures with reasons, recovery to four legs."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from pedi_drake.diagram import MakePedipulationDiagram
+from pedi_drake.mission.progress import FAILED, SUCCEEDED
+from pedi_drake.station.scenario import load_scenario
+
+QUICK_START = """
+  - {kind: stand_up, height: 0.28, duration: 1.5, timeout: 3.0}
+  - {kind: leg_to_pedipulation, leg: FR, duration: 1.0, timeout: 4.0}
+"""
+
+
+def _run_mission(tmp_path: Path, phases: str, duration: float):
+    path = tmp_path / "mission.yaml"
+    path.write_text("phases:" + phases)
+    scenario = load_scenario(
+        scenario_text=f"{{mission: {path}, controller: whole_body, simulation_duration: {duration}}}"
+    )
+    built = MakePedipulationDiagram(scenario)
+    simulator = Simulator(built.diagram)
+    simulator.Initialize()
+    manager = built.diagram.GetSubsystemByName("mission")
+    context = simulator.get_context()
+    manager_context = manager.GetMyContextFromRoot(context)
+    t = 0.0
+    while t < duration:
+        t = min(t + 0.5, duration)
+        simulator.AdvanceTo(t)
+        if manager.progress(manager_context).status in (SUCCEEDED, FAILED):
+            simulator.AdvanceTo(t + 0.5)
+            break
+    station = built.diagram.GetSubsystemByName("station")
+    station_context = station.GetMyContextFromRoot(context)
+    return manager.progress(manager_context), station, station_context
+
+
+def test_phases_run_in_order_and_the_mission_succeeds(tmp_path):
+    phases = QUICK_START + """
+  - {kind: reach, name: reach_front, leg: FR, target: [0.30, -0.13, 0.18], duration: 0.8, tolerance: 0.005, hold: 0.1}
+  - {kind: leg_to_support, leg: FR, duration: 1.0}
+"""
+    progress, _, _ = _run_mission(tmp_path, phases, 14.0)
+    assert progress.status == SUCCEEDED, progress.reason
+    assert [r.status for r in progress.records] == ["succeeded"] * 4
+    starts = [r.t_start for r in progress.records]
+    ends = [r.t_end for r in progress.records]
+    assert starts == sorted(starts) and all(e >= s for s, e in zip(starts, ends, strict=True))
+    assert progress.records[2].metrics["error_m"] < 0.005
+
+
+def test_unreachable_target_fails_cleanly_and_ends_on_four_legs(tmp_path):
+    phases = QUICK_START + """
+  - {kind: reach, name: too_far, leg: FR, target: [1.5, -0.13, 0.2]}
+  - {kind: leg_to_support, leg: FR}
+"""
+    progress, station, station_context = _run_mission(tmp_path, phases, 16.0)
+    assert progress.status == FAILED
+    assert "too_far" in progress.reason and "IK" in progress.reason
+    statuses = {r.name: r.status for r in progress.records}
+    assert statuses["too_far"] == "failed" and statuses["3_leg_to_support"] == "skipped"
+    assert statuses["recover_FR"] == "succeeded"
+    # Standing on four legs: every foot carries load, the trunk is up.
+    forces = station.GetOutputPort("go1.foot_contact").Eval(station_context)
+    assert np.all(forces > 15.0), forces
+    state = station.GetOutputPort("sim.plant_state").Eval(station_context)
+    assert state[6] > 0.25
+
+
+def test_reach_without_pedipulation_mode_fails_with_a_reason(tmp_path):
+    phases = """
+  - {kind: stand_up, height: 0.28, duration: 1.5, timeout: 3.0}
+  - {kind: reach, name: no_leg_lifted, leg: FL, target: [0.3, 0.13, 0.18]}
+"""
+    progress, _, _ = _run_mission(tmp_path, phases, 6.0)
+    assert progress.status == FAILED
+    assert "not in pedipulation mode" in progress.reason
+
+
+def test_timeout_fails_the_phase_with_the_remaining_error(tmp_path):
+    phases = QUICK_START + """
+  - {kind: reach, name: hurried, leg: FR, target: [0.30, -0.13, 0.18], duration: 1.0, timeout: 1.0, tolerance: 0.0001, hold: 0.5}
+"""
+    progress, _, _ = _run_mission(tmp_path, phases, 14.0)
+    assert progress.status == FAILED
+    assert "hurried: timed out after 1.0 s" in progress.reason and "mm" in progress.reason
