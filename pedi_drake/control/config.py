@@ -28,8 +28,9 @@ class WholeBodyControllerConfig:
     stack: str = "paper000"
     # "strict": each level optimises in the optimal set of the levels above; "weighted": one QP.
     hqp_mode: str = "strict"
-    # Weighted mode: weight of each level of the stack, top first (missing entries: 1e-3 steps) [-].
-    level_weights: list[float] = dataclasses.field(default_factory=lambda: [1e4, 1e1, 1e-2, 1e-3, 1e-4])
+    # Weighted mode: weight of each level of the stack, top first [-]. Empty: 100^(L-1-k) for the
+    # L levels of the stack (physics 1e6 ... regularisation 1 for paper000).
+    level_weights: list[float] = dataclasses.field(default_factory=list)
     # QP backend: "daqp" (dense active set, called directly) or "osqp" (MathematicalProgram, baseline).
     qp_backend: str = "daqp"
     # paper003 only: also keep the capture point in the safety polygon in its first level.

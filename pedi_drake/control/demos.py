@@ -315,14 +315,17 @@ class DemoResult:
     fell: bool  # trunk below 0.08 m, or tilted over 0.5 rad
     foot_errors: list[float]  # per hold window: max foot-to-target distance over the window [m]
     trunk_drift: float  # max |p_WB - p_ref| on three legs, before any push [m]
-    stance_slip: float  # max horizontal displacement of a loaded foot from its start [m]
+    stance_slip: float  # max horizontal foot-centre displacement of a stance foot on three legs [m]
+    stance_slip_whole_run: float  # the same from t = 0 (includes the trunk shift on four feet) [m]
     max_torque_ratio: float  # max |tau| / effort limit over the run (applied motor torques)
     qp_failures: int
     tick_median_ms: float
     tick_p99_ms: float
     push_displacement: float = float("nan")  # max trunk displacement during the push [m]
     peak_knee_torque: float = float("nan")  # max |calf torque| of the stance legs during the push [N m]
-    max_force_jump: float = float("nan")  # largest change of a contact force between ticks [N]
+    max_force_jump: float = float("nan")  # largest change of a contact force between ticks (t > 0.1 s) [N]
+    prong_force: float = 0.0  # mean total prong normal force over the last 0.5 s [N]
+    min_trunk_height: float = float("nan")  # [m]
 
 
 def run_demo(name: str, scenario: Scenario | None = None, timing: DemoTiming | None = None) -> DemoResult:
@@ -342,11 +345,17 @@ def run_demo(name: str, scenario: Scenario | None = None, timing: DemoTiming | N
     return evaluate(name, demo, logs, wall)
 
 
+def max_force_jump(times: np.ndarray, forces: np.ndarray, after: float = 0.1) -> float:
+    """Largest change of any contact-force component between consecutive ticks after `after` [N]."""
+    keep = times[: len(forces)] >= after
+    f = forces[keep]
+    return float(np.max(np.abs(np.diff(f, axis=0)))) if len(f) > 1 else 0.0
+
+
 def evaluate(name: str, demo: DemoDiagram, logs, wall: float) -> DemoResult:
     plan, controller = demo.plan, demo.controller
     plant = demo.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     plant_context = plant.CreateDefaultContext()
-    pm = robot.Go1PlantMap.from_plant(plant)
     times = logs["log.plant_state"].sample_times()
     states = logs["log.plant_state"].data().T
     nq = plant.num_positions()
@@ -375,12 +384,17 @@ def evaluate(name: str, demo: DemoDiagram, logs, wall: float) -> DemoResult:
     mask = (times >= plan.three_leg_start) & (times <= t_drift_end)
     ref = np.array([plan.body.sample(t).position for t in times[mask]])
     drift = float(np.max(np.linalg.norm(trunk_p[mask] - ref, axis=1))) if np.any(mask) else 0.0
-    # Slip of the feet that stay loaded throughout.
+    # Foot-centre displacement of the feet that stay loaded: an upper bound of slip (it also
+    # counts rolling of the foot sphere when the calf turns).
     lifted = set(plan.legs)
-    slip = 0.0
+    slip, slip_all = 0.0, 0.0
+    three = np.flatnonzero(times >= plan.three_leg_start)
     for i, leg in enumerate(robot.LEG_NAMES):
         if leg not in lifted:
-            slip = max(slip, float(np.max(np.linalg.norm(foot_p[:, i, :2] - foot_p[0, i, :2], axis=1))))
+            slip_all = max(slip_all, float(np.max(np.linalg.norm(foot_p[:, i, :2] - foot_p[0, i, :2], axis=1))))
+            if len(three):
+                moved = foot_p[three, i, :2] - foot_p[three[0], i, :2]
+                slip = max(slip, float(np.max(np.linalg.norm(moved, axis=1))))
     torque = logs["log.motor_torque"].data().T
     ratio = float(np.max(np.abs(torque) / robot.EFFORT_LIMIT))
     diag = logs["log.diagnostics"].data().T
@@ -397,17 +411,21 @@ def evaluate(name: str, demo: DemoDiagram, logs, wall: float) -> DemoResult:
         foot_errors=foot_errors,
         trunk_drift=drift,
         stance_slip=slip,
+        stance_slip_whole_run=slip_all,
         max_torque_ratio=ratio,
         qp_failures=int(diag[-1, layout["total_failures"]][0]),
         tick_median_ms=float(np.median(ticks)) if len(ticks) else float("nan"),
         tick_p99_ms=float(np.percentile(ticks, 99)) if len(ticks) else float("nan"),
-        max_force_jump=float(np.max(np.abs(np.diff(forces, axis=0)))) if len(forces) > 1 else 0.0,
+        max_force_jump=max_force_jump(times, forces),
+        min_trunk_height=float(np.min(trunk_p[:, 2])),
     )
+    if controller.num_contacts > 4:
+        last = times >= times[-1] - 0.5
+        result.prong_force = float(np.mean(np.sum(forces[last][:, 14::3], axis=1)))
     if plan.push is not None:
         mask = (times >= plan.push[0] - 0.5) & (times <= plan.push[1] + 0.5)
         before = trunk_p[times < plan.push[0] - 0.5][-1]
         result.push_displacement = float(np.max(np.linalg.norm(trunk_p[mask] - before, axis=1)))
         calf = [3 * i + 2 for i, leg in enumerate(robot.LEG_NAMES) if leg not in lifted]
         result.peak_knee_torque = float(np.max(np.abs(torque[mask][:, calf])))
-    del pm
     return result

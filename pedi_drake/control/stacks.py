@@ -66,6 +66,11 @@ class StackBuilder:
         self.torque_min = tasks.TorqueMinimization()
         self.nominal_q = np.tile(np.asarray(c.nominal_leg_posture, float), 4)
 
+    @property
+    def num_levels(self) -> int:
+        """Number of HQP levels the configured stack produces."""
+        return 6 if self.config.stack == "paper003" else 4
+
     def physics(self, s: RobotSnapshot, inputs: ResolvedInputs) -> Level:
         """Floating-base dynamics and contact no-motion: equalities that some x always meets exactly."""
         return Level(

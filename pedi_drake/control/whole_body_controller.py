@@ -92,6 +92,11 @@ class WholeBodyController(LeafSystem):
         self.layout = tasks.VariableLayout(self.model.nv, nc, self.model.plant_map.v_index)
         self.builder = StackBuilder(config, self.layout, self.model.total_mass)
         self.hqp_settings = HqpSettings(backend=config.qp_backend)
+        if config.level_weights and len(config.level_weights) != self.builder.num_levels:
+            raise ConfigError(
+                f"whole_body.level_weights: the {config.stack} stack has {self.builder.num_levels} levels, "
+                f"got {len(config.level_weights)} weights"
+            )
         self.diag = diagnostics_layout(nc)
         self.default_contact_set = references.contact_set_vector(num_prongs=nc - 4)
 
@@ -180,8 +185,8 @@ class WholeBodyController(LeafSystem):
         try:
             levels = self.builder.levels(snapshot, inputs)
             if c.hqp_mode == "weighted":
-                weights = list(c.level_weights) + [1e-3] * len(levels)
-                solution = solve_weighted(levels, self.layout.size, weights[: len(levels)], self.hqp_settings)
+                weights = list(c.level_weights) or [100.0 ** (len(levels) - 1 - k) for k in range(len(levels))]
+                solution = solve_weighted(levels, self.layout.size, weights, self.hqp_settings)
             else:
                 solution = solve_hqp(levels, self.layout.size, self.hqp_settings)
             x = solution.x
