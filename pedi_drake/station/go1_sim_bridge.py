@@ -35,8 +35,8 @@ from pedi_drake.station.scenario import Scenario, load_scenario
 from pedi_drake.station.station import MakeStation
 
 # Gains with which the bridge holds the initial pose until the first command [N m/rad], [N m s/rad].
-HOLD_KP = 20.0
-HOLD_KD = 0.5
+HOLD_KP = 60.0
+HOLD_KD = 2.0
 
 # One status sample: q, qd, tau_est (12 each), imu (10), foot_contact (4).
 _SAMPLE_SIZE = 50
