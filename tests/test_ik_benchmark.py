@@ -70,11 +70,6 @@ def test_paper_cube_mean_iterations_at_1cm_beat_the_paper(paper_cube):
         assert row["mean_iterations_reached"] <= benchmark.PAPER["mean_iterations"]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 3 floor not met: FABRIK's knee converges linearly (about x0.05-0.2 per iteration), "
-    "so stopping at the first iterate under 1 mm leaves a mean of 0.27-0.29 mm",
-)
 def test_paper_cube_mean_error_at_1mm_is_below_0_2mm(paper_cube):
     for row in _fabrik_rows(paper_cube, 1e-3):
         assert row["mean_error_reached_m"] < 2e-4

@@ -3,7 +3,6 @@
 from pathlib import Path
 
 import numpy as np
-import pytest
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake.diagram import MakePedipulationDiagram
@@ -41,10 +40,13 @@ def _run_mission(tmp_path: Path, phases: str, duration: float):
 
 
 def test_phases_run_in_order_and_the_mission_succeeds(tmp_path):
-    phases = QUICK_START + """
+    phases = (
+        QUICK_START
+        + """
   - {kind: reach, name: reach_front, leg: FR, target: [0.30, -0.13, 0.18], duration: 0.8, tolerance: 0.005, hold: 0.1}
   - {kind: leg_to_support, leg: FR, duration: 1.0}
 """
+    )
     progress, _, _ = _run_mission(tmp_path, phases, 14.0)
     assert progress.status == SUCCEEDED, progress.reason
     assert [r.status for r in progress.records] == ["succeeded"] * 4
@@ -55,10 +57,13 @@ def test_phases_run_in_order_and_the_mission_succeeds(tmp_path):
 
 
 def test_unreachable_target_fails_cleanly_and_ends_on_four_legs(tmp_path):
-    phases = QUICK_START + """
+    phases = (
+        QUICK_START
+        + """
   - {kind: reach, name: too_far, leg: FR, target: [1.5, -0.13, 0.2]}
   - {kind: leg_to_support, leg: FR}
 """
+    )
     progress, station, station_context = _run_mission(tmp_path, phases, 16.0)
     assert progress.status == FAILED
     assert "too_far" in progress.reason and "IK" in progress.reason
@@ -83,9 +88,13 @@ def test_reach_without_pedipulation_mode_fails_with_a_reason(tmp_path):
 
 
 def test_timeout_fails_the_phase_with_the_remaining_error(tmp_path):
-    phases = QUICK_START + """
-  - {kind: reach, name: hurried, leg: FR, target: [0.30, -0.13, 0.18], duration: 1.0, timeout: 1.0, tolerance: 0.0001, hold: 0.5}
+    phases = (
+        QUICK_START
+        + """
+  - {kind: reach, name: hurried, leg: FR, target: [0.30, -0.13, 0.18], duration: 1.0, timeout: 1.0,
+     tolerance: 0.0001, hold: 0.5}
 """
+    )
     progress, _, _ = _run_mission(tmp_path, phases, 14.0)
     assert progress.status == FAILED
     assert "hurried: timed out after 1.0 s" in progress.reason and "mm" in progress.reason

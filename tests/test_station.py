@@ -32,8 +32,9 @@ def test_station_exports_exactly_the_documented_go1_ports():
 
 def test_hardware_station_exports_the_same_ports_or_names_the_missing_driver():
     try:
-        from pedi_drake.station.hardware_station import MakeHardwareStation
         from pydrake.lcm import DrakeLcm
+
+        from pedi_drake.station.hardware_station import MakeHardwareStation
     except ImportError:
         with pytest.raises(NotImplementedError, match="issue 7"):
             MakeStation(Scenario(), hardware=True)

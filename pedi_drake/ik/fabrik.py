@@ -20,7 +20,8 @@ One Go1 leg is a fixed-base chain from the hip: hip joint H (abduction, axis e0)
    - calf: the target is projected onto the calf joint's plane and the calf turned towards it.
 3. Compensation (Algorithm 1), foot to base over calf, thigh, hip: project the foot and the
    target onto the joint's plane (relative to the joint), take the rotation between them about
-   the joint axis, skip it below 1e-4 rad, saturate, and update the downstream joints.
+   the joint axis, skip it below 1e-4 rad, saturate, and update the downstream joints. The
+   sweep is repeated (at most `_COMPENSATION_SWEEPS` times) until every rotation is skipped.
 
 The iteration stops within the tolerance, at `max_iterations`, or when an iteration no longer
 changes the error (a stall). A stall is the failure the paper reports ("the forward phase
@@ -56,6 +57,12 @@ _MIN_ROTATION = 1e-4  # [rad] Algorithm 1, line 6: smaller compensation rotation
 _MIN_PROGRESS = 1e-8  # [m] an iteration that changes the error by less than this has stalled.
 _MAX_BRANCH_SWITCHES = 2  # stalls after which the hip tangent is switched before giving up
 DEFAULT_MAX_ITERATIONS = 50
+# Compensation sweeps per iteration. One sweep (Algorithm 1) is a cyclic-coordinate step and
+# converges linearly (x0.05-0.2 per sweep at the knee), so stopping at the first iterate under a
+# 1 mm tolerance left a mean error near 0.28 mm. Repeating the sweep, until its rotations fall
+# under the skip threshold, costs ~2 us a sweep and brings the mean near 0.1 mm and the mean
+# iteration count at 1 cm from 1.4 to 1.0 (python -m pedi_drake.ik.benchmark).
+_COMPENSATION_SWEEPS = 8
 
 
 @dataclasses.dataclass(frozen=True)
@@ -162,7 +169,7 @@ def _hip_from_plane(ch: _Chain, q0: float, tv: complex, branch: int) -> float:
 
 def _iterate(ch: _Chain, tx: float, ty: float, tz: float, q0: float, q1: float, q2: float, branch: int):
     """One FABRIK iteration; returns the new (q0, q1, q2) [rad]."""
-    lat, w_HT, w_TC, w_CF = ch.lat, ch.w_HT, ch.w_TC, ch.w_CF
+    lat, w_HT, w_TC = ch.lat, ch.w_HT, ch.w_TC
     lo, hi = ch.lower, ch.upper
     tv = complex(ty, tz)
 
@@ -191,22 +198,40 @@ def _iterate(ch: _Chain, tx: float, ty: float, tz: float, q0: float, q1: float, 
     q2 = _saturate(q2, cmath.phase(w_t - w_C) - ch.phase_CF - q1, lo[2], hi[2])
 
     # 3. Compensation phase (Algorithm 1), from the foot towards the base.
-    e12 = e1 * cmath.exp(1j * q2)
-    w_F = w_C + e12 * w_CF
+    for _ in range(_COMPENSATION_SWEEPS):
+        q0, q1, q2, rotated = _compensate(ch, w_t, tv, q0, q1, q2)
+        if not rotated:
+            break
+    return q0, q1, q2
+
+
+def _compensate(ch: _Chain, w_t: complex, tv: complex, q0: float, q1: float, q2: float):
+    """One compensation sweep (Algorithm 1) over calf, thigh, hip; returns (q0, q1, q2, rotated).
+
+    `w_t` is the target projected on the leg plane, `tv` on the hip joint's plane [m].
+    `rotated` is False when every rotation was below the skip threshold of Algorithm 1.
+    """
+    lo, hi = ch.lower, ch.upper
+    e1 = cmath.exp(1j * q1)
+    w_C = ch.w_HT + e1 * ch.w_TC
+    w_F = w_C + e1 * cmath.exp(1j * q2) * ch.w_CF
+    rotated = False
     rho = cmath.phase((w_t - w_C) * (w_F - w_C).conjugate())  # calf
     if abs(rho) > _MIN_ROTATION:
         q2 = _saturate(q2, q2 + rho, lo[2], hi[2])
-        e12 = e1 * cmath.exp(1j * q2)
-        w_F = w_C + e12 * w_CF
-    rho = cmath.phase((w_t - w_HT) * (w_F - w_HT).conjugate())  # thigh
+        w_F = w_C + e1 * cmath.exp(1j * q2) * ch.w_CF
+        rotated = True
+    rho = cmath.phase((w_t - ch.w_HT) * (w_F - ch.w_HT).conjugate())  # thigh
     if abs(rho) > _MIN_ROTATION:
         q1 = _saturate(q1, q1 + rho, lo[1], hi[1])
-        w_F = w_HT + cmath.exp(1j * q1) * (w_TC + cmath.exp(1j * q2) * w_CF)
-    v_F = cmath.exp(1j * q0) * complex(lat, w_F.real)
+        w_F = ch.w_HT + cmath.exp(1j * q1) * (ch.w_TC + cmath.exp(1j * q2) * ch.w_CF)
+        rotated = True
+    v_F = cmath.exp(1j * q0) * complex(ch.lat, w_F.real)
     rho = cmath.phase(tv * v_F.conjugate())  # hip
     if abs(rho) > _MIN_ROTATION:
         q0 = _saturate(q0, q0 + rho, lo[0], hi[0])
-    return q0, q1, q2
+        rotated = True
+    return q0, q1, q2, rotated
 
 
 def _foot_error(ch: _Chain, tx: float, ty: float, tz: float, q0: float, q1: float, q2: float) -> float:
