@@ -122,7 +122,7 @@ def _solve_osqp(H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, 
     options = SolverOptions()
     options.SetOption(OsqpSolver.id(), "eps_abs", 1e-6)
     options.SetOption(OsqpSolver.id(), "eps_rel", 1e-6)
-    options.SetOption(OsqpSolver.id(), "polish", True)
+    options.SetOption(OsqpSolver.id(), "polishing", True)  # OSQP >= 1.0 name
     result = OsqpSolver().Solve(prog, None, options)
     if not result.is_success():
         raise QpInfeasible(f"HQP level {level!r}: OSQP {result.get_solution_result()}")
