@@ -1,7 +1,8 @@
 """One simulated run of a scenario or mission: build, simulate, judge, write the results.
 
 `run(scenario=..., name=..., out_dir=...)` is what run_sim.py, the mission benchmark, the tests
-and the notebooks call. It writes result.json (DESIGN.md section 5), replay.html and PNG plots.
+and the notebooks call. It writes result.json (DESIGN.md section 5), replay.html, PNG plots and the logged signals
+(logs.npz, read back with `pedi_drake.run_logs.read_run_logs`).
 """
 
 import time
@@ -17,6 +18,7 @@ from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.mission import results as mission_results
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
 from pedi_drake.results import trunk_fell, write_result
+from pedi_drake.run_logs import SignalLog, write_run_logs
 from pedi_drake.station.scenario import Scenario
 from pedi_drake.viz import plots
 
@@ -25,7 +27,7 @@ PROGRESS_EVERY = 2.0  # [s] of simulated time between progress lines
 
 
 def run(*, scenario: Scenario, name: str, out_dir: Path, meshcat: Meshcat | None = None, quiet: bool = False) -> dict:
-    """Simulates `scenario`, writes result.json, replay.html and plots to `out_dir`; returns the result."""
+    """Simulates `scenario`, writes result.json, replay.html, plots and logs.npz to `out_dir`; returns the result."""
     out_dir.mkdir(parents=True, exist_ok=True)
     # A Meshcat is always made: it records the replay even when nobody watches live.
     meshcat = meshcat or Meshcat()
@@ -125,5 +127,6 @@ def run(*, scenario: Scenario, name: str, out_dir: Path, meshcat: Meshcat | None
             plots.plot_mission_errors(
                 t_state, states, body_log, status_log, plant, result, out_dir / "mission_errors.png"
             )
+    write_run_logs(out_dir, {name: SignalLog(log.sample_times(), log.data()) for name, log in logs.items()})
     write_result(out_dir, result)
     return result
