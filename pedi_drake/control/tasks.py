@@ -18,6 +18,8 @@ Acceleration tasks follow Eq. 1 of paper 000: J vdot = a_ref + Kp (x_ref - x) + 
 """
 
 import dataclasses
+import functools
+import math
 
 import numpy as np
 
@@ -39,12 +41,22 @@ class VariableLayout:
     def size(self) -> int:
         return self.nv + 3 * self.nc
 
-    @property
+    @functools.cached_property
     def unactuated(self) -> np.ndarray:
         """Indices of the floating-base velocities (those that are not joints)."""
         mask = np.ones(self.nv, dtype=bool)
         mask[self.v_joints] = False
         return np.flatnonzero(mask)
+
+    @functools.cached_property
+    def joint_selector(self) -> np.ndarray:
+        """(24, size): [S; -S] with S x = the joint accelerations in Unitree order (read-only)."""
+        n = len(self.v_joints)
+        S = np.zeros((n, self.size))
+        S[np.arange(n), self.v_joints] = 1.0
+        selector = np.vstack([S, -S])
+        selector.flags.writeable = False
+        return selector
 
     def force(self, contact: int) -> slice:
         return slice(self.nv + 3 * contact, self.nv + 3 * contact + 3)
@@ -169,10 +181,7 @@ class JointLimits:
         mid = 0.5 * (lower + upper)
         upper = np.where(bad, mid, upper)
         lower = np.where(bad, mid, lower)
-        n = len(layout.v_joints)
-        S = np.zeros((n, layout.size))
-        S[np.arange(n), layout.v_joints] = 1.0
-        return InequalityTask("joint_limits", np.vstack([S, -S]), np.concatenate([upper, -lower]), hard=True)
+        return InequalityTask("joint_limits", layout.joint_selector, np.concatenate([upper, -lower]), hard=True)
 
 
 def convex_hull_ccw(points_xy: np.ndarray) -> np.ndarray:
@@ -252,12 +261,13 @@ class PdGains:
 def orientation_error_W(R_ref: np.ndarray, R: np.ndarray) -> np.ndarray:
     """Rotation vector of R_ref R^T (world frame) [rad]: the rotation taking R to R_ref."""
     E = R_ref @ R.T
-    cos_angle = np.clip((np.trace(E) - 1.0) / 2.0, -1.0, 1.0)
-    angle = np.arccos(cos_angle)
+    # Scalar maths: numpy's ufuncs cost microseconds each on a 3x3 and this runs twice a tick.
+    cos_angle = min(max((E[0, 0] + E[1, 1] + E[2, 2] - 1.0) / 2.0, -1.0), 1.0)
+    angle = math.acos(cos_angle)
     axis_sin = np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]]) / 2.0
     if angle < 1e-9:
         return axis_sin
-    return axis_sin * angle / np.sin(angle)
+    return axis_sin * (angle / math.sin(angle))
 
 
 @dataclasses.dataclass
