@@ -56,6 +56,9 @@ def summarise(mission: str, runs: list[dict]) -> dict:
     doors = [r["door"]["opened_deg"] for r in runs if "door" in r]
     if doors:
         row["door_opened_deg_min"] = min(doors)
+    boxes = [r["box"]["moved_m"] for r in runs if "box" in r]
+    if boxes:
+        row["box_moved_m_min"] = min(boxes)
     presses = [p for r in runs for p in r.get("presses", [])]
     if presses:
         row["obstacles_correct"] = sum(
@@ -91,6 +94,8 @@ def main() -> None:
         extra = ""
         if "door_opened_deg_min" in row:
             extra += f"door +{row['door_opened_deg_min']:.0f} deg (min) "
+        if "box_moved_m_min" in row:
+            extra += f"box +{100 * row['box_moved_m_min']:.1f} cm (min) "
         if "obstacles_correct" in row:
             extra += f"obstacles right {row['obstacles_correct']}/{row['runs']}"
 

@@ -170,6 +170,11 @@ class BodyRotateRunner(PhaseRunner):
         return SUCCEEDED if done and angle < phase.tolerance else RUNNING
 
 
+def _on_prongs(refs) -> bool:
+    """True while the prongs are in the contact set (the trunk rests on them)."""
+    return bool(np.any(np.asarray(refs.contacts[4:]) > 0.5))
+
+
 class LegToPedipulationRunner(PhaseRunner):
     """Shift the CoM over the other supports, release the contact, lift the foot to work height."""
 
@@ -179,7 +184,12 @@ class LegToPedipulationRunner(PhaseRunner):
         if len(supports) < 3:
             raise UnreachableTarget(f"{phase.name}: lifting {phase.leg} would leave fewer than three supports")
         p_now, _ = _body_sample(progress, view.time)
-        goal = _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
+        if _on_prongs(refs):
+            # The loaded prong tips pin the trunk: it cannot shift, and the prongs widen the support
+            # enough to lift a leg where it stands (the balance task still bounds the CoM).
+            goal = p_now
+        else:
+            goal = _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
         _move_body(progress, view.time, goal, None, SHIFT_DURATION)
         progress.memo.update(stage="shift")
 
@@ -312,7 +322,7 @@ class LegToSupportRunner(PhaseRunner):
         elif memo["stage"] == "load" and t >= memo["t_loaded"]:
             supports = _support_points_W(view, env, refs.contacts)
             p_now, _ = _body_sample(progress, t)
-            goal = _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
+            goal = p_now if _on_prongs(refs) else _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
             _move_body(progress, t, goal, None, SHIFT_DURATION)
             memo.update(stage="centre", t_centred=t + SHIFT_DURATION)
         elif memo["stage"] == "centre" and t >= memo["t_centred"]:

@@ -62,15 +62,39 @@ def foot_errors(progress: MissionProgress, plant, times: np.ndarray, states: np.
     return rows
 
 
-def max_base_drift(plant_map: robot.Go1PlantMap, states: np.ndarray, body_ref: np.ndarray, status: np.ndarray) -> float:
-    """Largest |p_WB - p_WB_ref| while a leg is in pedipulation mode [m] (0 if never)."""
-    n = min(states.shape[1], body_ref.shape[1], status.shape[1])
+def max_base_drift(p_WB: np.ndarray, body_ref: np.ndarray, status: np.ndarray) -> float:
+    """Largest |p_WB - p_WB_ref| while a leg is in pedipulation mode [m] (0 if never).
+
+    `p_WB` (3, N): trunk positions (ground truth in simulation, the estimate on hardware), sampled
+    with the logged body references and mission status.
+    """
+    n = min(p_WB.shape[1], body_ref.shape[1], status.shape[1])
     active = status[2, :n] > 0.5
     if not np.any(active):
         return 0.0
-    q0 = plant_map.base_q_start
-    p = states[q0 + 4 : q0 + 7, :n]
+    p = p_WB[:, :n]
     return float(np.max(np.linalg.norm(p[:, active] - body_ref[0:3, :n][:, active], axis=0)))
+
+
+def estimated_foot_errors(progress: MissionProgress) -> list[dict]:
+    """Every reach phase's final foot error as the controller estimated it (no ground truth) [m]."""
+    rows = []
+    for record in progress.records:
+        if record.kind != "reach" or record.t_end is None or "target_W" not in record.metrics:
+            continue
+        error = record.metrics.get("error_m")
+        rows.append(
+            {
+                "phase": record.name,
+                "leg": record.metrics["leg"],
+                "error": error,
+                "estimated_error": error,
+                "target_W": list(record.metrics["target_W"]),
+                "status": record.status,
+                "t_end": record.t_end,
+            }
+        )
+    return rows
 
 
 def press_results(progress: MissionProgress) -> list[dict]:
@@ -99,6 +123,16 @@ def door_opening(plant, states: np.ndarray) -> dict | None:
     hinge = plant.GetJointByName("hinge", plant.GetModelInstanceByName("door"))
     start, end = states[hinge.position_start(), 0], states[hinge.position_start(), -1]
     return {"start_rad": float(start), "end_rad": float(end), "opened_deg": float(np.degrees(end - start))}
+
+
+def box_displacement(plant, states: np.ndarray) -> dict | None:
+    """Where the box started and ended, and how far it moved on the floor [m], if the scene has one."""
+    if not plant.HasModelInstanceNamed("box"):
+        return None
+    box = plant.GetBodyByName("box", plant.GetModelInstanceByName("box"))
+    i = box.floating_positions_start() + 4  # [quaternion; position]
+    start, end = states[i : i + 3, 0], states[i : i + 3, -1]
+    return {"start_m": start.tolist(), "end_m": end.tolist(), "moved_m": float(np.linalg.norm((end - start)[:2]))}
 
 
 def pedipulation_leg(leg_reference_log: np.ndarray) -> str | None:

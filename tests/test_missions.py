@@ -1,0 +1,47 @@
+"""Every shipped mission, end to end in simulation (default scenario, seed 0), against the floors
+of the missions issue: success, reach errors, trunk drift, no fall, and each mission's own check.
+
+The mission benchmark (python -m pedi_drake.mission.benchmark) runs the same with sensor noise
+over more seeds.
+"""
+
+import pytest
+
+from pedi_drake.mission.benchmark import EXPECTED_OBSTACLE_CLASS, run_one
+from pedi_drake.mission.spec import shipped_missions
+
+MAX_FOOT_ERROR = 0.010  # [m] every reach phase
+MAX_DRIFT = 0.010  # [m] trunk drift while pedipulating
+
+
+@pytest.fixture(scope="module", params=shipped_missions())
+def mission_result(request):
+    return request.param, run_one(request.param, seed=0, noise=False)
+
+
+def test_mission_succeeds_without_falling(mission_result):
+    name, result = mission_result
+    assert result["success"], f"{name}: {result['reason']}"
+    assert not result["fell"]
+
+
+def test_mission_reaches_every_target_within_1cm(mission_result):
+    name, result = mission_result
+    for row in result["foot_errors_m"]:
+        assert row["error"] < MAX_FOOT_ERROR, f"{name} {row['phase']}: {1000 * row['error']:.1f} mm"
+
+
+def test_mission_keeps_the_trunk_within_1cm_while_pedipulating(mission_result):
+    name, result = mission_result
+    assert result["max_base_drift_m"] < MAX_DRIFT, f"{name}: {1000 * result['max_base_drift_m']:.1f} mm"
+
+
+def test_mission_specific_outcome(mission_result):
+    name, result = mission_result
+    if name == "open_door":
+        assert result["door"]["opened_deg"] >= 20.0
+    if name == "prong_push_box":
+        assert result["box"]["moved_m"] >= 0.02
+    if name == "obstacle_sensing":
+        calls = {press["phase"]: press["classified_as"] for press in result["presses"]}
+        assert calls == EXPECTED_OBSTACLE_CLASS
