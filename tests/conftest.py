@@ -16,3 +16,32 @@ def rng() -> np.random.Generator:
 def go1_plant():
     """(plant, Go1PlantMap) of the Go1 without prongs and without geometry; read-only."""
     return robot.make_go1_plant()
+
+
+@pytest.fixture
+def execute_notebook(tmp_path, monkeypatch):
+    """Runs notebooks/<name> headless in a copy under tmp_path; returns its code cells' outputs.
+
+    The kernel imports this checkout (PYTHONPATH) and renders figures inline, so tests can count
+    the PNGs a notebook shows.
+    """
+    import os
+    import shutil
+    from pathlib import Path
+
+    import nbformat
+    from nbclient import NotebookClient
+
+    repo = Path(__file__).resolve().parents[1]
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join(filter(None, [str(repo), os.environ.get("PYTHONPATH")])))
+    monkeypatch.delenv("MPLBACKEND", raising=False)
+
+    def execute(name: str, timeout: float = 300.0) -> list:
+        path = tmp_path / name
+        shutil.copy(repo / "notebooks" / name, path)
+        nb = nbformat.read(path, as_version=4)
+        resources = {"metadata": {"path": str(tmp_path)}}
+        NotebookClient(nb, kernel_name="python3", timeout=timeout, resources=resources).execute()
+        return [o for cell in nb.cells if cell.cell_type == "code" for o in cell.outputs]
+
+    return execute
