@@ -10,6 +10,9 @@ Examples:
     python run_sim.py --mission my_mission.yaml --meshcat
     python run_sim.py --scenario_name stand --out out/stand
     python run_sim.py --scenario_text "{sensor_noise: {enabled: true}, random_seed: 3}"
+    python run_sim.py --hardware --mission hit_target_front   # over LCM: a Go1, or the simulator
+        # bridge started first in another terminal:
+        #   python -m pedi_drake.station.go1_sim_bridge --mission hit_target_front
 """
 
 import argparse
@@ -18,7 +21,7 @@ from pathlib import Path
 
 from pydrake.geometry import Meshcat
 
-from pedi_drake.exceptions import ConfigError
+from pedi_drake.exceptions import ConfigError, LcmTimeout
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.simulation_run import run
 from pedi_drake.station.scenario import default_scenario_file, load_scenario
@@ -33,6 +36,11 @@ def main() -> int:
     parser.add_argument("--out", default=None, help="Output folder (default: out/<mission or scenario>).")
     parser.add_argument("--duration", type=float, default=None, help="Simulated duration [s] (overrides the scenario).")
     parser.add_argument("--meshcat", action="store_true", help="Serve a live Meshcat view (prints its URL).")
+    parser.add_argument(
+        "--hardware",
+        action="store_true",
+        help="Drive the Go1 over LCM (the scenario's bus 'go1') in real time instead of simulating it.",
+    )
     args = parser.parse_args()
     try:
         scenario = load_scenario(
@@ -47,6 +55,11 @@ def main() -> int:
             if not args.duration > 0:
                 raise ConfigError(f"--duration: must be > 0 s, got {args.duration}")
             scenario.simulation_duration = args.duration
+        if args.hardware and scenario.estimator == "ground_truth":
+            raise ConfigError(
+                "estimator: 'ground_truth' exists in simulation only; with --hardware use "
+                '--scenario_text "{estimator: kalman}"'
+            )
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
@@ -56,14 +69,19 @@ def main() -> int:
     if args.meshcat:
         meshcat = Meshcat()
         print(f"Meshcat: {meshcat.web_url()}")
-    print(f"running {name} ({scenario.simulation_duration:.1f} s max, seed {scenario.random_seed})")
-    result = run(scenario=scenario, name=name, out_dir=out_dir, meshcat=meshcat)
+    where = f"over LCM ({scenario.lcm_buses['go1'].lcm_url})" if args.hardware else "in simulation"
+    print(f"running {name} {where} ({scenario.simulation_duration:.1f} s max, seed {scenario.random_seed})")
+    try:
+        result = run(scenario=scenario, name=name, out_dir=out_dir, meshcat=meshcat, hardware=args.hardware)
+    except LcmTimeout as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
     errors = [f"{row['phase']} {1000 * row['error']:.1f} mm" for row in result["foot_errors_m"]]
     print(
         f"{name}: {'succeeded' if result['success'] else 'FAILED: ' + result['reason']}; "
-        f"sim {result['sim_time_s']:.2f} s in {result['wall_time_s']:.2f} s wall "
+        f"{'run' if args.hardware else 'sim'} {result['sim_time_s']:.2f} s in {result['wall_time_s']:.2f} s wall "
         f"(real-time factor {result['real_time_factor']:.2f})"
-        + (f"; foot errors: {', '.join(errors)}" if errors else "")
+        + (f"; foot errors ({result['judged_by'].replace('_', ' ')}): {', '.join(errors)}" if errors else "")
         + f"; results in {out_dir}/"
     )
     return 0 if result["success"] else 1

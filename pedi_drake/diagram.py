@@ -18,6 +18,7 @@ from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
 from pedi_drake.station.scenario import Scenario
 from pedi_drake.station.station import MakeStation
+from pedi_drake.station.wall_clock import WallClock
 
 # Signals logged by every run (name -> exported port of the diagram).
 LOGGED_SIGNALS = (
@@ -111,6 +112,9 @@ def MakePedipulationDiagram(
     if not hardware:
         for name in SIM_LOGGED_SIGNALS:
             sources[name] = station.GetOutputPort(name)
+    else:
+        # The host's clock beside the signals: aligns this run's logs with the robot side's.
+        sources["wall_clock"] = builder.AddNamedSystem("wall_clock", WallClock()).clock
     loggers = {}
     for name, port in sources.items():
         logger = builder.AddNamedSystem(f"log.{name}", VectorLogSink(port.size(), log_period))

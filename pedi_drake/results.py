@@ -18,8 +18,12 @@ def trunk_fell(plant_state_log: np.ndarray, plant_map: robot.Go1PlantMap, *, has
     `plant_state_log` is (nx, N): plant state samples as columns.
     """
     q0 = plant_map.base_q_start
-    height = plant_state_log[q0 + 6]
-    w, x, y, z = plant_state_log[q0 : q0 + 4]
+    return trunk_pose_fell(plant_state_log[q0 : q0 + 4], plant_state_log[q0 + 6], has_prongs=has_prongs)
+
+
+def trunk_pose_fell(quaternion_wxyz: np.ndarray, height: np.ndarray, *, has_prongs: bool) -> bool:
+    """`trunk_fell` from trunk quaternions (4, N) and heights (N,) [m] (e.g. the base-state estimate)."""
+    w, x, y, z = quaternion_wxyz
     # Angle between the trunk's z axis and world z, from the quaternion.
     cos_tilt = 1.0 - 2.0 * (x**2 + y**2) / np.maximum(w**2 + x**2 + y**2 + z**2, 1e-12)
     tilted = bool(np.any(cos_tilt < math.cos(FALL_TILT)))

@@ -17,7 +17,7 @@ from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.mission import results as mission_results
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
-from pedi_drake.results import trunk_fell, write_result
+from pedi_drake.results import trunk_fell, trunk_pose_fell, write_result
 from pedi_drake.run_logs import SignalLog, write_run_logs
 from pedi_drake.station.scenario import Scenario
 from pedi_drake.viz import plots
@@ -26,14 +26,30 @@ SETTLE_AFTER_MISSION = 0.5  # [s] simulated after the mission ends, then the run
 PROGRESS_EVERY = 2.0  # [s] of simulated time between progress lines
 
 
-def run(*, scenario: Scenario, name: str, out_dir: Path, meshcat: Meshcat | None = None, quiet: bool = False) -> dict:
-    """Simulates `scenario`, writes result.json, replay.html, plots and logs.npz to `out_dir`; returns the result."""
+def run(
+    *,
+    scenario: Scenario,
+    name: str,
+    out_dir: Path,
+    meshcat: Meshcat | None = None,
+    quiet: bool = False,
+    hardware: bool = False,
+) -> dict:
+    """Simulates `scenario`, writes result.json, replay.html, plots and logs.npz to `out_dir`; returns the result.
+
+    With `hardware=True` the station is the Go1 LCM driver (a Go1, or the simulator bridge in
+    another process) and the diagram runs in real time. There is no ground truth then: the
+    results (foot errors, drift, falls) come from the state estimate, and no replay is written.
+    """
     out_dir.mkdir(parents=True, exist_ok=True)
-    # A Meshcat is always made: it records the replay even when nobody watches live.
-    meshcat = meshcat or Meshcat()
-    built = MakePedipulationDiagram(scenario, meshcat)
+    if not hardware:
+        # A Meshcat is always made: it records the replay even when nobody watches live.
+        meshcat = meshcat or Meshcat()
+    built = MakePedipulationDiagram(scenario, meshcat, hardware=hardware)
     diagram = built.diagram
     simulator = Simulator(diagram)
+    if hardware:
+        simulator.set_target_realtime_rate(1.0)
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
     state = {"next_print": PROGRESS_EVERY, "ended": None}
 
@@ -56,23 +72,35 @@ def run(*, scenario: Scenario, name: str, out_dir: Path, meshcat: Meshcat | None
 
     simulator.set_monitor(monitor)
     simulator.Initialize()
-    meshcat.StartRecording(set_visualizations_while_recording=False)
+    if meshcat is not None and not hardware:
+        meshcat.StartRecording(set_visualizations_while_recording=False)
     wall_start = time.perf_counter()
     simulator.AdvanceTo(scenario.simulation_duration)
     wall_time = time.perf_counter() - wall_start
-    meshcat.StopRecording()
-    meshcat.PublishRecording()
-    (out_dir / "replay.html").write_text(meshcat.StaticHtml())
+    if meshcat is not None and not hardware:
+        meshcat.StopRecording()
+        meshcat.PublishRecording()
+        (out_dir / "replay.html").write_text(meshcat.StaticHtml())
 
     context = simulator.get_context()
     logs = {name: diagram.GetSubsystemByName(logger).FindLog(context) for name, logger in built.loggers.items()}
-    plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
-    plant_map = robot.Go1PlantMap.from_plant(plant)
-    t_state, states = logs["sim.plant_state"].sample_times(), logs["sim.plant_state"].data()
     t_cmd, command = logs["go1.command"].sample_times(), logs["go1.command"].data()
     position, velocity = logs["go1.position_measured"].data(), logs["go1.velocity_measured"].data()
+    base = logs["base_state"].data()
+    has_prongs = scenario.robot.prongs is not None
+    if hardware:
+        # The estimate is all there is: the trunk pose [quaternion; position] of base_state.
+        plant = plant_map = None
+        t_state, states = logs["base_state"].sample_times(), None
+        p_WB = base[4:7]
+        fell = trunk_pose_fell(base[0:4], base[6], has_prongs=has_prongs)
+    else:
+        plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
+        plant_map = robot.Go1PlantMap.from_plant(plant)
+        t_state, states = logs["sim.plant_state"].sample_times(), logs["sim.plant_state"].data()
+        p_WB = states[plant_map.base_q_start + 4 : plant_map.base_q_start + 7]
+        fell = trunk_fell(states, plant_map, has_prongs=has_prongs)
     sim_time = float(context.get_time())
-    fell = trunk_fell(states, plant_map, has_prongs=scenario.robot.prongs is not None)
     result = {
         "mission": built.mission.name if built.mission else None,
         "scenario": name,
@@ -87,9 +115,13 @@ def run(*, scenario: Scenario, name: str, out_dir: Path, meshcat: Meshcat | None
         "real_time_factor": sim_time / wall_time if wall_time > 0 else None,
         "controller_tick_ms": None,
         "controller": scenario.controller,
+        "estimator": scenario.estimator,
+        "hardware": hardware,
+        # Where foot errors, drift and falls come from: simulation ground truth, or the estimate.
+        "judged_by": "state_estimate" if hardware else "ground_truth",
         "random_seed": scenario.random_seed,
         "sensor_noise": scenario.sensor_noise.enabled,
-        "final_trunk_height_m": float(states[plant_map.base_q_start + 6, -1]),
+        "final_trunk_height_m": float(p_WB[2, -1]),
     }
     if "controller.diagnostics" in logs:
         tick_ms = 1e3 * logs["controller.diagnostics"].data()[2]
@@ -112,21 +144,28 @@ def run(*, scenario: Scenario, name: str, out_dir: Path, meshcat: Meshcat | None
         if progress.status not in (SUCCEEDED, FAILED):
             result["reason"] = f"the simulation ended ({sim_time:.1f} s) before the mission did"
         result["phases"] = mission_results.phase_table(progress)
-        result["foot_errors_m"] = mission_results.foot_errors(progress, plant, t_state, states)
         status_log, body_log = logs["mission.status"].data(), logs["mission.body_reference"].data()
-        result["max_base_drift_m"] = mission_results.max_base_drift(plant_map, states, body_log, status_log)
+        result["max_base_drift_m"] = mission_results.max_base_drift(p_WB, body_log, status_log)
         result["presses"] = mission_results.press_results(progress)
-        door = mission_results.door_opening(plant, states)
-        if door is not None:
-            result["door"] = door
+        if hardware:
+            result["foot_errors_m"] = mission_results.estimated_foot_errors(progress)
+        else:
+            result["foot_errors_m"] = mission_results.foot_errors(progress, plant, t_state, states)
+            door = mission_results.door_opening(plant, states)
+            if door is not None:
+                result["door"] = door
+            box = mission_results.box_displacement(plant, states)
+            if box is not None:
+                result["box"] = box
         leg = mission_results.pedipulation_leg(logs["mission.leg_reference"].data())
         if leg is not None:
             plots.plot_leg_tracking(
                 t_cmd, command, position, velocity, leg, result["phases"], out_dir / "leg_tracking.png"
             )
-            plots.plot_mission_errors(
-                t_state, states, body_log, status_log, plant, result, out_dir / "mission_errors.png"
-            )
+            if not hardware:
+                plots.plot_mission_errors(
+                    t_state, states, body_log, status_log, plant, result, out_dir / "mission_errors.png"
+                )
     write_run_logs(out_dir, {name: SignalLog(log.sample_times(), log.data()) for name, log in logs.items()})
     write_result(out_dir, result)
     return result

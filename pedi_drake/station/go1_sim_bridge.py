@@ -1,7 +1,8 @@
 """The robot's side of the Go1 LCM protocol, around the simulated Go1: a stand-in for the real bridge.
 
     python -m pedi_drake.station.go1_sim_bridge [--scenario_file F] [--scenario_name N]
-        [--scenario_text YAML] [--duration S] [--lcm_url URL] [--latency S] [--drop_probability P]
+        [--scenario_text YAML] [--mission NAME] [--duration S] [--lcm_url URL] [--latency S]
+        [--drop_probability P] [--truth_log FILE]
 
 Runs `MakeStation(scenario, hardware=False)` in real time and, like walk-these-ways' `lcm_position`
 on a Go1, at 500 Hz: publishes `leg_control_data` and `state_estimator_data`, filling only the
@@ -9,13 +10,20 @@ fields the real bridge fills (q, qd, tau_est; quat, rpy, omegaBody, aBody, conta
 world-frame fields stay 0), and applies the last `pd_plustau_targets` it received (holding the
 initial pose until the first one). Optional latency and dropped messages; sensor noise comes
 from the scenario's `sensor_noise`. A controller started with `MakeStation(..., hardware=True)`
-on the same URL (default udpm://239.255.76.67:7667?ttl=0, this host only) drives it over UDP.
+on the same URL (default udpm://239.255.76.67:7667?ttl=0, this host only) drives it over UDP,
+e.g. `python run_sim.py --hardware --mission hit_target_front` in a second terminal.
+
+`--mission` adds the mission's scene objects and robot variant, as run_sim does. `--truth_log`
+writes the simulated ground truth on exit (wall-clock time [s], trunk pose, foot positions in
+world), which no controller sees: `pedi_drake.station.sil` uses it to judge a run over the wire.
 """
 
 import argparse
 import math
 import signal
 import sys
+import time
+from pathlib import Path
 
 import numpy as np
 from pydrake.common.eigen_geometry import Quaternion
@@ -24,7 +32,9 @@ from pydrake.math import RollPitchYaw
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import BasicVector, DiagramBuilder, DiscreteValues, LeafSystem
 from pydrake.systems.lcm import LcmInterfaceSystem
+from pydrake.systems.primitives import VectorLogSink
 
+from pedi_drake.exceptions import ConfigError
 from pedi_drake.station import go1_lcm_constants as c
 from pedi_drake.station.go1_driver_config import Go1BridgeConfig
 from pedi_drake.station.go1_status_receiver import Go1LcmReceiver
@@ -33,6 +43,10 @@ from pedi_drake.station.lcmtypes import leg_control_data_lcmt, state_estimator_l
 from pedi_drake.station.motor_model import COMMAND_SIZE, pack_command
 from pedi_drake.station.scenario import Scenario, load_scenario
 from pedi_drake.station.station import MakeStation
+from pedi_drake.station.wall_clock import WallClock
+
+# Period of the ground-truth log [s].
+TRUTH_LOG_PERIOD = 0.01
 
 # Gains with which the bridge holds the initial pose until the first command [N m/rad], [N m s/rad].
 HOLD_KP = 60.0
@@ -187,9 +201,48 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
     builder.ExportOutput(hold.GetOutputPort("command"), "bridge.applied_command")
     builder.ExportOutput(receiver.GetOutputPort("message_counts"), "bridge.command_counts")
     builder.ExportOutput(station.GetOutputPort("sim.plant_state"), "sim.plant_state")
+    clock = builder.AddNamedSystem("wall_clock", WallClock())
+    for name, port in (("log.plant_state", station.GetOutputPort("sim.plant_state")), ("log.wall_clock", clock.clock)):
+        logger = builder.AddNamedSystem(name, VectorLogSink(port.size(), TRUTH_LOG_PERIOD))
+        builder.Connect(port, logger.get_input_port())
     diagram = builder.Build()
     diagram.set_name("go1_sim_bridge")
     return diagram
+
+
+def write_truth_log(diagram, context, path: Path) -> Path:
+    """Writes the bridge's ground truth to `path` (npz): wall_time (N,) [s], p_WB (N, 3) [m],
+    quaternion_WB (N, 4) (w, x, y, z), p_WF (N, 4, 3) foot centres FR, FL, RR, RL [m]."""
+    from pedi_drake import robot
+
+    plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
+    states = diagram.GetSubsystemByName("log.plant_state").FindLog(context).data()
+    wall = diagram.GetSubsystemByName("log.wall_clock").FindLog(context).data()[0]
+    plant_context = plant.CreateDefaultContext()
+    trunk = plant.GetBodyByName(robot.TRUNK_BODY_NAME)
+    feet = [plant.GetBodyByName(name) for name in robot.FOOT_BODY_NAMES]
+    n = min(states.shape[1], len(wall))
+    p_WB, quaternion, p_WF = np.zeros((n, 3)), np.zeros((n, 4)), np.zeros((n, 4, 3))
+    for k in range(n):
+        plant.SetPositionsAndVelocities(plant_context, states[:, k])
+        X_WB = plant.EvalBodyPoseInWorld(plant_context, trunk)
+        p_WB[k], quaternion[k] = X_WB.translation(), X_WB.rotation().ToQuaternion().wxyz()
+        for i, foot in enumerate(feet):
+            p_WF[k, i] = plant.EvalBodyPoseInWorld(plant_context, foot).translation()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, wall_time=wall[:n], p_WB=p_WB, quaternion_WB=quaternion, p_WF=p_WF)
+    return path
+
+
+def bridge_scenario(scenario: Scenario, mission: str | None) -> Scenario:
+    """`scenario` with the mission's scene objects and robot variant, as the controller side has them."""
+    if not mission:
+        return scenario
+    from pedi_drake.diagram import apply_mission
+    from pedi_drake.mission.spec import load_mission
+
+    return apply_mission(scenario, load_mission(mission))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -202,17 +255,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--latency", type=float, default=None, help="status latency [s]")
     parser.add_argument("--drop_probability", type=float, default=None, help="status drop probability [-]")
     parser.add_argument("--realtime_rate", type=float, default=1.0)
+    parser.add_argument("--mission", default=None, help="add this mission's scene objects and robot variant")
+    parser.add_argument("--truth_log", default=None, help="write the ground truth (npz) here on exit")
     args = parser.parse_args(argv)
-    scenario = load_scenario(
-        filename=args.scenario_file, scenario_name=args.scenario_name, scenario_text=args.scenario_text
-    )
+    try:
+        scenario = load_scenario(
+            filename=args.scenario_file, scenario_name=args.scenario_name, scenario_text=args.scenario_text
+        )
+        scenario = bridge_scenario(scenario, args.mission)
+    except ConfigError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     config = driver_config_for(scenario).bridge
     if args.latency is not None:
         config.latency = args.latency
     if args.drop_probability is not None:
         config.drop_probability = args.drop_probability
     lcm = DrakeLcm(args.lcm_url) if args.lcm_url else go1_lcm_for(scenario)
-    simulator = Simulator(MakeSimBridgeDiagram(scenario, lcm, config))
+    diagram = MakeSimBridgeDiagram(scenario, lcm, config)
+    simulator = Simulator(diagram)
     simulator.set_target_realtime_rate(args.realtime_rate)
     # SIGTERM ends the run like Ctrl-C, so a supervising test or script can stop the bridge cleanly.
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
@@ -224,6 +285,10 @@ def main(argv: list[str] | None = None) -> int:
             simulator.AdvanceTo(min(simulator.get_context().get_time() + 1.0, args.duration))
     except KeyboardInterrupt:
         pass
+    finally:
+        if args.truth_log:
+            path = write_truth_log(diagram, simulator.get_context(), args.truth_log)
+            print(f"go1_sim_bridge: ground truth written to {path} ({time.time():.3f})", flush=True)
     return 0
 
 

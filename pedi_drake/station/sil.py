@@ -1,0 +1,139 @@
+"""Software in the loop over real UDP: a mission through the Go1 LCM driver against the simulator
+bridge in a second process, judged against the bridge's ground truth.
+
+    python -m pedi_drake.station.sil [--mission hit_target_front] [--scenario_text YAML]
+                                     [--lcm_url URL] [--out out/sil_<mission>]
+
+Starts `python -m pedi_drake.station.go1_sim_bridge --mission M --truth_log ...` (the robot side,
+real time, 500 Hz), then runs the mission here exactly as `run_sim.py --hardware` does (driver,
+state estimator, controller, mission manager; no ground truth on this side), stops the bridge
+and compares: each reach phase's target with where the bridge's simulated foot really was at the
+end of the phase (the two processes' logs are aligned by the host's wall clock). Prints a table
+and writes `sil.json` beside the run's result.json.
+"""
+
+import argparse
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from pedi_drake import robot
+from pedi_drake.run_logs import read_run_logs
+from pedi_drake.simulation_run import run
+from pedi_drake.station.scenario import apply_scenario_text, load_scenario
+
+GROUP = "239.255.76.67"
+BRIDGE_START_TIMEOUT = 60.0  # [s] for the bridge to build its diagram and start publishing
+
+
+def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[dict]:
+    """Per reach phase: |true foot position at the phase end - target| [m], via the wall clock.
+
+    `controller_logs` are the run's logs (with `wall_clock`), `truth` the bridge's truth log.
+    """
+    clock = controller_logs["wall_clock"]
+    rows = []
+    for row in result["foot_errors_m"]:
+        wall = float(np.interp(row["t_end"], clock.times, clock.data[0]))
+        leg = robot.LEG_NAMES.index(row["leg"])
+        p_true = np.array([np.interp(wall, truth["wall_time"], truth["p_WF"][:, leg, k]) for k in range(3)])
+        rows.append(
+            {
+                "phase": row["phase"],
+                "leg": row["leg"],
+                "true_error_m": float(np.linalg.norm(p_true - np.asarray(row["target_W"]))),
+                "estimated_error_m": row["estimated_error"],
+            }
+        )
+    return rows
+
+
+def estimator_error(controller_logs: dict, truth: dict) -> dict:
+    """Trunk position error of the estimate against the bridge's ground truth over the run [m]."""
+    clock, base = controller_logs["wall_clock"], controller_logs["base_state"]
+    n = min(len(clock.times), len(base.times))
+    wall = clock.data[0, :n]
+    inside = (wall >= truth["wall_time"][0]) & (wall <= truth["wall_time"][-1])
+    p_true = np.array([np.interp(wall[inside], truth["wall_time"], truth["p_WB"][:, k]) for k in range(3)])
+    error = np.linalg.norm(base.data[4:7, :n][:, inside] - p_true, axis=0)
+    return {"max_m": float(np.max(error)), "final_m": float(error[-1])}
+
+
+def run_sil(mission: str, out_dir: Path, scenario_text: str = "{}", lcm_url: str | None = None) -> dict:
+    """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry."""
+    url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
+    out_dir.mkdir(parents=True, exist_ok=True)
+    truth_path = out_dir / "bridge_truth.npz"
+    text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
+    bridge = subprocess.Popen(
+        [sys.executable, "-m", "pedi_drake.station.go1_sim_bridge", "--mission", mission, "--lcm_url", url]
+        + ["--scenario_text", text, "--truth_log", str(truth_path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    try:
+        start = time.monotonic()
+        line = ""
+        while "running" not in line:
+            line = bridge.stdout.readline()
+            if not line and bridge.poll() is not None:
+                raise RuntimeError(f"the simulator bridge exited with {bridge.returncode} before starting")
+            if time.monotonic() - start > BRIDGE_START_TIMEOUT:
+                raise RuntimeError("the simulator bridge did not start within 60 s")
+        bus = f"{{go1: {{lcm_url: '{url}'}}}}"
+        overrides = f"{{mission: {mission}, controller: whole_body, estimator: kalman, lcm_buses: {bus}}}"
+        scenario = apply_scenario_text(load_scenario(scenario_text=text), overrides)
+        result = run(scenario=scenario, name=mission, out_dir=out_dir, quiet=True, hardware=True)
+    finally:
+        if bridge.poll() is None:
+            bridge.send_signal(signal.SIGTERM)
+        bridge.communicate(timeout=120)
+    with np.load(truth_path) as archive:
+        truth = {key: archive[key] for key in archive.files}
+    logs = read_run_logs(out_dir)
+    result["sil"] = {
+        "foot_errors": true_foot_errors(result, logs, truth),
+        "estimator_trunk_position_error": estimator_error(logs, truth),
+        "lcm_url": url,
+    }
+    (out_dir / "sil.json").write_text(json.dumps(result["sil"], indent=2))
+    return result
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--mission", default="hit_target_front")
+    parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto both sides' scenario")
+    parser.add_argument("--lcm_url", default=None, help="default: the Go1 group on a port of this process's own")
+    parser.add_argument("--out", default=None)
+    args = parser.parse_args()
+    out_dir = Path(args.out or f"out/sil_{args.mission}")
+    result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url)
+    print(
+        f"{args.mission} over {result['sil']['lcm_url']}: {'succeeded' if result['success'] else 'FAILED'}"
+        f" {result['reason']}; wall {result['wall_time_s']:.1f} s"
+    )
+    print(f"{'phase':<20}{'leg':<5}{'true error [mm]':>16}{'estimated [mm]':>16}")
+    for row in result["sil"]["foot_errors"]:
+        estimated = row["estimated_error_m"]
+        print(
+            f"{row['phase']:<20}{row['leg']:<5}{1000 * row['true_error_m']:16.1f}"
+            f"{(1000 * estimated if estimated is not None else float('nan')):16.1f}"
+        )
+    trunk = result["sil"]["estimator_trunk_position_error"]
+    print(
+        f"estimated trunk position vs truth: max {1000 * trunk['max_m']:.1f} mm, final {1000 * trunk['final_m']:.1f} mm"
+    )
+    print(f"wrote {out_dir / 'sil.json'}")
+    return 0 if result["success"] else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
