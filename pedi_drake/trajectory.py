@@ -74,8 +74,15 @@ class QuinticSegment:
             raise PediError("quintic start and end must be finite")
         if not (np.isfinite(self.duration) and self.duration > 0.0):
             raise PediError(f"quintic duration must be a finite number > 0 s, got {self.duration!r}")
-        object.__setattr__(self, "start", start)
-        object.__setattr__(self, "end", end)
+        # Private read-only copies: a segment is a value (see __deepcopy__).
+        for name, value in (("start", start), ("end", end)):
+            value = value.copy()
+            value.flags.writeable = False
+            object.__setattr__(self, name, value)
+
+    def __deepcopy__(self, memo) -> "QuinticSegment":
+        # Immutable: Drake clones the mission state (which holds segments) several times a tick.
+        return self
 
     @property
     def t_end(self) -> float:
@@ -111,6 +118,9 @@ class QuinticOrientationSegment:
         if not (np.isfinite(self.duration) and self.duration > 0.0):
             raise PediError(f"quintic duration must be a finite number > 0 s, got {self.duration!r}")
 
+    def __deepcopy__(self, memo) -> "QuinticOrientationSegment":
+        return self  # immutable (RotationMatrix values and floats)
+
     @property
     def t_end(self) -> float:
         return self.t0 + self.duration
@@ -134,6 +144,9 @@ class PiecewiseQuintic:
     """Consecutive vector quintic segments through waypoints; holds the last waypoint afterwards."""
 
     segments: tuple[QuinticSegment, ...]
+
+    def __deepcopy__(self, memo) -> "PiecewiseQuintic":
+        return self  # immutable: a tuple of immutable segments
 
     @staticmethod
     def through(waypoints: np.ndarray, t0: float, durations: list[float]) -> "PiecewiseQuintic":
