@@ -156,7 +156,10 @@ def plan_demo(name: str, scenario: Scenario, timing: DemoTiming | None = None) -
         if name == "prongs":
             target = feet0[leg] + np.array([0.03, 0.0, 0.08])
         else:
-            target = _shoulder_W(X_WB1, leg) - np.array([0.0, 0.0, 0.15])
+            # 15 cm below the shoulder when standing; at prong height (0.17 m) that is the floor,
+            # so the low demos hold the foot 8 cm below the shoulder, clear of the ground.
+            depth = 0.08 if low else 0.15
+            target = _shoulder_W(X_WB1, leg) - np.array([0.0, 0.0, depth])
         targets[leg] = target
         legs[leg] = PiecewiseQuintic.through(np.array([feet0[leg], target]), t_lift0, [tm.lift_duration])
     end = t_lift1 + 1.5
