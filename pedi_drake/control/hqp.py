@@ -97,9 +97,16 @@ def _stack_equalities(tasks: list[EqualityTask], n: int) -> tuple[np.ndarray, np
         return np.zeros((0, n)), np.zeros(0)
     if len(tasks) == 1 and tasks[0].weight == 1.0:
         return tasks[0].A, tasks[0].b
-    scale = [np.sqrt(t.weight) for t in tasks]
-    A = np.vstack([s * t.A for s, t in zip(scale, tasks, strict=True)])
-    b = np.concatenate([s * t.b for s, t in zip(scale, tasks, strict=True)])
+    # Filled in place: vstack of scaled copies costs twice as much at these sizes.
+    m = sum(len(t.b) for t in tasks)
+    A, b = np.empty((m, n)), np.empty(m)
+    row = 0
+    for t in tasks:
+        scale = math.sqrt(t.weight)
+        rows = slice(row, row + len(t.b))
+        np.multiply(t.A, scale, out=A[rows])
+        np.multiply(t.b, scale, out=b[rows])
+        row = rows.stop
     return A, b
 
 
@@ -190,6 +197,10 @@ def _min_norm_least_squares(A: np.ndarray, r: np.ndarray, split) -> np.ndarray:
     """argmin ||z|| among the minimisers of ||A z - r||, using a `_row_space_split` of A."""
     Y, _, rank, R = split
     if R is not None:
+        # R^T w = r by forward substitution (R is upper triangular).
+        w, info = lapack.dtrtrs(R, r, lower=0, trans=1)
+        if info == 0:
+            return Y @ w
         return Y @ np.linalg.solve(R.T, r)
     return np.linalg.lstsq(A, r, rcond=None)[0]
 

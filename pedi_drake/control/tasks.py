@@ -186,7 +186,8 @@ class JointLimits:
 
 def convex_hull_ccw(points_xy: np.ndarray) -> np.ndarray:
     """Vertices of the convex hull of `points_xy` (k, 2), counter-clockwise (Andrew's monotone chain)."""
-    pts = sorted(map(tuple, np.asarray(points_xy, float)))
+    # Python floats: the chain below does scalar arithmetic, slow on numpy scalars.
+    pts = sorted(map(tuple, np.asarray(points_xy, float).tolist()))
     if len(pts) <= 2:
         return np.array(pts)
 
@@ -208,10 +209,10 @@ def convex_hull_ccw(points_xy: np.ndarray) -> np.ndarray:
 def polygon_halfplanes(vertices_xy: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(N, d) with N p <= d: the convex hull of `vertices_xy` (k >= 3, [m]) shrunk by `margin` [m]."""
     hull = convex_hull_ccw(vertices_xy)
-    edges = np.vstack([hull[1:], hull[:1]]) - hull
+    edges = np.roll(hull, -1, axis=0) - hull
     normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # outward for a counter-clockwise ring
-    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-    return normals, np.einsum("ij,ij->i", normals, hull) - margin
+    normals /= np.sqrt(np.sum(normals * normals, axis=1))[:, None]
+    return normals, np.sum(normals * hull, axis=1) - margin
 
 
 def rectangle_halfplanes(centre: np.ndarray, half_sizes: np.ndarray, yaw: float) -> tuple[np.ndarray, np.ndarray]:
