@@ -13,6 +13,7 @@ from pydrake.systems.primitives import VectorLogSink
 from pedi_drake.control.stand_controller import StandController
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
+from pedi_drake.estimation.kalman_estimator import KalmanEstimator
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
@@ -71,10 +72,12 @@ def MakePedipulationDiagram(
         estimator = builder.AddNamedSystem("estimator", GroundTruthEstimator(plant))
         builder.Connect(station.GetOutputPort("sim.plant_state"), estimator.GetInputPort("plant_state"))
     else:
-        raise ScenarioError(
-            f"estimator: {scenario.estimator!r} is not available yet (the floating-base Kalman filter of issue 7); "
-            "use estimator: ground_truth in simulation"
+        num_contacts = 4 + (scenario.robot.prongs.num_prongs if scenario.robot.prongs is not None else 0)
+        estimator = builder.AddNamedSystem(
+            "estimator", KalmanEstimator(scenario.kalman, scenario.robot.initial_xy, num_contacts)
         )
+        for name in ("imu", "position_measured", "velocity_measured", "foot_contact"):
+            builder.Connect(station.GetOutputPort(f"go1.{name}"), estimator.GetInputPort(name))
     base_state = estimator.GetOutputPort("base_state")
 
     extra_logs = {}
@@ -99,6 +102,8 @@ def MakePedipulationDiagram(
                 builder.Connect(station.GetOutputPort(f"go1.{name}"), manager.GetInputPort(name))
             for name in ("body_reference", "leg_reference", "contact_set", "safety_polygon", "friction"):
                 builder.Connect(manager.GetOutputPort(name), controller.GetInputPort(name))
+            if isinstance(estimator, KalmanEstimator):
+                builder.Connect(manager.GetOutputPort("contact_set"), estimator.contact_set_port)
             extra_logs["mission.status"] = manager.GetOutputPort("mission_status")
             extra_logs["mission.body_reference"] = manager.GetOutputPort("body_reference")
             extra_logs["mission.leg_reference"] = manager.GetOutputPort("leg_reference")

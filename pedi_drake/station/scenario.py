@@ -16,6 +16,7 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import WholeBodyControllerConfig
+from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.exceptions import ProngDesignError, ScenarioError
 from pedi_drake.prongs import ProngDesign
 
@@ -126,8 +127,11 @@ class Scenario:
     whole_body: WholeBodyControllerConfig = dataclasses.field(default_factory=WholeBodyControllerConfig)
     # The mission to run (a name in missions/ or a YAML path); empty for none.
     mission: str = ""
-    # Floating-base estimate used by controllers: "kalman" or "ground_truth" (simulation only).
-    estimator: str = "ground_truth"
+    # Floating-base estimate used by controllers: "kalman" (IMU + leg kinematics, simulation and
+    # hardware) or "ground_truth" (the simulated plant's state, for debugging only).
+    estimator: str = "kalman"
+    # Settings of the Kalman estimator.
+    kalman: KalmanEstimatorConfig = dataclasses.field(default_factory=KalmanEstimatorConfig)
     # LCM buses by name; the hardware station uses the bus "go1".
     lcm_buses: dict[str, DrakeLcmParams] = dataclasses.field(
         default_factory=lambda: {"go1": DrakeLcmParams(lcm_url=DEFAULT_GO1_LCM_URL)}
@@ -176,6 +180,8 @@ class Scenario:
                 self.robot.prongs.validate(where="robot.prongs")
             except ProngDesignError as error:
                 raise ScenarioError(f"{where}: {error}") from None
+        for problem in self.kalman.validate(where="kalman"):
+            raise ScenarioError(f"{where}: {problem}")
         for number_field in ("simulation_duration", "visualization_period", "ground_friction"):
             need(math.isfinite(getattr(self, number_field)), number_field, "must be finite")
 

@@ -1,0 +1,275 @@
+"""Floating-base state estimation from the IMU and leg kinematics: a linear Kalman filter.
+
+The filter of Bloesch et al. (2013) in its linear form (as in MIT Cheetah 3): the IMU gives the
+orientation R_WB (its quaternion) and the angular velocity (gyro); the filter estimates
+
+    x = [p_WB (3), v_WB (3), p_WF for the four feet (12)]   (world frame, 18 states)
+
+* predict: p += v dt + a dt^2 / 2, v += a dt with a = R_WB (f_I - w x (w x p_BI)) + g, the
+  accelerometer's specific force moved from the IMU to the trunk origin; feet stand still, with
+  a small random walk in contact and a large one in the air;
+* update, every foot: p_WF - p_WB = R_WB p_BF(q) (leg kinematics);
+  every foot in contact: v_WB = -R_WB (J(q) qd + w_B x p_BF) (the foot does not move), and, on
+  flat ground, p_WF,z = foot radius.
+
+A foot is in contact when the mission's contact schedule (if connected) loads it and its sensor
+reads above a threshold; if no foot passes, the schedule alone decides (the robot does not fly).
+Only go1.* signals are read, in simulation and on hardware alike.
+"""
+
+import dataclasses
+
+import numpy as np
+from pydrake.common.eigen_geometry import Quaternion
+from pydrake.math import RotationMatrix
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
+
+from pedi_drake import robot
+from pedi_drake.estimation.base_state import BASE_STATE_SIZE
+from pedi_drake.estimation.config import KalmanEstimatorConfig
+from pedi_drake.estimation.leg_odometry import foot_kinematics_B
+
+GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
+NUM_STATES = 18
+_P, _V = slice(0, 3), slice(3, 6)
+
+
+def _foot(i: int) -> slice:
+    return slice(6 + 3 * i, 9 + 3 * i)
+
+
+def imu_offset_B() -> np.ndarray:
+    """The IMU's position in the trunk frame, read from the model [m]."""
+    plant, plant_map = robot.make_go1_plant()
+    context = plant.CreateDefaultContext()
+    trunk = plant.GetBodyByName(robot.TRUNK_BODY_NAME, plant_map.model)
+    imu = plant.GetBodyByName(robot.IMU_BODY_NAME, plant_map.model)
+    return plant.CalcRelativeTransform(context, trunk.body_frame(), imu.body_frame()).translation().copy()
+
+
+@dataclasses.dataclass(frozen=True)
+class ImuSample:
+    """One go1.imu sample: orientation R_WB, gyro w_B [rad/s], specific force f_B [m/s^2] (trunk frame)."""
+
+    R_WB: np.ndarray
+    w_B: np.ndarray
+    f_B: np.ndarray
+
+    @staticmethod
+    def from_vector(imu: np.ndarray) -> "ImuSample | None":
+        """None when the quaternion is not usable (all zeros before the first message, NaN)."""
+        imu = np.asarray(imu, dtype=float)
+        if imu.shape != (10,) or not np.all(np.isfinite(imu)):
+            return None
+        norm = np.linalg.norm(imu[0:4])
+        if norm < 0.5:
+            return None
+        R = RotationMatrix(Quaternion(imu[0:4] / norm)).matrix()
+        return ImuSample(R, imu[4:7].copy(), imu[7:10].copy())
+
+
+def rolling_velocities_W(R_WB: np.ndarray, w_B: np.ndarray, q: np.ndarray, qd: np.ndarray, radius: float) -> np.ndarray:
+    """(4, 3) world velocity of each foot sphere's centre when it rolls without slipping [m/s].
+
+    A foot sphere turns with its calf: w_calf = w_B + x qd_hip + Rx(q_hip) y (qd_thigh + qd_calf)
+    (trunk frame), and its centre moves at w_calf x (radius z) above the contact point on flat
+    ground. Standing up turns the calves by about a radian: 2 cm of travel the filter must expect.
+    """
+    rolling = np.empty((4, 3))
+    up = np.array([0.0, 0.0, radius])
+    for i in range(4):
+        hip, thigh, calf = q[3 * i : 3 * i + 3]
+        rate_hip, rate_sagittal = qd[3 * i], qd[3 * i + 1] + qd[3 * i + 2]
+        w_calf_B = w_B + np.array([rate_hip, np.cos(hip) * rate_sagittal, np.sin(hip) * rate_sagittal])
+        rolling[i] = np.cross(R_WB @ w_calf_B, up)
+    return rolling
+
+
+class FloatingBaseKalmanFilter:
+    """The filter's maths on plain arrays (no Drake state): `initial_state`, `predict`, `update`."""
+
+    def __init__(self, config: KalmanEstimatorConfig, p_BI: np.ndarray, foot_radius: float = robot.FOOT_RADIUS):
+        self.config = config
+        self.p_BI = np.asarray(p_BI, dtype=float)
+        self.foot_radius = foot_radius
+
+    def initial_state(self, imu: ImuSample, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(x, P) for a robot at rest with its lowest foot on the ground, trunk at `xy` [m]."""
+        p_BF, _ = foot_kinematics_B(q)
+        feet_W = p_BF @ imu.R_WB.T
+        p = np.array([xy[0], xy[1], self.foot_radius - float(np.min(feet_W[:, 2]))])
+        x = np.concatenate([p, np.zeros(3), (feet_W + p).ravel()])
+        variances = np.concatenate([np.full(3, 0.01**2), np.full(3, 0.1**2), np.full(12, 0.01**2)])
+        return x, np.diag(variances)
+
+    def predict(
+        self,
+        x: np.ndarray,
+        P: np.ndarray,
+        imu: ImuSample,
+        contact: np.ndarray,
+        dt: float,
+        rolling: np.ndarray | None = None,
+    ):
+        """Propagates (x, P) over dt [s] with the IMU acceleration; feet in contact move by their
+        `rolling` velocities (4, 3) [m/s] (see rolling_velocities_W), when given."""
+        c = self.config
+        w = imu.w_B
+        a_B = imu.f_B - np.cross(w, np.cross(w, self.p_BI))  # specific force at the trunk origin
+        a_W = imu.R_WB @ a_B + GRAVITY_W
+        x = x.copy()
+        x[_P] += x[_V] * dt + 0.5 * a_W * dt * dt
+        x[_V] += a_W * dt
+        if rolling is not None:
+            for i in range(4):
+                if contact[i]:
+                    x[_foot(i)] += rolling[i] * dt
+        # F = I + dt E_pv: P <- F P F^T + Q, written out to skip two 18x18 products.
+        P = P.copy()
+        P[_P, :] += dt * P[_V, :]
+        P[:, _P] += dt * P[:, _V]
+        q = np.empty(NUM_STATES)
+        q[_P] = c.position_process_noise**2 * dt
+        q[_V] = c.accelerometer_noise**2 * dt
+        for i in range(4):
+            sigma = c.stance_foot_process_noise if contact[i] else c.swing_foot_process_noise
+            q[_foot(i)] = sigma**2 * dt
+        P[np.diag_indices(NUM_STATES)] += q
+        return x, P
+
+    def update(
+        self,
+        x: np.ndarray,
+        P: np.ndarray,
+        imu: ImuSample,
+        q: np.ndarray,
+        qd: np.ndarray,
+        contact: np.ndarray,
+        rolling: np.ndarray | None = None,
+    ):
+        """Corrects (x, P) with the leg kinematics of all feet and the no-slip of the feet in contact
+        (whose centres move at their `rolling` velocities (4, 3) [m/s], when given)."""
+        c = self.config
+        R = imu.R_WB
+        p_BF, J = foot_kinematics_B(q)
+        stance = [i for i in range(4) if contact[i]]
+        use_height = c.ground_height_measurement
+        m = 12 + 3 * len(stance) + (len(stance) if use_height else 0)
+        H = np.zeros((m, NUM_STATES))
+        y = np.empty(m)
+        noise = np.empty(m)
+        for i in range(4):
+            rows = slice(3 * i, 3 * i + 3)
+            H[rows, _P] = -np.eye(3)
+            H[rows, _foot(i)] = np.eye(3)
+            y[rows] = R @ p_BF[i]
+            # A foot in the air is carried by the kinematics: a loose measurement of it costs nothing.
+            noise[rows] = c.foot_position_noise**2 if contact[i] else c.foot_position_noise**2 * 4.0
+        row = 12
+        for i in stance:
+            v_BF = J[i] @ qd[3 * i : 3 * i + 3] + np.cross(imu.w_B, p_BF[i])
+            H[row : row + 3, _V] = np.eye(3)
+            y[row : row + 3] = -(R @ v_BF) + (rolling[i] if rolling is not None else 0.0)
+            noise[row : row + 3] = c.foot_velocity_noise**2
+            row += 3
+        if use_height:
+            for i in stance:
+                H[row, 6 + 3 * i + 2] = 1.0
+                y[row] = self.foot_radius
+                noise[row] = c.ground_height_noise**2
+                row += 1
+        innovation = y - H @ x
+        PHt = P @ H.T
+        S = H @ PHt
+        S[np.diag_indices(m)] += noise
+        K = np.linalg.solve(S, PHt.T).T
+        x = x + K @ innovation
+        P = P - K @ PHt.T
+        P = 0.5 * (P + P.T)
+        return x, P
+
+    @staticmethod
+    def contact_flags(foot_sensor: np.ndarray, schedule: np.ndarray | None, threshold: float) -> np.ndarray:
+        """Feet in contact: scheduled and sensed; the schedule alone when no foot is both."""
+        scheduled = np.ones(4, dtype=bool) if schedule is None else np.asarray(schedule[:4]) > 0.5
+        sensed = np.asarray(foot_sensor) > threshold
+        both = scheduled & sensed
+        return both if np.any(both) else scheduled
+
+
+class KalmanEstimator(LeafSystem):
+    """go1.imu, go1.position_measured, go1.velocity_measured, go1.foot_contact (+ optional
+    contact_set) -> base_state (13: quaternion, p_WB, w_WB, v_WB; see base_state.py).
+
+    Periodic discrete update at `config.period`; base_state is computed from the discrete state
+    alone, so the loop estimator -> mission manager -> contact_set -> estimator has a delay.
+    State: [initialised flag, x (18), P (18 x 18), quaternion (4), w_W (3)].
+    """
+
+    def __init__(self, config: KalmanEstimatorConfig, initial_xy=(0.0, 0.0), num_contacts: int = 4):
+        super().__init__()
+        self.config = config
+        self._xy = np.asarray(config.initial_xy if config.initial_xy is not None else initial_xy, dtype=float)
+        self.filter = FloatingBaseKalmanFilter(config, imu_offset_B())
+        self.imu_port = self.DeclareVectorInputPort("imu", 10)
+        self.position_port = self.DeclareVectorInputPort("position_measured", 12)
+        self.velocity_port = self.DeclareVectorInputPort("velocity_measured", 12)
+        self.foot_contact_port = self.DeclareVectorInputPort("foot_contact", 4)
+        # Optional: the mission's contact schedule (feet first, then prongs).
+        self.contact_set_port = self.DeclareVectorInputPort("contact_set", num_contacts)
+        n = NUM_STATES
+        self._layout = {"flag": 0, "x": slice(1, 1 + n), "P": slice(1 + n, 1 + n + n * n)}
+        self._quat = slice(1 + n + n * n, 5 + n + n * n)
+        self._w = slice(5 + n + n * n, 8 + n + n * n)
+        initial = np.zeros(8 + n + n * n)
+        initial[self._quat] = [1.0, 0.0, 0.0, 0.0]
+        self._state = self.DeclareDiscreteState(initial)
+        self.DeclareInitializationDiscreteUpdateEvent(self._update)
+        self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
+        # The same step on demand (CalcForcedDiscreteVariableUpdate), for tests.
+        self.DeclareForcedDiscreteUpdateEvent(self._update)
+        self.base_state_port = self.DeclareVectorOutputPort(
+            "base_state", BASE_STATE_SIZE, self._calc_base_state, {self.xd_ticket()}
+        )
+
+    def _measurements(self, context: Context):
+        imu = ImuSample.from_vector(self.imu_port.Eval(context))
+        q = np.asarray(self.position_port.Eval(context), dtype=float)
+        qd = np.asarray(self.velocity_port.Eval(context), dtype=float)
+        force = np.asarray(self.foot_contact_port.Eval(context), dtype=float)
+        schedule = self.contact_set_port.Eval(context) if self.contact_set_port.HasValue(context) else None
+        finite = all(np.all(np.isfinite(v)) for v in (q, qd, force))
+        return imu, q, qd, force, schedule, finite
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        s = context.get_discrete_state(self._state).get_value().copy()
+        imu, q, qd, force, schedule, finite = self._measurements(context)
+        if imu is None or not finite:
+            return  # hold the last estimate: a bad sample (or none yet) never reaches the output
+        n = NUM_STATES
+        contact = self.filter.contact_flags(force, schedule, self.config.foot_contact_threshold)
+        rolling = rolling_velocities_W(imu.R_WB, imu.w_B, q, qd, self.filter.foot_radius)
+        if s[0] == 0.0:
+            x, P = self.filter.initial_state(imu, q, self._xy)
+        else:
+            x, P = s[self._layout["x"]], s[self._layout["P"]].reshape(n, n)
+            x, P = self.filter.predict(x, P, imu, contact, self.config.period, rolling)
+        x, P = self.filter.update(x, P, imu, q, qd, contact, rolling)
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(P))):
+            return
+        s[0] = 1.0
+        s[self._layout["x"]] = x
+        s[self._layout["P"]] = P.ravel()
+        s[self._quat] = RotationMatrix(imu.R_WB).ToQuaternion().wxyz()
+        s[self._w] = imu.R_WB @ imu.w_B
+        discrete_state.get_mutable_vector(self._state).SetFromVector(s)
+
+    def _calc_base_state(self, context: Context, output: BasicVector) -> None:
+        s = context.get_discrete_state(self._state).get_value()
+        x = s[self._layout["x"]]
+        output.SetFromVector(np.concatenate([s[self._quat], x[_P], s[self._w], x[_V]]))
+
+    def covariance(self, context: Context) -> np.ndarray:
+        """The filter's covariance P (18 x 18) in `context` (this system's)."""
+        n = NUM_STATES
+        return context.get_discrete_state(self._state).get_value()[self._layout["P"]].reshape(n, n)

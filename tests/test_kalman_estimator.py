@@ -1,0 +1,204 @@
+"""The floating-base Kalman estimator: leg odometry, the filter on synthetic data, bad inputs, and
+the LeafSystem in a simulated diagram against ground truth."""
+
+import numpy as np
+import pytest
+from pydrake.math import RollPitchYaw, RotationMatrix
+from pydrake.systems.analysis import Simulator
+
+from pedi_drake import robot
+from pedi_drake.diagram import MakePedipulationDiagram
+from pedi_drake.estimation.accuracy import estimate_errors
+from pedi_drake.estimation.config import KalmanEstimatorConfig
+from pedi_drake.estimation.kalman_estimator import (
+    GRAVITY_W,
+    FloatingBaseKalmanFilter,
+    ImuSample,
+    KalmanEstimator,
+    imu_offset_B,
+)
+from pedi_drake.estimation.leg_odometry import foot_kinematics_B
+from pedi_drake.exceptions import ScenarioError
+from pedi_drake.ik.analytic import solve_leg_ik_analytic
+from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
+from pedi_drake.run_logs import SignalLog
+from pedi_drake.station.scenario import load_scenario
+
+DT = 0.002
+
+
+def test_leg_odometry_matches_the_general_leg_kinematics(rng):
+    for _ in range(50):
+        q = rng.uniform(robot.Q_LOWER, robot.Q_UPPER)
+        positions, jacobians = foot_kinematics_B(q)
+        for i, leg in enumerate(robot.LEG_NAMES):
+            np.testing.assert_allclose(positions[i], foot_position_B(leg, q[3 * i : 3 * i + 3]), atol=1e-12)
+            np.testing.assert_allclose(jacobians[i], foot_jacobian_B(leg, q[3 * i : 3 * i + 3]), atol=1e-12)
+
+
+def _feet_W(p_WB: np.ndarray) -> np.ndarray:
+    """The standing feet in world for a trunk at p_WB, level (the feet never move)."""
+    p_BF, _ = foot_kinematics_B(robot.STANDING_Q)
+    return p_BF + p_WB
+
+
+def _joint_angles_for(p_WB: np.ndarray, feet_W: np.ndarray) -> np.ndarray:
+    """Joint angles that put the feet at feet_W with a level trunk at p_WB (closed-form IK)."""
+    q = np.empty(12)
+    for i, leg in enumerate(robot.LEG_NAMES):
+        sl = robot.leg_slice(leg)
+        q[sl] = solve_leg_ik_analytic(leg, feet_W[i] - p_WB, robot.STANDING_Q[sl])
+    return q
+
+
+def _synthetic_run(trajectory, duration: float, rng, noise: bool):
+    """Feeds the filter a trunk moving along `trajectory(t) -> (p, v, a)` (level, feet planted)."""
+    config = KalmanEstimatorConfig()
+    kf = FloatingBaseKalmanFilter(config, np.zeros(3))
+    feet = _feet_W(trajectory(0.0)[0])
+    contact = np.ones(4, dtype=bool)
+    estimates, truths = [], []
+    x = P = None
+    q_prev = None
+    for k in range(int(duration / DT)):
+        t = k * DT
+        p, v, a = trajectory(t)
+        q = _joint_angles_for(p, feet)
+        qd = np.zeros(12) if q_prev is None else (q - q_prev) / DT
+        q_prev = q
+        f_B = a - GRAVITY_W
+        if noise:
+            f_B = f_B + rng.normal(0.0, 0.05, 3)
+            q = q + rng.normal(0.0, 0.0005, 12)
+        imu = ImuSample(np.eye(3), np.zeros(3), f_B)
+        if x is None:
+            x, P = kf.initial_state(imu, q, p[:2])
+        else:
+            x, P = kf.predict(x, P, imu, contact, DT)
+        x, P = kf.update(x, P, imu, q, qd, contact)
+        estimates.append(x[:6].copy())
+        truths.append(np.concatenate([p, v]))
+    return np.array(estimates), np.array(truths)
+
+
+def test_a_robot_at_rest_stays_put_under_sensor_noise(rng):
+    p0 = np.array([0.3, -0.2, robot.trunk_height_for(0.9, -1.8)])
+    est, truth = _synthetic_run(lambda t: (p0, np.zeros(3), np.zeros(3)), 2.0, rng, noise=True)
+    assert np.max(np.linalg.norm(est[:, :3] - truth[:, :3], axis=1)) < 0.002
+    assert np.sqrt(np.mean(np.sum(est[-250:, 3:] ** 2, axis=1))) < 0.01
+
+
+def test_a_trunk_swaying_over_planted_feet_is_tracked(rng):
+    h = robot.trunk_height_for(0.9, -1.8)
+    w = 2.0 * np.pi * 0.5  # 0.5 Hz, 3 cm sway in x
+
+    def sway(t):
+        return (
+            np.array([0.03 * np.sin(w * t), 0.0, h]),
+            np.array([0.03 * w * np.cos(w * t), 0.0, 0.0]),
+            np.array([-0.03 * w * w * np.sin(w * t), 0.0, 0.0]),
+        )
+
+    est, truth = _synthetic_run(sway, 2.0, rng, noise=False)
+    assert np.max(np.linalg.norm(est[:, :3] - truth[:, :3], axis=1)) < 0.001
+    settled = slice(100, None)
+    assert np.max(np.linalg.norm(est[settled, 3:] - truth[settled, 3:], axis=1)) < 0.01
+
+
+def test_contact_comes_from_the_schedule_and_the_sensor_together():
+    flags = FloatingBaseKalmanFilter.contact_flags
+    assert flags(np.array([50, 50, 50, 50]), np.array([0, 1, 1, 1, 0, 0]), 10.0).tolist() == [0, 1, 1, 1]
+    assert flags(np.array([0, 50, 50, 50]), None, 10.0).tolist() == [0, 1, 1, 1]
+    # Nothing sensed (e.g. the sensor not yet published): the schedule decides.
+    assert flags(np.zeros(4), np.array([1, 1, 1, 1]), 10.0).tolist() == [1, 1, 1, 1]
+
+
+def test_unusable_imu_samples_are_rejected():
+    assert ImuSample.from_vector(np.zeros(10)) is None  # before the first hardware message
+    assert ImuSample.from_vector(np.full(10, np.nan)) is None
+    sample = ImuSample.from_vector(np.array([2.0, 0, 0, 0, 0, 0, 0, 0, 0, 9.81]))
+    np.testing.assert_allclose(sample.R_WB, np.eye(3))
+
+
+def _estimator_context(config=None):
+    estimator = KalmanEstimator(config or KalmanEstimatorConfig(), initial_xy=(0.5, 0.2))
+    context = estimator.CreateDefaultContext()
+    q = robot.STANDING_Q.copy()
+    R = RotationMatrix(RollPitchYaw(0.0, 0.0, 0.3))
+    imu = np.concatenate([R.ToQuaternion().wxyz(), np.zeros(3), R.matrix().T @ -GRAVITY_W])
+    estimator.imu_port.FixValue(context, imu)
+    estimator.position_port.FixValue(context, q)
+    estimator.velocity_port.FixValue(context, np.zeros(12))
+    estimator.foot_contact_port.FixValue(context, np.full(4, 30.0))
+    return estimator, context
+
+
+def _tick(estimator, context):
+    values = estimator.AllocateDiscreteVariables()
+    estimator.CalcForcedDiscreteVariableUpdate(context, values)
+    context.SetDiscreteState(values)
+    return estimator.base_state_port.Eval(context)
+
+
+def test_the_first_sample_puts_the_feet_on_the_ground_at_the_scenario_position():
+    estimator, context = _estimator_context()
+    base = _tick(estimator, context)
+    np.testing.assert_allclose(base[4:6], [0.5, 0.2], atol=1e-3)
+    np.testing.assert_allclose(base[6], robot.trunk_height_for(0.9, -1.8), atol=1e-3)
+    np.testing.assert_allclose(abs(RollPitchYaw(RotationMatrix(_quaternion(base[0:4]))).yaw_angle()), 0.3, atol=1e-9)
+
+
+def _quaternion(wxyz):
+    from pydrake.common.eigen_geometry import Quaternion
+
+    return Quaternion(np.asarray(wxyz) / np.linalg.norm(wxyz))
+
+
+@pytest.mark.parametrize("port", ["imu", "position_measured", "velocity_measured", "foot_contact"])
+def test_non_finite_inputs_hold_the_last_estimate(port):
+    estimator, context = _estimator_context()
+    before = _tick(estimator, context).copy()
+    size = estimator.GetInputPort(port).size()
+    estimator.GetInputPort(port).FixValue(context, np.full(size, np.nan))
+    after = _tick(estimator, context)
+    np.testing.assert_array_equal(after, before)
+    assert np.all(np.isfinite(after))
+
+
+def test_before_any_imu_message_the_output_is_finite():
+    estimator, context = _estimator_context()
+    estimator.imu_port.FixValue(context, np.zeros(10))
+    base = _tick(estimator, context)
+    assert np.all(np.isfinite(base)) and base[0] == 1.0
+
+
+def test_bad_settings_name_the_field():
+    with pytest.raises(ScenarioError, match=r"kalman\.foot_position_noise"):
+        load_scenario(scenario_text="{kalman: {foot_position_noise: -1.0}}")
+
+
+def test_estimate_follows_the_simulated_robot_standing_up_with_sensor_noise():
+    scenario = load_scenario(
+        scenario_name="stand",
+        scenario_text="{estimator: kalman, simulation_duration: 3.0, sensor_noise: {enabled: true}, random_seed: 4}",
+    )
+    built = MakePedipulationDiagram(scenario)
+    simulator = Simulator(built.diagram)
+    simulator.AdvanceTo(3.0)
+    context = simulator.get_context()
+
+    def log(name):
+        data = built.diagram.GetSubsystemByName(built.loggers[name]).FindLog(context)
+        return SignalLog(data.sample_times(), data.data())
+
+    plant = built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
+    errors = estimate_errors(
+        log("base_state"), log("sim.plant_state"), robot.Go1PlantMap.from_plant(plant), plant.num_positions()
+    )
+    assert errors["position_error_max_m"] < 0.01, errors
+    assert errors["velocity_rms_m_s"] < 0.03, errors
+    assert errors["orientation_error_max_deg"] < 1.0, errors
+
+
+def test_imu_offset_is_read_from_the_model():
+    np.testing.assert_allclose(imu_offset_B(), [-0.01592, -0.06659, -0.00617], atol=1e-9)
