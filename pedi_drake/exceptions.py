@@ -31,3 +31,7 @@ class QpInfeasible(PediError):
 
 class LcmTimeout(PediError):
     """No message arrived on an LCM channel in time."""
+
+
+class SufError(PediError):
+    """A Smallest Unrejectable Force problem that cannot be built or solved (names the cause)."""
