@@ -241,7 +241,7 @@ def suf_quadratic(problem: RejectableForceProblem, *, solver: str = "clarabel") 
             raise SufError("quadratic SDP: the nominal motion is not feasible (a torque or friction row is violated)")
         norm = np.linalg.norm(g)
         rho_max = min(rho_max, e / norm) if norm > 1e-12 else rho_max
-    data = _ControlLawData(data.g[~free], data.h[~free], data.e[~free])
+    full, data = data, _ControlLawData(data.g[~free], data.h[~free], data.e[~free])
     m, n = data.h.shape
     prog = MathematicalProgram()
     rho = prog.NewContinuousVariables(1, "rho")
@@ -275,7 +275,7 @@ def suf_quadratic(problem: RejectableForceProblem, *, solver: str = "clarabel") 
     if not result.is_success():
         raise SufError(f"quadratic SDP: {result.get_solution_result()} (is the nominal motion feasible?)")
     r, q0, Uv = result.GetSolution(rho)[0], result.GetSolution(dQ0), result.GetSolution(U)
-    direction = _direction_of_tightest(data, r, q0, Uv)
+    direction = _direction_of_tightest(full, r, q0, Uv)
     return SufResult("quadratic", max(float(r), 0.0), direction, None, time.perf_counter() - start, True, 1)
 
 
