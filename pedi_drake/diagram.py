@@ -28,6 +28,7 @@ LOGGED_SIGNALS = (
     "go1.velocity_measured",
     "go1.torque_estimated",
     "go1.foot_contact",
+    "go1.imu",
     "base_state",
 )
 SIM_LOGGED_SIGNALS = ("sim.plant_state",)
@@ -72,9 +73,8 @@ def MakePedipulationDiagram(
         estimator = builder.AddNamedSystem("estimator", GroundTruthEstimator(plant))
         builder.Connect(station.GetOutputPort("sim.plant_state"), estimator.GetInputPort("plant_state"))
     else:
-        num_contacts = 4 + (scenario.robot.prongs.num_prongs if scenario.robot.prongs is not None else 0)
         estimator = builder.AddNamedSystem(
-            "estimator", KalmanEstimator(scenario.kalman, scenario.robot.initial_xy, num_contacts)
+            "estimator", KalmanEstimator(scenario.kalman, scenario.robot.initial_xy, scenario.robot.prongs)
         )
         for name in ("imu", "position_measured", "velocity_measured", "foot_contact"):
             builder.Connect(station.GetOutputPort(f"go1.{name}"), estimator.GetInputPort(name))

@@ -25,6 +25,8 @@ class KalmanEstimatorConfig:
     foot_position_noise: float = 0.003
     # Noise of the trunk velocity seen through a stance foot that does not move [m/s].
     foot_velocity_noise: float = 0.05
+    # With no foot loaded the trunk rests on the ground: its velocity is zero within this [m/s].
+    resting_velocity_noise: float = 0.05
     # Flat ground at z = 0: feet in contact are at the foot radius. Removes height drift [-].
     ground_height_measurement: bool = True
     # Noise of that height measurement [m].
@@ -44,6 +46,7 @@ class KalmanEstimatorConfig:
             "swing_foot_process_noise",
             "foot_position_noise",
             "foot_velocity_noise",
+            "resting_velocity_noise",
             "ground_height_noise",
         ):
             value = getattr(self, name)

@@ -9,11 +9,12 @@ orientation R_WB (its quaternion) and the angular velocity (gyro); the filter es
   accelerometer's specific force moved from the IMU to the trunk origin; feet stand still, with
   a small random walk in contact and a large one in the air;
 * update, every foot: p_WF - p_WB = R_WB p_BF(q) (leg kinematics);
-  every foot in contact: v_WB = -R_WB (J(q) qd + w_B x p_BF) (the foot does not move), and, on
-  flat ground, p_WF,z = foot radius.
+  every foot in contact: v_WB = -R_WB (J(q) qd + w_B x p_BF) + (its rolling velocity) (the
+  contact point does not move), and, on flat ground, p_WF,z = foot radius; with no foot in
+  contact the trunk rests on the ground (lying, or on prongs): v_WB = 0.
 
 A foot is in contact when the mission's contact schedule (if connected) loads it and its sensor
-reads above a threshold; if no foot passes, the schedule alone decides (the robot does not fly).
+reads above a threshold.
 Only go1.* signals are read, in simulation and on hardware alike.
 """
 
@@ -28,6 +29,7 @@ from pedi_drake import robot
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
+from pedi_drake.prongs import ProngDesign
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
 NUM_STATES = 18
@@ -88,10 +90,20 @@ def rolling_velocities_W(R_WB: np.ndarray, w_B: np.ndarray, q: np.ndarray, qd: n
 class FloatingBaseKalmanFilter:
     """The filter's maths on plain arrays (no Drake state): `initial_state`, `predict`, `update`."""
 
-    def __init__(self, config: KalmanEstimatorConfig, p_BI: np.ndarray, foot_radius: float = robot.FOOT_RADIUS):
+    def __init__(
+        self,
+        config: KalmanEstimatorConfig,
+        p_BI: np.ndarray,
+        foot_radius: float = robot.FOOT_RADIUS,
+        prong_tips_B: np.ndarray | None = None,
+        prong_tip_radius: float = 0.0,
+    ):
         self.config = config
         self.p_BI = np.asarray(p_BI, dtype=float)
         self.foot_radius = foot_radius
+        # Prong tip centres in the trunk frame (k, 3) [m]: a loaded tip pins the trunk like a foot.
+        self.prong_tips_B = np.zeros((0, 3)) if prong_tips_B is None else np.asarray(prong_tips_B, dtype=float)
+        self.prong_tip_radius = prong_tip_radius
 
     def initial_state(self, imu: ImuSample, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(x, P) for a robot at rest with its lowest foot on the ground, trunk at `xy` [m]."""
@@ -146,15 +158,22 @@ class FloatingBaseKalmanFilter:
         qd: np.ndarray,
         contact: np.ndarray,
         rolling: np.ndarray | None = None,
+        prongs_loaded: bool = False,
     ):
         """Corrects (x, P) with the leg kinematics of all feet and the no-slip of the feet in contact
-        (whose centres move at their `rolling` velocities (4, 3) [m/s], when given)."""
+        (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with the
+        prong tips when `prongs_loaded` (they do not move, and touch the ground)."""
         c = self.config
         R = imu.R_WB
         p_BF, J = foot_kinematics_B(q)
         stance = [i for i in range(4) if contact[i]]
         use_height = c.ground_height_measurement
-        m = 12 + 3 * len(stance) + (len(stance) if use_height else 0)
+        tips = self.prong_tips_B if prongs_loaded else np.zeros((0, 3))
+        # No foot or prong loaded: the trunk rests on the ground (on its belly or knees) while
+        # the legs move freely; the Go1 does not fly, so the trunk is nearly still. A
+        # zero-velocity measurement keeps the IMU from drifting while the legs unfold.
+        resting = not stance and not len(tips)
+        m = 12 + 3 * len(stance) + (len(stance) if use_height else 0) + (3 if resting else 0) + 4 * len(tips)
         H = np.zeros((m, NUM_STATES))
         y = np.empty(m)
         noise = np.empty(m)
@@ -178,6 +197,19 @@ class FloatingBaseKalmanFilter:
                 y[row] = self.foot_radius
                 noise[row] = c.ground_height_noise**2
                 row += 1
+        for tip in tips:
+            H[row : row + 3, _V] = np.eye(3)
+            y[row : row + 3] = -(R @ np.cross(imu.w_B, tip))
+            noise[row : row + 3] = c.foot_velocity_noise**2
+            H[row + 3, 2] = 1.0
+            y[row + 3] = self.prong_tip_radius - (R @ tip)[2]
+            noise[row + 3] = c.ground_height_noise**2
+            row += 4
+        if resting:
+            H[row : row + 3, _V] = np.eye(3)
+            y[row : row + 3] = 0.0
+            noise[row : row + 3] = c.resting_velocity_noise**2
+            row += 3
         innovation = y - H @ x
         PHt = P @ H.T
         S = H @ PHt
@@ -190,11 +222,9 @@ class FloatingBaseKalmanFilter:
 
     @staticmethod
     def contact_flags(foot_sensor: np.ndarray, schedule: np.ndarray | None, threshold: float) -> np.ndarray:
-        """Feet in contact: scheduled and sensed; the schedule alone when no foot is both."""
+        """Feet in contact: scheduled (when a schedule is given) and sensed."""
         scheduled = np.ones(4, dtype=bool) if schedule is None else np.asarray(schedule[:4]) > 0.5
-        sensed = np.asarray(foot_sensor) > threshold
-        both = scheduled & sensed
-        return both if np.any(both) else scheduled
+        return scheduled & (np.asarray(foot_sensor) > threshold)
 
 
 class KalmanEstimator(LeafSystem):
@@ -206,11 +236,14 @@ class KalmanEstimator(LeafSystem):
     State: [initialised flag, x (18), P (18 x 18), quaternion (4), w_W (3)].
     """
 
-    def __init__(self, config: KalmanEstimatorConfig, initial_xy=(0.0, 0.0), num_contacts: int = 4):
+    def __init__(self, config: KalmanEstimatorConfig, initial_xy=(0.0, 0.0), prongs: ProngDesign | None = None):
         super().__init__()
         self.config = config
         self._xy = np.asarray(config.initial_xy if config.initial_xy is not None else initial_xy, dtype=float)
-        self.filter = FloatingBaseKalmanFilter(config, imu_offset_B())
+        tips = None if prongs is None else prongs.tip_positions_B()
+        radius = 0.0 if prongs is None else prongs.tip_radius
+        self.filter = FloatingBaseKalmanFilter(config, imu_offset_B(), prong_tips_B=tips, prong_tip_radius=radius)
+        num_contacts = 4 + (0 if prongs is None else prongs.num_prongs)
         self.imu_port = self.DeclareVectorInputPort("imu", 10)
         self.position_port = self.DeclareVectorInputPort("position_measured", 12)
         self.velocity_port = self.DeclareVectorInputPort("velocity_measured", 12)
@@ -254,7 +287,8 @@ class KalmanEstimator(LeafSystem):
         else:
             x, P = s[self._layout["x"]], s[self._layout["P"]].reshape(n, n)
             x, P = self.filter.predict(x, P, imu, contact, self.config.period, rolling)
-        x, P = self.filter.update(x, P, imu, q, qd, contact, rolling)
+        prongs_loaded = schedule is not None and len(schedule) > 4 and bool(np.any(np.asarray(schedule[4:]) > 0.5))
+        x, P = self.filter.update(x, P, imu, q, qd, contact, rolling, prongs_loaded)
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(P))):
             return
         s[0] = 1.0
