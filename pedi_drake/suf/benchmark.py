@@ -20,9 +20,11 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake.exceptions import SufError
+from pedi_drake.suf.design import height_sweep, stance_for
 from pedi_drake.suf.go1_configuration import Go1Stance, stance_problem, with_prongs_at_height
 from pedi_drake.suf.methods import METHODS, smallest_unrejectable_force
 from pedi_drake.suf.ray_program import RfpLinearProgram
+from pedi_drake.viz.suf_plots import plot_accuracy, plot_rfp, plot_suf_vs_height
 
 # Paper 003, Table I [ms] (i7-7830X): teleoperation, manipulation.
 PAPER_MS = {
@@ -32,6 +34,9 @@ PAPER_MS = {
     "quadratic": (84.169, 709.1),
     "single": (4.65, 4.93),
 }
+# Fig. 3: trunk heights swept, and the range called practical (the Go1 stands at 0.27-0.28 m).
+SWEEP_HEIGHTS = (0.16, 0.18, 0.20, 0.22, 0.24, 0.26, 0.28, 0.30)
+PRACTICAL_HEIGHTS = (0.18, 0.26)
 # Speed floors of the SUF issue: at least this many times faster than the paper (teleoperation).
 SPEEDUP_FLOOR = {"exact": 5.0, "affine": 5.0, "quadratic": 5.0, "single": 5.0, "fibonacci": 2.0}
 
@@ -158,10 +163,31 @@ def main() -> None:
             f"{s['single']['overestimates']}/{args.configs}"
         )
     print(f"Machine: {platform.machine()}, Python {platform.python_version()}; LPs by CLP, cone programs by Clarabel")
+    figures = Path(args.out).parent
+    figures.mkdir(parents=True, exist_ok=True)
+    ratios = {m: [r["suf"][m] / r["suf"]["exact"] for r in scenarios["teleoperation"]["rows"]] for m in METHODS}
+    plot_accuracy({m: v for m, v in ratios.items() if m != "exact"}, figures / "suf_accuracy.png")
+    sweep = height_sweep(SWEEP_HEIGHTS)
+    plot_suf_vs_height(sweep, figures / "suf_vs_height.png")
+    for row in sweep:
+        print(
+            f"height {row['height']:.2f} m: best SUF {row['without']['suf']:.1f} N without prongs, "
+            f"{row['with_prongs']['suf']:.1f} N with ({row['benefit_percent']:+.1f} %)"
+        )
+    practical = [r["benefit_percent"] for r in sweep if PRACTICAL_HEIGHTS[0] <= r["height"] <= PRACTICAL_HEIGHTS[1]]
+    print(f"prong benefit at practical heights {PRACTICAL_HEIGHTS} m: up to {max(practical):+.1f} %")
+    rfp = {
+        label: smallest_unrejectable_force(stance_problem(stance_for(0.22, 0.20, 0.14, prongs)), "exact")
+        for label, prongs in (("without prongs", False), ("with prongs", True))
+    }
+    plot_rfp(rfp, figures / "suf_rfp.png", limit=150)
+    print(f"figures: {figures}/suf_accuracy.png, suf_vs_height.png, suf_rfp.png")
     print("Floors:", json.dumps(floors))
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"scenarios": scenarios, "floors": floors, "paper_ms": PAPER_MS}, indent=2))
+    out.write_text(
+        json.dumps({"scenarios": scenarios, "floors": floors, "paper_ms": PAPER_MS, "height_sweep": sweep}, indent=2)
+    )
     print(f"wrote {out}")
 
 
