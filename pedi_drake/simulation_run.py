@@ -34,16 +34,18 @@ def run(
     meshcat: Meshcat | None = None,
     quiet: bool = False,
     hardware: bool = False,
+    replay: bool = True,
 ) -> dict:
     """Simulates `scenario`, writes result.json, replay.html, plots and logs.npz to `out_dir`; returns the result.
 
     With `hardware=True` the station is the Go1 LCM driver (a Go1, or the simulator bridge in
     another process) and the diagram runs in real time. There is no ground truth then: the
     results (foot errors, drift, falls) come from the state estimate, and no replay is written.
+    `replay=False` skips the Meshcat recording too (a run without any visualisation).
     """
     out_dir.mkdir(parents=True, exist_ok=True)
-    if not hardware:
-        # A Meshcat is always made: it records the replay even when nobody watches live.
+    if not hardware and replay:
+        # A Meshcat is made even when nobody watches live: it records the replay.
         meshcat = meshcat or Meshcat()
     built = MakePedipulationDiagram(scenario, meshcat, hardware=hardware)
     diagram = built.diagram

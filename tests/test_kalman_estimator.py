@@ -109,8 +109,8 @@ def test_contact_comes_from_the_schedule_and_the_sensor_together():
     flags = FloatingBaseKalmanFilter.contact_flags
     assert flags(np.array([50, 50, 50, 50]), np.array([0, 1, 1, 1, 0, 0]), 10.0).tolist() == [0, 1, 1, 1]
     assert flags(np.array([0, 50, 50, 50]), None, 10.0).tolist() == [0, 1, 1, 1]
-    # Nothing sensed (e.g. the sensor not yet published): the schedule decides.
-    assert flags(np.zeros(4), np.array([1, 1, 1, 1]), 10.0).tolist() == [1, 1, 1, 1]
+    # Nothing sensed (lying on the belly, the legs in the air): no foot is in contact.
+    assert flags(np.zeros(4), np.array([1, 1, 1, 1]), 10.0).tolist() == [0, 0, 0, 0]
 
 
 def test_unusable_imu_samples_are_rejected():

@@ -25,7 +25,7 @@ class KalmanEstimatorConfig:
     foot_position_noise: float = 0.003
     # Noise of the trunk velocity seen through a stance foot that does not move [m/s].
     foot_velocity_noise: float = 0.05
-    # With no foot loaded the trunk rests on the ground: its velocity is zero within this [m/s].
+    # With no foot loaded the trunk rests on the ground: its horizontal velocity is zero within this [m/s].
     resting_velocity_noise: float = 0.05
     # Flat ground at z = 0: feet in contact are at the foot radius. Removes height drift [-].
     ground_height_measurement: bool = True

@@ -170,10 +170,10 @@ class FloatingBaseKalmanFilter:
         use_height = c.ground_height_measurement
         tips = self.prong_tips_B if prongs_loaded else np.zeros((0, 3))
         # No foot or prong loaded: the trunk rests on the ground (on its belly or knees) while
-        # the legs move freely; the Go1 does not fly, so the trunk is nearly still. A
-        # zero-velocity measurement keeps the IMU from drifting while the legs unfold.
+        # the legs move freely; it does not slide, so a zero horizontal velocity keeps the IMU
+        # from drifting while the legs unfold (the knees may push it up: z is left to the IMU).
         resting = not stance and not len(tips)
-        m = 12 + 3 * len(stance) + (len(stance) if use_height else 0) + (3 if resting else 0) + 4 * len(tips)
+        m = 12 + 3 * len(stance) + (len(stance) if use_height else 0) + (2 if resting else 0) + 4 * len(tips)
         H = np.zeros((m, NUM_STATES))
         y = np.empty(m)
         noise = np.empty(m)
@@ -206,10 +206,10 @@ class FloatingBaseKalmanFilter:
             noise[row + 3] = c.ground_height_noise**2
             row += 4
         if resting:
-            H[row : row + 3, _V] = np.eye(3)
-            y[row : row + 3] = 0.0
-            noise[row : row + 3] = c.resting_velocity_noise**2
-            row += 3
+            H[row : row + 2, _V] = np.eye(3)[:2]
+            y[row : row + 2] = 0.0
+            noise[row : row + 2] = c.resting_velocity_noise**2
+            row += 2
         innovation = y - H @ x
         PHt = P @ H.T
         S = H @ PHt

@@ -3,9 +3,10 @@
     python -m pedi_drake.mission.benchmark [--missions a,b] [--noise-seeds 1,2,3,4,5] [--jobs 2]
                                            [--out benchmarks/results/missions.json]
 
-Prints one row per mission (successes, foot errors, trunk drift, real-time factor, and the
-mission-specific checks: door opening, obstacle classification) and writes every run's
-result.json content to the JSON file. Runs are independent processes (`--jobs`).
+Prints one row per mission (successes, foot errors, trunk drift, real-time factor without any
+visualisation, the estimator's largest errors against the simulated truth, and the
+mission-specific checks: door opening, box push, obstacle classification) and writes every
+run's result.json content to the JSON file. Runs are independent processes (`--jobs`).
 """
 
 import argparse
@@ -23,6 +24,7 @@ EXPECTED_OBSTACLE_CLASS = {"press_a": "rigid", "press_b": "soft"}
 
 def run_one(mission: str, seed: int, noise: bool) -> dict:
     """One run of `mission`; returns its result dictionary (result.json)."""
+    from pedi_drake.estimation.accuracy import run_estimate_errors
     from pedi_drake.simulation_run import run
     from pedi_drake.station.scenario import load_scenario
 
@@ -32,7 +34,10 @@ def run_one(mission: str, seed: int, noise: bool) -> dict:
     )
     scenario = load_scenario(scenario_text=text)
     with tempfile.TemporaryDirectory() as out:
-        return run(scenario=scenario, name=mission, out_dir=Path(out), quiet=True)
+        result = run(scenario=scenario, name=mission, out_dir=Path(out), quiet=True, replay=False)
+        if scenario.estimator == "kalman":
+            result["estimator_errors"] = run_estimate_errors(out, scenario)
+        return result
 
 
 def _run_job(job) -> tuple[str, int, bool, dict]:
@@ -53,6 +58,11 @@ def summarise(mission: str, runs: list[dict]) -> dict:
         "real_time_factor_median": statistics.median(r["real_time_factor"] for r in runs),
         "failures": [r["reason"] for r in runs if not r["success"]],
     }
+    estimates = [r["estimator_errors"] for r in runs if "estimator_errors" in r]
+    if estimates:
+        row["estimator_position_error_max_m"] = max(e["position_error_max_m"] for e in estimates)
+        row["estimator_velocity_rms_max_m_s"] = max(e["velocity_rms_m_s"] for e in estimates)
+        row["estimator_orientation_error_max_deg"] = max(e["orientation_error_max_deg"] for e in estimates)
     doors = [r["door"]["opened_deg"] for r in runs if "door" in r]
     if doors:
         row["door_opened_deg_min"] = min(doors)
@@ -89,7 +99,10 @@ def main() -> None:
             status = "ok" if result["success"] else f"FAILED ({result['reason'][:80]})"
             print(f"  {mission:<24} seed {seed} noise {noise!s:<5} {status}", flush=True)
     summary = {m: summarise(m, runs) for m, runs in results.items()}
-    print(f"\n{'mission':<24} {'ok':>5} {'err med':>8} {'err max':>8} {'drift':>7} {'RTF':>5}  extra")
+    print(
+        f"\n{'mission':<24} {'ok':>5} {'err med':>8} {'err max':>8} {'drift':>7} {'RTF':>5} "
+        f"{'est pos':>8} {'est vel':>8} {'est ori':>8}  extra"
+    )
     for mission, row in summary.items():
         extra = ""
         if "door_opened_deg_min" in row:
@@ -100,12 +113,17 @@ def main() -> None:
             extra += f"obstacles right {row['obstacles_correct']}/{row['runs']}"
 
         def mm(value):
-            return f"{1000 * value:7.1f}" if value is not None else "      -"
+            return f"{1000 * value:8.1f}" if value is not None else "       -"
+
+        def deg(value):
+            return f"{value:8.2f}" if value is not None else "       -"
 
         print(
             f"{mission:<24} {row['succeeded']:>2}/{row['runs']:<2} {mm(row['foot_error_median_m'])} "
             f"{mm(row['foot_error_max_m'])} {mm(row['max_base_drift_m'])} "
-            f"{row['real_time_factor_median']:5.2f}  {extra}"
+            f"{row['real_time_factor_median']:5.2f} {mm(row.get('estimator_position_error_max_m'))} "
+            f"{mm(row.get('estimator_velocity_rms_max_m_s'))} {deg(row.get('estimator_orientation_error_max_deg'))}"
+            f"  {extra}"
         )
     all_errors = [row["error"] for runs in results.values() for r in runs for row in r["foot_errors_m"]]
     if all_errors:
