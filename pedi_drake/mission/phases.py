@@ -31,6 +31,7 @@ from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, Q
 
 LYING_HEIGHT = 0.13  # [m] trunk height when lying down under control (legs folded, off the limits)
 CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
+PLACE_DEPTH = 0.015  # [m] below the floor that leg_to_support aims the foot (it stops at the touch)
 SHIFT_DURATION = 1.0  # [s] trunk shift before lifting a leg
 CONTACT_RAMP_WAIT = 0.3  # [s] wait for the controller to ramp a contact's force away
 
@@ -300,7 +301,9 @@ class LegToSupportRunner(PhaseRunner):
         leg = phase.leg
         geometry = leg_geometry(leg)
         p_WF = view.X_WB @ (geometry.p_BH + geometry.p_HT)
-        ground = np.array([p_WF[0], p_WF[1], robot.FOOT_RADIUS - 0.004])
+        # Aim 1.5 cm into the floor: the estimate's height may be off by millimetres, and the
+        # phase switches the foot to a contact as soon as its sensor feels the floor.
+        ground = np.array([p_WF[0], p_WF[1], robot.FOOT_RADIUS - PLACE_DEPTH])
         above = ground + [0.0, 0.0, 0.05]
         q_above = _ik(leg, view.X_WB.inverse() @ above, view.leg_q(leg), phase.name)
         q_ground = _ik(leg, view.X_WB.inverse() @ ground, q_above, phase.name)
