@@ -4,7 +4,8 @@
 the go1.* station signals, the command, the base-state estimate, the controller diagnostics,
 the mission status and references, and in simulation the plant state (ground truth, for
 evaluation only). Samples are stored as float32 (about 7 significant digits, plenty for plots
-and statistics) and compressed, so a 25 s mission at 500 Hz takes a few megabytes.
+and statistics; signals beyond 1e6, such as the wall clock, as float64) and compressed, so a
+25 s mission at 500 Hz takes a few megabytes.
 
     logs = read_run_logs("out/hit_target_front")
     t, tau = logs["go1.command"].times, logs["go1.command"].data[48:60]
@@ -31,7 +32,10 @@ def write_run_logs(out_dir: Path, logs: dict[str, SignalLog]) -> Path:
     arrays = {}
     for name, log in logs.items():
         arrays[f"{name}/times"] = np.asarray(log.times, dtype=np.float64)
-        arrays[f"{name}/data"] = np.asarray(log.data, dtype=np.float32)
+        data = np.asarray(log.data, dtype=np.float64)
+        # float32 keeps 7 digits: plenty for every signal but clocks (1.8e9 s since the epoch).
+        exact = data.size and np.max(np.abs(data)) > 1e6
+        arrays[f"{name}/data"] = data if exact else data.astype(np.float32)
     path = Path(out_dir) / LOGS_FILE
     np.savez_compressed(path, **arrays)
     return path

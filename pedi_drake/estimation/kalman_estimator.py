@@ -96,6 +96,11 @@ def rolling_velocities_W(R_WB: np.ndarray, w_B: np.ndarray, q: np.ndarray, qd: n
     return rolling
 
 
+def _plausible_joint_angles(q: np.ndarray, slack: float = 0.2) -> bool:
+    """Whether q lies within the joint limits (+- slack [rad]); all zeros (the calf cannot be at 0) is not."""
+    return bool(np.all(q >= robot.Q_LOWER - slack) and np.all(q <= robot.Q_UPPER + slack))
+
+
 class FloatingBaseKalmanFilter:
     """The filter's maths on plain arrays (no Drake state): `initial_state`, `predict`, `update`."""
 
@@ -288,6 +293,8 @@ class KalmanEstimator(LeafSystem):
         imu, q, qd, force, schedule, finite = self._measurements(context)
         if imu is None or not finite:
             return  # hold the last estimate: a bad sample (or none yet) never reaches the output
+        if s[0] == 0.0 and not _plausible_joint_angles(q):
+            return  # no leg_control_data yet (all zeros on hardware): initialise from a real sample
         n = NUM_STATES
         contact = self.filter.contact_flags(force, schedule, self.config.foot_contact_threshold)
         rolling = rolling_velocities_W(imu.R_WB, imu.w_B, q, qd, self.filter.foot_radius)
