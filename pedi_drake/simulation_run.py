@@ -35,6 +35,7 @@ def run(
     quiet: bool = False,
     hardware: bool = False,
     replay: bool = True,
+    realtime_rate: float = 1.0,
 ) -> dict:
     """Simulates `scenario`, writes result.json, replay.html, plots and logs.npz to `out_dir`; returns the result.
 
@@ -42,6 +43,8 @@ def run(
     another process) and the diagram runs in real time. There is no ground truth then: the
     results (foot errors, drift, falls) come from the state estimate, and no replay is written.
     `replay=False` skips the Meshcat recording too (a run without any visualisation).
+    `realtime_rate` paces a hardware run (below 1 only against the simulator bridge run at the
+    same rate: a slow-motion run for a machine too slow for both processes in real time).
     """
     out_dir.mkdir(parents=True, exist_ok=True)
     if not hardware and replay:
@@ -51,7 +54,7 @@ def run(
     diagram = built.diagram
     simulator = Simulator(diagram)
     if hardware:
-        simulator.set_target_realtime_rate(1.0)
+        simulator.set_target_realtime_rate(realtime_rate)
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
     state = {"next_print": PROGRESS_EVERY, "ended": None}
 

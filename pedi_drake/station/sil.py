@@ -65,15 +65,21 @@ def estimator_error(controller_logs: dict, truth: dict) -> dict:
     return {"max_m": float(np.max(error)), "final_m": float(error[-1])}
 
 
-def run_sil(mission: str, out_dir: Path, scenario_text: str = "{}", lcm_url: str | None = None) -> dict:
-    """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry."""
+def run_sil(
+    mission: str, out_dir: Path, scenario_text: str = "{}", lcm_url: str | None = None, realtime_rate: float = 1.0
+) -> dict:
+    """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
+
+    `realtime_rate` < 1 runs both processes in slow motion (the watchdogs keep their wall-clock
+    limits, so they are stricter in simulated time), for machines that cannot run both in real time.
+    """
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
     out_dir.mkdir(parents=True, exist_ok=True)
     truth_path = out_dir / "bridge_truth.npz"
     text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
     bridge = subprocess.Popen(
         [sys.executable, "-m", "pedi_drake.station.go1_sim_bridge", "--mission", mission, "--lcm_url", url]
-        + ["--scenario_text", text, "--truth_log", str(truth_path)],
+        + ["--scenario_text", text, "--truth_log", str(truth_path), "--realtime_rate", str(realtime_rate)],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
@@ -90,7 +96,9 @@ def run_sil(mission: str, out_dir: Path, scenario_text: str = "{}", lcm_url: str
         bus = f"{{go1: {{lcm_url: '{url}'}}}}"
         overrides = f"{{mission: {mission}, controller: whole_body, estimator: kalman, lcm_buses: {bus}}}"
         scenario = apply_scenario_text(load_scenario(scenario_text=text), overrides)
-        result = run(scenario=scenario, name=mission, out_dir=out_dir, quiet=True, hardware=True)
+        result = run(
+            scenario=scenario, name=mission, out_dir=out_dir, quiet=True, hardware=True, realtime_rate=realtime_rate
+        )
     finally:
         if bridge.poll() is None:
             bridge.send_signal(signal.SIGTERM)
@@ -102,6 +110,7 @@ def run_sil(mission: str, out_dir: Path, scenario_text: str = "{}", lcm_url: str
         "foot_errors": true_foot_errors(result, logs, truth),
         "estimator_trunk_position_error": estimator_error(logs, truth),
         "lcm_url": url,
+        "realtime_rate": realtime_rate,
     }
     (out_dir / "sil.json").write_text(json.dumps(result["sil"], indent=2))
     return result
@@ -113,9 +122,10 @@ def main() -> int:
     parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto both sides' scenario")
     parser.add_argument("--lcm_url", default=None, help="default: the Go1 group on a port of this process's own")
     parser.add_argument("--out", default=None)
+    parser.add_argument("--realtime_rate", type=float, default=1.0, help="< 1: both processes in slow motion")
     args = parser.parse_args()
     out_dir = Path(args.out or f"out/sil_{args.mission}")
-    result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url)
+    result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate)
     print(
         f"{args.mission} over {result['sil']['lcm_url']}: {'succeeded' if result['success'] else 'FAILED'}"
         f" {result['reason']}; wall {result['wall_time_s']:.1f} s"
