@@ -35,7 +35,7 @@ from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
 from pedi_drake import robot
 from pedi_drake.control import references, tasks
 from pedi_drake.control.config import HQP_MODES, QP_BACKENDS, STACKS, WholeBodyControllerConfig
-from pedi_drake.control.hqp import HqpSettings, HqpSolution, Level, solve_hqp, solve_weighted
+from pedi_drake.control.hqp import HqpSettings, solve_hqp, solve_weighted
 from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
@@ -43,14 +43,14 @@ from pedi_drake.exceptions import ConfigError, QpInfeasible
 from pedi_drake.prongs import ProngDesign
 
 COMMAND_SIZE = 60
-STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT, STATUS_LIMITS_RELAXED = 0.0, 1.0, 2.0, 3.0
+STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0
 MAX_LEVELS = 5
 
 
 def diagnostics_layout(num_contacts: int) -> dict[str, slice]:
     """Named slices of the diagnostics vector."""
     sizes = [
-        ("status", 1),  # 0 ok, 1 QP failed (last command held), 2 non-finite input, 3 joint limits relaxed
+        ("status", 1),  # 0 ok, 1 QP failed (last command held), 2 non-finite input
         ("solve_time", 1),  # wall time of the HQP solve [s]
         ("tick_time", 1),  # wall time of the whole update [s]
         ("consecutive_failures", 1),
@@ -182,17 +182,13 @@ class WholeBodyController(LeafSystem):
             friction=float(mu_x[0]),
             ground_height=ground,
         )
-        status = STATUS_OK
         try:
             levels = self.builder.levels(snapshot, inputs)
-            try:
-                solution = self._solve(levels)
-            except QpInfeasible:
-                # A joint at its limit whose foot must not move can leave no acceleration that meets
-                # every bound (a splayed stance on prongs does it): the joint-limit bounds, which
-                # look ahead over a horizon, yield to the contact and torque limits for this tick.
-                solution = self._solve([_without(level, "joint_limits") for level in levels])
-                status = STATUS_LIMITS_RELAXED
+            if c.hqp_mode == "weighted":
+                weights = list(c.level_weights) or [100.0 ** (len(levels) - 1 - k) for k in range(len(levels))]
+                solution = solve_weighted(levels, self.layout.size, weights, self.hqp_settings)
+            else:
+                solution = solve_hqp(levels, self.layout.size, self.hqp_settings)
             x = solution.x
             if not np.all(np.isfinite(x)):
                 raise QpInfeasible("non-finite QP solution")
@@ -212,7 +208,7 @@ class WholeBodyController(LeafSystem):
         q_ref = np.clip(q_ref + qd_ref * c.period, q - c.max_reference_deviation, q + c.max_reference_deviation)
         command = np.concatenate([q_ref, qd_ref, np.full(12, c.joint_kp), np.full(12, c.joint_kd), tau])
 
-        diag[self.diag["status"]] = status
+        diag[self.diag["status"]] = STATUS_OK
         diag[self.diag["solve_time"]] = solution.solve_time
         diag[self.diag["consecutive_failures"]] = 0.0
         xi, _ = self.builder.balance.capture_point(snapshot, ground)
@@ -237,13 +233,6 @@ class WholeBodyController(LeafSystem):
         discrete_state.get_mutable_vector(self.ramp_state).SetFromVector(ramp)
         discrete_state.get_mutable_vector(self.hold_state).SetFromVector(hold)
         discrete_state.get_mutable_vector(self.diagnostics_state).SetFromVector(diag)
-
-    def _solve(self, levels: list[Level]) -> HqpSolution:
-        c = self.config
-        if c.hqp_mode == "weighted":
-            weights = list(c.level_weights) or [100.0 ** (len(levels) - 1 - k) for k in range(len(levels))]
-            return solve_weighted(levels, self.layout.size, weights, self.hqp_settings)
-        return solve_hqp(levels, self.layout.size, self.hqp_settings)
 
     def _fail(
         self,
@@ -274,8 +263,3 @@ class WholeBodyController(LeafSystem):
             discrete_state.get_mutable_vector(self.ramp_state).SetFromVector(ramp)
         if hold is not None:
             discrete_state.get_mutable_vector(self.hold_state).SetFromVector(hold)
-
-
-def _without(level: Level, task_name: str) -> Level:
-    """`level` without its inequality task named `task_name`."""
-    return Level(level.name, level.equalities, [t for t in level.inequalities if t.name != task_name])
