@@ -98,3 +98,57 @@ def test_timeout_fails_the_phase_with_the_remaining_error(tmp_path):
     progress, _, _ = _run_mission(tmp_path, phases, 14.0)
     assert progress.status == FAILED
     assert "hurried: timed out after 1.0 s" in progress.reason and "mm" in progress.reason
+
+
+def test_body_reference_starts_from_the_measured_trunk_pose(tmp_path):
+    """The first phase starts its trajectories where the trunk is (not at the origin).
+
+    At initialisation the estimate is not yet available; a reference made from it pulled the
+    trunk towards z = 0 for the first second of the stand-up.
+    """
+    path = tmp_path / "mission.yaml"
+    path.write_text("phases:" + QUICK_START)
+    scenario = load_scenario(scenario_text=f"{{mission: {path}, controller: whole_body, robot: {{prongs: {{}}}}}}")
+    built = MakePedipulationDiagram(scenario)
+    simulator = Simulator(built.diagram)
+    simulator.Initialize()
+    simulator.AdvanceTo(0.1)
+    context = simulator.get_context()
+    manager = built.diagram.GetSubsystemByName("mission")
+    station = built.diagram.GetSubsystemByName("station")
+    p_ref = manager.GetOutputPort("body_reference").Eval(manager.GetMyContextFromRoot(context))[:3]
+    p_true = station.GetOutputPort("sim.plant_state").Eval(station.GetMyContextFromRoot(context))[4:7]
+    assert np.linalg.norm(p_ref - p_true) < 0.01, (p_ref, p_true)
+
+
+def test_leg_to_support_after_a_press_puts_the_foot_down_at_its_footprint(tmp_path):
+    """The foot sensor still feels the pressed obstacle when leg_to_support starts: that reading
+    must not count as touch-down (the contact would be restored with the foot up at the obstacle)."""
+    path = tmp_path / "mission.yaml"
+    path.write_text(
+        """
+scene:
+  - {kind: fixed_obstacle, name: wall, position: [0.47, -0.30, 0.0]}
+phases:"""
+        + QUICK_START
+        + """
+  - {kind: reach, name: touch, leg: FR, target: [0.40, -0.22, 0.17], tolerance: 0.01, timeout: 5.0}
+  - {kind: press, name: press, leg: FR, direction: [1.0, 0.0, 0.0], force: 12.0, max_displacement: 0.04}
+  - {kind: leg_to_support, name: place, leg: FR, duration: 1.0}
+"""
+    )
+    scenario = load_scenario(scenario_text=f"{{mission: {path}, controller: whole_body, simulation_duration: 14.0}}")
+    built = MakePedipulationDiagram(scenario)
+    simulator = Simulator(built.diagram)
+    simulator.Initialize()
+    manager = built.diagram.GetSubsystemByName("mission")
+    manager_context = manager.GetMyContextFromRoot(simulator.get_context())
+    while simulator.get_context().get_time() < 14.0:
+        simulator.AdvanceTo(simulator.get_context().get_time() + 0.5)
+        if manager.progress(manager_context).status in (SUCCEEDED, FAILED):
+            break
+    progress = manager.progress(manager_context)
+    assert progress.status == SUCCEEDED, progress.reason
+    records = {r.name: r for r in progress.records}
+    assert records["press"].metrics["stopped_by"] == "force"
+    assert records["place"].metrics["placement_error_m"] < 0.02, records["place"].metrics

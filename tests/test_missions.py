@@ -14,14 +14,6 @@ MAX_FOOT_ERROR = 0.010  # [m] every reach phase
 MAX_DRIFT = 0.010  # [m] trunk drift while pedipulating
 
 
-# Known defect, kept visible: on the Kalman estimate the robot stands up from lying with its hips
-# splayed (the feet barely load while the legs unfold), so on the prongs a hip sits at its limit
-# and the balance fails when the first front foot lifts. With estimator: ground_truth it succeeds.
-KNOWN_FAILURES = {
-    "prong_push_box": "falls when FR lifts on the prongs on the Kalman estimate (hips splayed at stand-up)",
-}
-
-
 @pytest.fixture(scope="module", params=shipped_missions())
 def mission_result(request):
     return request.param, run_one(request.param, seed=0, noise=False)
@@ -29,34 +21,23 @@ def mission_result(request):
 
 def test_mission_succeeds_without_falling(mission_result):
     name, result = mission_result
-    if name in KNOWN_FAILURES:
-        assert not result["success"], f"{name} succeeds now: take it out of KNOWN_FAILURES"
-        pytest.xfail(KNOWN_FAILURES[name])
     assert result["success"], f"{name}: {result['reason']}"
     assert not result["fell"]
 
 
-def _succeeded(name: str, result: dict) -> None:
-    if name in KNOWN_FAILURES and not result["success"]:
-        pytest.skip(f"{name} fails (known): {KNOWN_FAILURES[name]}")
-
-
 def test_mission_reaches_every_target_within_1cm(mission_result):
     name, result = mission_result
-    _succeeded(name, result)
     for row in result["foot_errors_m"]:
         assert row["error"] < MAX_FOOT_ERROR, f"{name} {row['phase']}: {1000 * row['error']:.1f} mm"
 
 
 def test_mission_keeps_the_trunk_within_1cm_while_pedipulating(mission_result):
     name, result = mission_result
-    _succeeded(name, result)
     assert result["max_base_drift_m"] < MAX_DRIFT, f"{name}: {1000 * result['max_base_drift_m']:.1f} mm"
 
 
 def test_mission_specific_outcome(mission_result):
     name, result = mission_result
-    _succeeded(name, result)
     if name == "open_door":
         assert result["door"]["opened_deg"] >= 20.0
     if name == "prong_push_box":

@@ -121,6 +121,13 @@ class MissionManager(LeafSystem):
         phase = phases[progress.index]
         runner = RUNNERS[type(phase)]
         outcome = RUNNING
+        if not progress.records:
+            # The mission starts: hold the pose measured now. At initialisation the estimator's
+            # output may not be initialised yet (Drake runs all initialisation events on the
+            # same pre-event context), so the references made there can be far off (z = 0).
+            progress.references = References.holding(
+                view.base.p_WB, view.X_WB.rotation(), view.time, self._env.num_prongs
+            )
         if not progress.started:
             progress.started, progress.phase_start, progress.memo = True, view.time, {}
             progress.records.append(PhaseRecord(phase.name, kind_name(phase), RUNNING, view.time))

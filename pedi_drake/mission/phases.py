@@ -312,13 +312,23 @@ class LegToSupportRunner(PhaseRunner):
             np.array([view.leg_q(leg), q_above, q_ground]), t, [phase.duration, 0.6 * phase.duration]
         )
         progress.references.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
-        progress.memo.update(stage="place", t_down=t + 1.6 * phase.duration)
+        progress.memo.update(
+            stage="place", footprint_W=ground, t_above=t + phase.duration, t_down=t + 1.6 * phase.duration
+        )
 
     def step(self, phase, progress, view, env):
         t, leg, memo, refs = view.time, phase.leg, progress.memo, progress.references
         k = robot.LEG_NAMES.index(leg)
-        touched = view.foot_force[k] > CONTACT_FORCE_THRESHOLD
+        # A touch counts only on the way down from above the footprint: before that, the foot
+        # sensor may still feel whatever the foot was pushing (an obstacle, a box).
+        touched = t >= memo["t_above"] and view.foot_force[k] > CONTACT_FORCE_THRESHOLD
         if memo["stage"] == "place" and (touched or t >= memo["t_down"] + 0.3):
+            placed = view.foot_W(leg)
+            progress.records[-1].metrics.update(
+                leg=leg,
+                placed_W=placed.tolist(),
+                placement_error_m=float(np.linalg.norm(placed[:2] - memo["footprint_W"][:2])),
+            )
             refs.legs.pop(leg, None)
             refs.contacts[k] = 1.0
             memo.update(stage="load", t_loaded=t + CONTACT_RAMP_WAIT)

@@ -12,6 +12,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from pedi_drake import robot
 from pedi_drake.station.scenario import SensorNoiseConfig
+from pedi_drake.vector3 import cross3
 
 IMU_SIZE = 10  # quaternion w, x, y, z; gyro (3); accelerometer (3)
 
@@ -108,7 +109,7 @@ class Go1SensorModel(LeafSystem):
         alpha_W = A_WB.rotational()
         p_BI_W = R_WB @ self._p_BI
         # Acceleration of the IMU point, then the specific force a - g in the trunk frame.
-        a_WI = A_WB.translational() + np.cross(alpha_W, p_BI_W) + np.cross(w_W, np.cross(w_W, p_BI_W))
+        a_WI = A_WB.translational() + cross3(alpha_W, p_BI_W) + cross3(w_W, cross3(w_W, p_BI_W))
         gyro = R_WB.T @ w_W
         accel = R_WB.T @ (a_WI - self._gravity_W)
         rng = self._rng(context, 3)
