@@ -8,7 +8,7 @@ for joint torques tau (12), contact forces lambda (3 per point contact: stance f
 tips, world frame) and the disturbance F (3, world frame) at the end-effector point. The six
 unactuated rows tie lambda and F; the twelve actuated rows give tau = b_a - J_c,a^T lambda -
 J_e,a^T F, so the torque limits |tau| <= tau_max (Eq. 6) are linear in (F, lambda) too. With the
-friction pyramids (Eqs. 2-5: lambda_z >= 0, |lambda_x|, |lambda_y| <= mu lambda_z on flat ground)
+friction pyramids (Eqs. 2-5: lambda_z >= 0, |lambda_x|, |lambda_y| <= (sqrt(2)/2) mu lambda_z on flat ground)
 every condition is linear, and the RFP (Eq. 8) is the projection onto F of
 
     x = [F; lambda]:   A_eq x = b_eq,   A_in x <= b_in.
@@ -18,6 +18,7 @@ kept too: W y = b - J_e^T F with y = [tau; lambda], W = [B  J_c^T], and G_y y <=
 """
 
 import dataclasses
+import math
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
@@ -76,14 +77,21 @@ class RejectableForceProblem:
 
 
 def friction_pyramid_rows(mu: float) -> np.ndarray:
-    """(5, 3): rows r with r . lambda <= 0 for the 4-edge pyramid of a flat-ground contact (Eqs. 2-5)."""
+    """(5, 3): rows r with r . lambda <= 0 for the 4-edge pyramid of a flat-ground contact (Eqs. 2-4).
+
+    Paper 003's pyramid is the one inscribed in the Coulomb cone: |lambda_x|, |lambda_y| <=
+    (sqrt(2)/2) mu lambda_z, so that every force it admits is inside the cone of radius mu (the
+    circumscribed |lambda_x| <= mu lambda_z admits tangential forces up to sqrt(2) mu lambda_z
+    along the diagonals, which the contact cannot hold).
+    """
+    m = 0.5 * math.sqrt(2.0) * mu
     return np.array(
         [
             [0.0, 0.0, -1.0],  # unilateral: lambda_z >= 0
-            [1.0, 0.0, -mu],
-            [-1.0, 0.0, -mu],
-            [0.0, 1.0, -mu],
-            [0.0, -1.0, -mu],
+            [1.0, 0.0, -m],
+            [-1.0, 0.0, -m],
+            [0.0, 1.0, -m],
+            [0.0, -1.0, -m],
         ]
     )
 
