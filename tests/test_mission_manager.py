@@ -6,7 +6,10 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.mission.progress import FAILED, SUCCEEDED
+from pedi_drake.mission.phases import ReachRunner
+from pedi_drake.mission.progress import FAILED, SUCCEEDED, MissionProgress, PhaseRecord
+from pedi_drake.mission.results import estimated_foot_errors
+from pedi_drake.mission.spec import CompanionReach, Reach
 from pedi_drake.station.scenario import load_scenario
 
 QUICK_START = """
@@ -85,6 +88,38 @@ def test_reach_without_pedipulation_mode_fails_with_a_reason(tmp_path):
     progress, _, _ = _run_mission(tmp_path, phases, 6.0)
     assert progress.status == FAILED
     assert "not in pedipulation mode" in progress.reason
+
+
+def test_reach_with_a_companion_leg_not_in_pedipulation_mode_fails_with_a_reason(tmp_path):
+    phases = (
+        QUICK_START
+        + """
+  - {kind: reach, name: both, leg: FR, target: [0.3, -0.13, 0.18], together: [{leg: FL, target: [0.3, 0.13, 0.18]}]}
+"""
+    )
+    progress, _, _ = _run_mission(tmp_path, phases, 10.0)
+    assert progress.status == FAILED
+    assert "both: FL is not in pedipulation mode" in progress.reason
+
+
+def test_a_reach_with_companions_reports_every_leg():
+    metrics = {
+        "leg": "FR",
+        "error_m": 0.002,
+        "target_W": [0.3, -0.17, 0.05],
+        "legs": [
+            {"leg": "FR", "target_W": [0.3, -0.17, 0.05], "error_m": 0.002},
+            {"leg": "FL", "target_W": [0.3, 0.17, 0.05], "error_m": 0.012},
+        ],
+    }
+    progress = MissionProgress(records=[PhaseRecord("push", "reach", SUCCEEDED, 1.0, 2.0, metrics=metrics)])
+    rows = estimated_foot_errors(progress)
+    assert [(row["phase"], row["leg"], row["error"], row["target_W"]) for row in rows] == [
+        ("push", "FR", 0.002, [0.3, -0.17, 0.05]),
+        ("push", "FL", 0.012, [0.3, 0.17, 0.05]),
+    ]
+    phase = Reach(name="push", tolerance=0.01, together=[CompanionReach(leg="FL", target=[0.3, 0.17, 0.05])])
+    assert ReachRunner.timeout_reason(phase, progress).startswith("foot error FL 12.0 mm still above")
 
 
 def test_timeout_fails_the_phase_with_the_remaining_error(tmp_path):

@@ -41,6 +41,15 @@ def test_numbers_are_read_as_floats(tmp_path):
     assert mission.phases[0].target == [1.0, 0.0, 0.0] and isinstance(mission.phases[0].target[0], float)
 
 
+def test_reach_takes_companion_legs(tmp_path):
+    body = "phases:\n  - {kind: reach, leg: FR, target: [1, -1, 0], together: [{leg: FL, target: [1, 1, 0]}]}\n"
+    (phase,) = load_mission(_write(tmp_path, body)).phases
+    assert [(c.leg, c.target) for c in phase.together] == [("FL", [1.0, 1.0, 0.0])]
+    assert isinstance(phase.together[0].target[0], float)
+    shipped = {phase.name: phase for phase in load_mission("prong_push_box").phases}
+    assert [shipped[name].together[0].leg for name in ("touch_box", "push_box")] == ["FL", "FL"]
+
+
 @pytest.mark.parametrize(
     "body,pattern",
     [
@@ -55,6 +64,35 @@ def test_numbers_are_read_as_floats(tmp_path):
         ("phases: []\n", r"phases: expected a non-empty list"),
         ("phases:\n  - {kind: wait, name: a}\n  - {kind: wait, name: a}\n", r"duplicate phase names \['a'\]"),
         ("scene:\n  - {kind: box, positon: [0, 0, 0]}\nphases:\n  - {kind: wait}\n", r"scene\[0\]\.positon: unknown"),
+        (
+            "phases:\n  - {kind: wait}\n  - {kind: reach, together: [{leg: FX, target: [1, 2, 3]}]}\n",
+            r"phases\[1\]\.together\[0\]\.leg: must be one of .*got 'FX'",
+        ),
+        (
+            "phases:\n  - {kind: reach, together: [{leg: FL}]}\n",
+            r"phases\[0\]\.together\[0\]\.target: expected \[x, y, z\] in metres, got nothing",
+        ),
+        (
+            "phases:\n  - {kind: reach, together: [{leg: FL, target: [1, 2]}]}\n",
+            r"phases\[0\]\.together\[0\]\.target: expected \[x, y, z\]",
+        ),
+        (
+            "phases:\n  - {kind: reach, together: [{target: [1, 2, 3]}]}\n",
+            r"phases\[0\]\.together\[0\]\.leg: must be one of",
+        ),
+        (
+            "phases:\n  - {kind: reach, leg: FR, together: [{leg: FR, target: [1, 2, 3]}]}\n",
+            r"phases\[0\]\.together\[0\]\.leg: FR already moves in this phase",
+        ),
+        (
+            "phases:\n  - {kind: reach, together: [{leg: FL, target: [1, 2, 3], via_points: [[1, 2]]}]}\n",
+            r"phases\[0\]\.together\[0\]\.via_points\[0\]: expected \[x, y, z\]",
+        ),
+        (
+            "phases:\n  - {kind: reach, together: [{leg: FL, targt: [1, 2, 3]}]}\n",
+            r"phases\[0\]\.together\[0\]\.targt: unknown field; CompanionReach has",
+        ),
+        ("phases:\n  - {kind: reach, together: {leg: FL}}\n", r"phases\[0\]\.together: expected a list"),
     ],
 )
 def test_mistakes_name_file_phase_and_field(tmp_path, body, pattern):

@@ -216,35 +216,62 @@ class LegToPedipulationRunner(PhaseRunner):
         return RUNNING
 
 
+def _reach_legs(phase) -> list[tuple[str, list, list]]:
+    """(leg, target, via_points) of every leg a reach phase moves, the main leg first."""
+    legs = [(phase.leg, phase.target, phase.via_points)]
+    return legs + [(c.leg, c.target, c.via_points) for c in phase.together]
+
+
 class ReachRunner(PhaseRunner):
-    """IK to the target (and the approach and via points), then joint-space quintics through them."""
+    """IK to the target (and the approach and via points), then joint-space quintics through them.
+
+    With `together`, every listed leg gets its own quintics over the same time span, so the feet
+    move and arrive together; the phase succeeds when every foot is within the tolerance.
+    """
 
     def start(self, phase, progress, view, env):
-        leg = phase.leg
-        if leg not in progress.references.legs:
-            raise UnreachableTarget(f"{phase.name}: {leg} is not in pedipulation mode (add leg_to_pedipulation first)")
-        points = [np.asarray(p, float) for p in phase.via_points]
-        if phase.approach_offset:
-            points.append(np.asarray(phase.target) + np.asarray(phase.approach_offset))
-        points.append(np.asarray(phase.target, float))
-        q, waypoints = view.leg_q(leg), [view.leg_q(leg)]
-        for point in points:
-            q = _ik(leg, _to_trunk(view, point, phase.frame), q, phase.name)
-            waypoints.append(q)
+        legs = _reach_legs(phase)
+        for leg, _, _ in legs:
+            if leg not in progress.references.legs:
+                raise UnreachableTarget(
+                    f"{phase.name}: {leg} is not in pedipulation mode (add leg_to_pedipulation first)"
+                )
+        plans = []
+        for leg, target, via_points in legs:
+            points = [np.asarray(p, float) for p in via_points]
+            if phase.approach_offset:
+                points.append(np.asarray(target) + np.asarray(phase.approach_offset))
+            points.append(np.asarray(target, float))
+            q, waypoints = view.leg_q(leg), [view.leg_q(leg)]
+            for point in points:
+                q = _ik(leg, _to_trunk(view, point, phase.frame), q, phase.name)
+                waypoints.append(q)
+            target_W = np.asarray(target, float) if phase.frame == "world" else view.X_WB @ points[-1]
+            plans.append((leg, np.array(waypoints), target_W))
+        # Every leg spans the time of the leg with the most segments (`duration` per segment).
         t = view.time
-        trajectory = PiecewiseQuintic.through(np.array(waypoints), t, [phase.duration] * len(points))
-        progress.references.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
-        target_W = np.asarray(phase.target, float) if phase.frame == "world" else view.X_WB @ points[-1]
-        progress.memo.update(t_arrive=t + phase.duration * len(points), target_W=target_W, t_ok=None)
+        span = phase.duration * max(len(waypoints) - 1 for _, waypoints, _ in plans)
+        for leg, waypoints, _ in plans:
+            n = len(waypoints) - 1
+            trajectory = PiecewiseQuintic.through(waypoints, t, [span / n] * n)
+            progress.references.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
+        targets = {leg: target_W for leg, _, target_W in plans}
+        progress.memo.update(t_arrive=t + span, target_W=targets[phase.leg], targets_W=targets, t_ok=None)
 
     def step(self, phase, progress, view, env):
         memo = progress.memo
-        error = _foot_error(view, phase.leg, memo["target_W"])
+        errors = {leg: _foot_error(view, leg, target_W) for leg, target_W in memo["targets_W"].items()}
         record = progress.records[-1]
-        record.metrics.update(leg=phase.leg, error_m=error, target_W=memo["target_W"].tolist())
+        # The main leg's figures at the top level, every leg's in `legs`.
+        record.metrics.update(leg=phase.leg, error_m=errors[phase.leg], target_W=memo["target_W"].tolist())
+        if phase.together:
+            record.metrics["legs"] = [
+                {"leg": leg, "target_W": target_W.tolist(), "error_m": errors[leg]}
+                for leg, target_W in memo["targets_W"].items()
+            ]
         if view.time < memo["t_arrive"]:
             return RUNNING
-        if error < phase.tolerance:
+        if max(errors.values()) < phase.tolerance:
             memo["t_ok"] = memo["t_ok"] if memo["t_ok"] is not None else view.time
             if view.time - memo["t_ok"] >= phase.hold:
                 return SUCCEEDED
@@ -254,8 +281,11 @@ class ReachRunner(PhaseRunner):
 
     @staticmethod
     def timeout_reason(phase, progress) -> str:
-        error = progress.records[-1].metrics.get("error_m", float("nan"))
-        return f"foot error {error * 1000:.1f} mm still above the {phase.tolerance * 1000:.1f} mm tolerance"
+        metrics = progress.records[-1].metrics
+        rows = metrics.get("legs") or [{"leg": phase.leg, "error_m": metrics.get("error_m", float("nan"))}]
+        late = [row for row in rows if not row["error_m"] < phase.tolerance] or rows
+        errors = ", ".join(f"{row['leg']} {row['error_m'] * 1000:.1f} mm" for row in late)
+        return f"foot error {errors} still above the {phase.tolerance * 1000:.1f} mm tolerance"
 
 
 class PressRunner(PhaseRunner):

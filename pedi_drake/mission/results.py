@@ -38,24 +38,33 @@ def phase_table(progress: MissionProgress) -> list[dict]:
     ]
 
 
-def foot_errors(progress: MissionProgress, plant, times: np.ndarray, states: np.ndarray) -> list[dict]:
-    """Final foot-to-target distance of every reach phase, from the true foot position [m]."""
-    context = plant.CreateDefaultContext()
-    rows = []
+def _reach_rows(progress: MissionProgress):
+    """(record, leg, target_W, estimated error) for every leg of every finished reach phase."""
     for record in progress.records:
         if record.kind != "reach" or record.t_end is None or "target_W" not in record.metrics:
             continue
-        leg = record.metrics["leg"]
+        metrics = record.metrics
+        legs = metrics.get("legs") or [
+            {"leg": metrics["leg"], "target_W": metrics["target_W"], "error_m": metrics.get("error_m")}
+        ]
+        for row in legs:
+            yield record, row["leg"], list(row["target_W"]), row.get("error_m")
+
+
+def foot_errors(progress: MissionProgress, plant, times: np.ndarray, states: np.ndarray) -> list[dict]:
+    """Final foot-to-target distance of every leg of every reach phase, from the true foot [m]."""
+    context = plant.CreateDefaultContext()
+    rows = []
+    for record, leg, target_W, estimated in _reach_rows(progress):
         k = _sample_index(times, record.t_end)
         true_foot = _foot_W(plant, context, states[:, k], leg)
-        error = float(np.linalg.norm(true_foot - np.asarray(record.metrics["target_W"])))
         rows.append(
             {
                 "phase": record.name,
                 "leg": leg,
-                "error": error,
-                "estimated_error": record.metrics.get("error_m"),
-                "target_W": list(record.metrics["target_W"]),
+                "error": float(np.linalg.norm(true_foot - np.asarray(target_W))),
+                "estimated_error": estimated,
+                "target_W": target_W,
                 "status": record.status,
             }
         )
@@ -77,24 +86,19 @@ def max_base_drift(p_WB: np.ndarray, body_ref: np.ndarray, status: np.ndarray) -
 
 
 def estimated_foot_errors(progress: MissionProgress) -> list[dict]:
-    """Every reach phase's final foot error as the controller estimated it (no ground truth) [m]."""
-    rows = []
-    for record in progress.records:
-        if record.kind != "reach" or record.t_end is None or "target_W" not in record.metrics:
-            continue
-        error = record.metrics.get("error_m")
-        rows.append(
-            {
-                "phase": record.name,
-                "leg": record.metrics["leg"],
-                "error": error,
-                "estimated_error": error,
-                "target_W": list(record.metrics["target_W"]),
-                "status": record.status,
-                "t_end": record.t_end,
-            }
-        )
-    return rows
+    """Every leg's final foot error in every reach phase as the controller estimated it [m]."""
+    return [
+        {
+            "phase": record.name,
+            "leg": leg,
+            "error": estimated,
+            "estimated_error": estimated,
+            "target_W": target_W,
+            "status": record.status,
+            "t_end": record.t_end,
+        }
+        for record, leg, target_W, estimated in _reach_rows(progress)
+    ]
 
 
 def press_results(progress: MissionProgress) -> list[dict]:

@@ -97,8 +97,24 @@ class LegToSupport(PhaseBase):
 
 
 @dataclasses.dataclass
+class CompanionReach:
+    """A further leg that a reach phase moves at the same time as its main leg."""
+
+    # Leg name; it must be in pedipulation mode and differ from the phase's other legs.
+    leg: str = ""
+    # Foot target [m], in the phase's `frame`.
+    target: list[float] = dataclasses.field(default_factory=list)
+    # Intermediate targets of this leg (same frame) [m]; the phase's `approach_offset` applies too.
+    via_points: list[list[float]] = dataclasses.field(default_factory=list)
+
+
+@dataclasses.dataclass
 class Reach(PhaseBase):
-    """Moves the foot of `leg` to `target` through the IK, optionally via `approach_offset` first."""
+    """Moves the foot of `leg` to `target` through the IK, optionally via `approach_offset` first.
+
+    `together` lists further legs that move at the same time, with the same frame, segment
+    duration, tolerance and hold; the phase succeeds when every foot is within the tolerance.
+    """
 
     leg: str = "FR"
     # Foot target [m], in `frame` ("world", or "trunk" at the phase start).
@@ -114,6 +130,8 @@ class Reach(PhaseBase):
     duration: float = 1.0
     # Time to stay at the target once reached [s].
     hold: float = 0.3
+    # Legs moving at the same time, e.g. [{leg: FL, target: [x, y, z]}].
+    together: list[CompanionReach] = dataclasses.field(default_factory=list)
 
 
 @dataclasses.dataclass
@@ -313,6 +331,23 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         for k, point in enumerate(phase.via_points):
             need(len(point) == 3, f"via_points[{k}]", f"expected [x, y, z] in metres, got {point}")
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+        legs = [phase.leg]
+        for k, companion in enumerate(phase.together):
+            field = f"together[{k}]"
+            need(companion.leg in LEG_NAMES, f"{field}.leg", f"must be one of {LEG_NAMES}, got {companion.leg!r}")
+            need(
+                companion.leg not in legs,
+                f"{field}.leg",
+                f"{companion.leg} already moves in this phase (legs {legs}); each leg may appear once",
+            )
+            legs.append(companion.leg)
+            need(
+                len(companion.target) == 3,
+                f"{field}.target",
+                f"expected [x, y, z] in metres, got {companion.target or 'nothing'}",
+            )
+            for j, point in enumerate(companion.via_points):
+                need(len(point) == 3, f"{field}.via_points[{j}]", f"expected [x, y, z] in metres, got {point}")
     if isinstance(phase, Press):
         norm = math.sqrt(sum(v * v for v in phase.direction)) if len(phase.direction) == 3 else 0.0
         need(norm > 0.5, "direction", f"expected a unit [x, y, z] vector, got {phase.direction}")
