@@ -34,7 +34,13 @@ def main() -> int:
     parser.add_argument("--scenario_name", default="default", help="Scenario to run from --scenario_file.")
     parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto the scenario.")
     parser.add_argument("--out", default=None, help="Output folder (default: out/<mission or scenario>).")
-    parser.add_argument("--duration", type=float, default=None, help="Simulated duration [s] (overrides the scenario).")
+    parser.add_argument(
+        "--duration",
+        type=float,
+        default=None,
+        help="Simulated duration [s] (overrides the scenario; by default a mission gets room for "
+        "every phase to reach its timeout, and the run ends when the mission does).",
+    )
     parser.add_argument("--meshcat", action="store_true", help="Serve a live Meshcat view (prints its URL).")
     parser.add_argument(
         "--hardware",
@@ -46,11 +52,15 @@ def main() -> int:
         scenario = load_scenario(
             filename=args.scenario_file, scenario_name=args.scenario_name, scenario_text=args.scenario_text
         )
+        mission = None
         if args.mission is not None:
-            load_mission(args.mission)  # validate now: bad input exits 2 before anything runs
+            mission = load_mission(args.mission)  # validate now: bad input exits 2 before anything runs
             scenario.mission, scenario.controller = args.mission, "whole_body"
         elif scenario.mission:
-            load_mission(scenario.mission)
+            mission = load_mission(scenario.mission)
+        if mission is not None and args.duration is None:
+            # Room for every phase to use its timeout: the run stops as soon as the mission is over.
+            scenario.simulation_duration = max(scenario.simulation_duration, mission.longest_duration())
         if args.duration is not None:
             if not args.duration > 0:
                 raise ConfigError(f"--duration: must be > 0 s, got {args.duration}")
@@ -76,7 +86,7 @@ def main() -> int:
     except LcmTimeout as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
-    errors = [f"{row['phase']} {1000 * row['error']:.1f} mm" for row in result["foot_errors_m"]]
+    errors = [f"{row['phase']} {row['leg']} {1000 * row['error']:.1f} mm" for row in result["foot_errors_m"]]
     print(
         f"{name}: {'succeeded' if result['success'] else 'FAILED: ' + result['reason']}; "
         f"{'run' if args.hardware else 'sim'} {result['sim_time_s']:.2f} s in {result['wall_time_s']:.2f} s wall "

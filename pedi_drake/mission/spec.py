@@ -197,6 +197,11 @@ class MissionSpec:
     robot: RobotConfig | None
     source: str  # the file it came from
 
+    def longest_duration(self) -> float:
+        """Simulated time [s] the mission can take at most: every phase running to its timeout,
+        then a failure's recovery putting both front legs back down."""
+        return sum(phase.timeout for phase in self.phases) + 2 * LegToSupport().timeout
+
 
 @dataclasses.dataclass
 class _MissionFile:
