@@ -19,6 +19,7 @@ from pedi_drake.mission import results as mission_results
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
 from pedi_drake.results import trunk_fell, trunk_pose_fell, write_result
 from pedi_drake.run_logs import SignalLog, write_run_logs
+from pedi_drake.station.go1_safety import driver_report
 from pedi_drake.station.scenario import Scenario
 from pedi_drake.viz import plots
 
@@ -128,6 +129,13 @@ def run(
         "sensor_noise": scenario.sensor_noise.enabled,
         "final_trunk_height_m": float(p_WB[2, -1]),
     }
+    if hardware:
+        station = diagram.GetSubsystemByName("station")
+        station_context = station.GetMyContextFromRoot(context)
+        result["driver"] = driver_report(
+            station.GetOutputPort("driver.status").Eval(station_context),
+            station.GetOutputPort("driver.message_counts").Eval(station_context),
+        )
     if "controller.diagnostics" in logs:
         tick_ms = 1e3 * logs["controller.diagnostics"].data()[2]
         tick_ms = tick_ms[tick_ms > 0]
@@ -171,6 +179,10 @@ def run(
                 plots.plot_mission_errors(
                     t_state, states, body_log, status_log, plant, result, out_dir / "mission_errors.png"
                 )
+    if hardware and result["driver"]["latched"] is not None:
+        # Damping took over: whatever the estimate says afterwards, the run did not go as planned.
+        result["success"] = False
+        result["reason"] = f"the driver latched damping ({result['driver']['latched']}); " + result["reason"]
     write_run_logs(out_dir, {name: SignalLog(log.sample_times(), log.data()) for name, log in logs.items()})
     write_result(out_dir, result)
     return result

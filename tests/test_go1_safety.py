@@ -237,3 +237,17 @@ def test_damping_torque_within_limits_at_high_joint_rates():
     command = damping_command(robot.STANDING_Q, qd, LIMITS, kd=5.0)
     assert is_damping(command)
     assert np.all(np.abs(pd_torque(command, robot.STANDING_Q, qd)) <= robot.EFFORT_LIMIT)
+
+
+def test_driver_report_names_the_latch_and_counts_every_intervention():
+    from pedi_drake.station.go1_safety import INTERVENTION_INDEX, INTERVENTIONS, driver_report
+
+    status = np.zeros(1 + len(INTERVENTIONS))
+    status[0] = 1 + INTERVENTION_INDEX["status_timeout"]
+    status[1 + INTERVENTION_INDEX["status_timeout"]] = 1
+    status[1 + INTERVENTION_INDEX["position_clamped"]] = 368
+    report = driver_report(status, np.array([6292, 0, 6288, 2, 0, 0]))
+    assert report["latched"] == "status_timeout"
+    assert report["interventions"] == {"position_clamped": 368, "status_timeout": 1}
+    assert report["messages"]["state_estimator_data"] == {"received": 6288, "dropped": 2}
+    assert driver_report(np.zeros(1 + len(INTERVENTIONS)))["latched"] is None

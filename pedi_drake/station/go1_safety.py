@@ -83,6 +83,28 @@ class SafetyLimits:
         return np.clip(np.where(np.isfinite(q), q, middle), self.q_lower, self.q_upper)
 
 
+def driver_report(status: np.ndarray, message_counts: np.ndarray | None = None) -> dict:
+    """The driver's `status` output (and `message_counts`) as a plain dictionary for result files.
+
+    {"latched": name of the intervention that latched damping, or None, "interventions": {name:
+    count} of every kind that fired, "messages": {channel: {"received", "dropped"}}}.
+    """
+    status = np.asarray(status, dtype=float)
+    latch = int(status[0])
+    report = {
+        "latched": INTERVENTIONS[latch - 1] if latch > 0 else None,
+        "interventions": {name: int(count) for name, count in zip(INTERVENTIONS, status[1:], strict=True) if count},
+    }
+    if message_counts is not None:
+        channels = ("leg_control_data", "state_estimator_data", "rc_command")
+        counts = np.asarray(message_counts, dtype=float).reshape(len(channels), 2)
+        report["messages"] = {
+            channel: {"received": int(received), "dropped": int(dropped)}
+            for channel, (received, dropped) in zip(channels, counts, strict=True)
+        }
+    return report
+
+
 def pd_torque(command: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """tau_ff + kp (q_des - q) + kd (qd_des - qd) [N m], before the motors' own saturation."""
     q_des, qd_des, kp, kd, tau_ff = split_command(command)

@@ -60,6 +60,8 @@ def estimator_error(controller_logs: dict, truth: dict) -> dict:
     n = min(len(clock.times), len(base.times))
     wall = clock.data[0, :n]
     inside = (wall >= truth["wall_time"][0]) & (wall <= truth["wall_time"][-1])
+    # The sample logged at t = 0 precedes the estimator's first update (it is all zeros).
+    inside &= base.times[:n] > 0.0
     p_true = np.array([np.interp(wall[inside], truth["wall_time"], truth["p_WB"][:, k]) for k in range(3)])
     error = np.linalg.norm(base.data[4:7, :n][:, inside] - p_true, axis=0)
     return {"max_m": float(np.max(error)), "final_m": float(error[-1])}
