@@ -8,13 +8,14 @@ import dataclasses
 
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import VectorLogSink, ZeroOrderHold
+from pydrake.systems.primitives import VectorLogSink
 
 from pedi_drake.control.stand_controller import StandController
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
 from pedi_drake.estimation.kalman_estimator import KalmanEstimator
 from pedi_drake.exceptions import ScenarioError
+from pedi_drake.log_hold import LogHold
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
 from pedi_drake.station.scenario import Scenario
@@ -46,18 +47,6 @@ class PedipulationDiagram:
     hardware: bool
     # The mission being run, if any (its manager is the subsystem "mission").
     mission: MissionSpec | None = None
-    # Sample-and-hold subsystem names in front of the sensor loggers (see MakePedipulationDiagram).
-    log_holds: list[str] = dataclasses.field(default_factory=list)
-
-    def initialize_log_holds(self, root_context) -> None:
-        """Starts every log hold at its input's initial value, so the logs' t = 0 samples are real.
-
-        Call before Simulator.Initialize (which logs t = 0 before the holds first sample).
-        """
-        for name in self.log_holds:
-            hold = self.diagram.GetSubsystemByName(name)
-            context = hold.GetMyMutableContextFromRoot(root_context)
-            hold.SetVectorState(context, hold.get_input_port().Eval(context))
 
 
 def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
@@ -134,22 +123,18 @@ def MakePedipulationDiagram(
     else:
         # The host's clock beside the signals: aligns this run's logs with the robot side's.
         sources["wall_clock"] = builder.AddNamedSystem("wall_clock", WallClock()).clock
-    loggers, holds = {}, []
+    loggers = {}
     for name, port in sources.items():
         logger = builder.AddNamedSystem(f"log.{name}", VectorLogSink(port.size(), log_period))
         logged = port
         if not hardware and name in SAMPLED_SENSOR_SIGNALS:
-            # Loggers publish after the tick's discrete updates, at the next plant state: logged
-            # directly, every sensor would be computed twice a tick (the IMU needs the plant's
-            # accelerations, the foot sensors its contact results). A hold sampled with the
-            # tick's updates logs what the estimator read, computed once.
-            hold = builder.AddNamedSystem(f"log_hold.{name}", ZeroOrderHold(log_period, port.size()))
+            # Logged directly, these sensors would be computed twice a tick (see LogHold).
+            hold = builder.AddNamedSystem(f"log_hold.{name}", LogHold(port.size(), log_period))
             builder.Connect(port, hold.get_input_port())
             logged = hold.get_output_port()
-            holds.append(hold.get_name())
         builder.Connect(logged, logger.get_input_port())
         loggers[name] = logger.get_name()
         builder.ExportOutput(port, name)
     diagram = builder.Build()
     diagram.set_name("pedipulation")
-    return PedipulationDiagram(diagram=diagram, loggers=loggers, hardware=hardware, mission=mission, log_holds=holds)
+    return PedipulationDiagram(diagram=diagram, loggers=loggers, hardware=hardware, mission=mission)

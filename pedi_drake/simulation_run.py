@@ -77,7 +77,6 @@ def run(
         return EventStatus.Succeeded()
 
     simulator.set_monitor(monitor)
-    built.initialize_log_holds(simulator.get_mutable_context())
     simulator.Initialize()
     if meshcat is not None and not hardware:
         meshcat.StartRecording(set_visualizations_while_recording=False)

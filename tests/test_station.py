@@ -137,3 +137,17 @@ def test_lying_start_rests_on_the_ground_without_penetration(robot_text):
     p_end = station.GetOutputPort("sim.plant_state").Eval(context)[4:7]
     assert p_end[2] - p_start[2] < 0.002, (p_start, p_end)
     assert np.linalg.norm(p_end[:2] - p_start[:2]) < 0.005, (p_start, p_end)
+
+
+def test_logged_sensors_start_at_their_initial_values():
+    """Sensor logs go through a LogHold: the t = 0 sample is the initial reading, not the hold's zeros."""
+    scenario = load_scenario(scenario_name="stand", scenario_text="{estimator: kalman, simulation_duration: 0.1}")
+    built = MakePedipulationDiagram(scenario)
+    simulator = Simulator(built.diagram)
+    context = simulator.get_mutable_context()
+    imu_0 = built.diagram.GetOutputPort("go1.imu").Eval(context).copy()
+    simulator.AdvanceTo(0.1)
+    log = built.diagram.GetSubsystemByName(built.loggers["go1.imu"]).FindLog(context)
+    assert log.sample_times()[0] == 0.0
+    np.testing.assert_allclose(log.data()[:, 0], imu_0)
+    assert abs(np.linalg.norm(log.data()[0:4, -1]) - 1.0) < 1e-9  # a unit quaternion every sample

@@ -27,6 +27,9 @@ BRIDGE_PERIOD = 0.002  # [s]
 GO1_BUS_NAME = "go1"
 
 # Message type by channel.
+# Status channels in the order of the driver's `driver.message_counts` output ([received, dropped] each).
+STATUS_CHANNELS = (LEG_CONTROL_CHANNEL, STATE_ESTIMATOR_CHANNEL, RC_COMMAND_CHANNEL)
+
 CHANNEL_TYPES = {
     COMMAND_CHANNEL: pd_tau_targets_lcmt,
     LEG_CONTROL_CHANNEL: leg_control_data_lcmt,

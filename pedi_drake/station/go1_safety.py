@@ -25,6 +25,7 @@ from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
 
 from pedi_drake import robot
 from pedi_drake.station.go1_driver_config import Go1SafetyConfig
+from pedi_drake.station.go1_lcm_constants import STATUS_CHANNELS
 from pedi_drake.station.motor_model import COMMAND_SIZE, pack_command, split_command
 
 _log = logging.getLogger(__name__)
@@ -96,7 +97,7 @@ def driver_report(status: np.ndarray, message_counts: np.ndarray | None = None) 
         "interventions": {name: int(count) for name, count in zip(INTERVENTIONS, status[1:], strict=True) if count},
     }
     if message_counts is not None:
-        channels = ("leg_control_data", "state_estimator_data", "rc_command")
+        channels = STATUS_CHANNELS
         counts = np.asarray(message_counts, dtype=float).reshape(len(channels), 2)
         report["messages"] = {
             channel: {"received": int(received), "dropped": int(dropped)}

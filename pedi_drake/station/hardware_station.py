@@ -96,6 +96,7 @@ def MakeHardwareStation(
     builder.ExportOutput(safety.GetOutputPort("status"), "driver.status")
     builder.ExportOutput(safety.GetOutputPort("command"), "driver.command_published")
     counts = builder.AddNamedSystem("message_counts", Multiplexer([2, 2, 2]))
+    # In the order of c.STATUS_CHANNELS.
     for i, receiver in enumerate((leg, estimator, remote)):
         builder.Connect(receiver.GetOutputPort("message_counts"), counts.get_input_port(i))
     builder.ExportOutput(counts.get_output_port(), "driver.message_counts")
