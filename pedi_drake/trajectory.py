@@ -14,6 +14,7 @@ theta k the axis-angle of R0^T R1, so the angular velocity is parallel to the fi
 """
 
 import dataclasses
+import functools
 
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis
@@ -125,17 +126,22 @@ class QuinticOrientationSegment:
     def t_end(self) -> float:
         return self.t0 + self.duration
 
-    def _axis_angle(self) -> tuple[np.ndarray, float]:
+    @functools.cached_property
+    def _axis_angle(self) -> tuple[np.ndarray, float, np.ndarray]:
+        """(axis k in the start frame, angle [rad], axis in world) of R_start^T R_end (computed once)."""
         # Relative rotation expressed in the start frame: R_end = R_start * R_rel.
         rel = AngleAxis(self.start.inverse().multiply(self.end).ToQuaternion())
-        return np.asarray(rel.axis()), float(rel.angle())
+        axis = np.asarray(rel.axis())
+        return axis, float(rel.angle()), self.start.multiply(axis)
 
     def sample(self, t: float) -> OrientationSample:
         """Orientation, angular velocity and acceleration (in the world frame) at time `t` [s]."""
-        axis, angle = self._axis_angle()
+        axis, angle, axis_W = self._axis_angle
         s, ds, dds = quintic_time_law(t, self.t0, self.duration)
+        if s == 0.0 or s == 1.0:
+            # At rest at either end (most samples: the phases hold a pose far longer than they move).
+            return OrientationSample(self.start if s == 0.0 else self.end, np.zeros(3), np.zeros(3))
         rotation = self.start.multiply(RotationMatrix(AngleAxis(s * angle, axis)))
-        axis_W = self.start.multiply(axis)
         return OrientationSample(rotation, ds * angle * axis_W, dds * angle * axis_W)
 
 

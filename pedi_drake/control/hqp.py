@@ -20,6 +20,7 @@ Levels without inequalities are plain least squares.
 """
 
 import dataclasses
+import functools
 import math
 import time
 
@@ -71,8 +72,20 @@ class HqpSolution:
 
     x: np.ndarray  # (n,) the solution
     equality_residuals: list[float]  # per level: sqrt(sum_i weight_i ||A_i x - b_i||^2)
-    inequality_violations: list[float]  # per level: largest G x - h over its rows (<= 0 when met)
     solve_time: float  # wall time of the solve [s]
+    # Per level, blocks (G, h) of its inequality rows (hard and soft), kept for `inequality_violations`.
+    level_inequalities: list[list[tuple[np.ndarray, np.ndarray]]] = dataclasses.field(default_factory=list, repr=False)
+
+    @functools.cached_property
+    def inequality_violations(self) -> list[float]:
+        """Per level: the largest G x - h over its rows (<= 0 when met; -inf for a level without any).
+
+        Computed on first use: the controller does not read it, and at 500 Hz it would cost more
+        than a level's QP set-up."""
+        return [
+            max((float(np.max(G @ self.x - h)) for G, h in blocks if len(h)), default=-np.inf)
+            for blocks in self.level_inequalities
+        ]
 
 
 @dataclasses.dataclass
@@ -110,17 +123,29 @@ def _stack_equalities(tasks: list[EqualityTask], n: int) -> tuple[np.ndarray, np
     return A, b
 
 
-def _stack_inequalities(tasks: list[InequalityTask], n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(G, h, sqrt(weight) per row) of a list of inequality tasks."""
+def _stack_inequalities(
+    tasks: list[InequalityTask], n: int, with_weights: bool = True
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """(G, h, sqrt(weight) per row, or None without `with_weights`) of a list of inequality tasks."""
     if not tasks:
-        return np.zeros((0, n)), np.zeros(0), np.zeros(0)
+        return np.zeros((0, n)), _EMPTY, _EMPTY
     if len(tasks) == 1:
         t = tasks[0]
-        return t.G, t.h, np.full(len(t.h), math.sqrt(t.weight))
+        return t.G, t.h, np.full(len(t.h), math.sqrt(t.weight)) if with_weights else None
     G = np.vstack([t.G for t in tasks])
     h = np.concatenate([t.h for t in tasks])
-    w = np.concatenate([np.full(len(t.h), np.sqrt(t.weight)) for t in tasks])
-    return G, h, w
+    if not with_weights:
+        return G, h, None
+    return G, h, np.concatenate([np.full(len(t.h), math.sqrt(t.weight)) for t in tasks])
+
+
+_EMPTY = np.zeros(0)
+_EMPTY.flags.writeable = False
+
+
+def _meets(G: np.ndarray, h: np.ndarray, x: np.ndarray, tolerance: float) -> bool:
+    """Whether G x <= h + tolerance on every row."""
+    return len(h) == 0 or bool(np.all(G @ x - h <= tolerance))
 
 
 def _solve_osqp(H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, level: str) -> np.ndarray:
@@ -160,7 +185,7 @@ def _solve_dense_qp(
         lower,
         eps_prox=eps_prox,
     )
-    if exitflag not in _DAQP_OK or not np.all(np.isfinite(y)):
+    if exitflag not in _DAQP_OK or not np.isfinite(y).all():
         raise QpInfeasible(f"HQP level {level!r}: DAQP exit flag {exitflag}")
     return np.asarray(y)
 
@@ -178,19 +203,29 @@ def _row_space_split(A: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.nd
         # time at this size, where the Python wrapper dominates.
         qr, tau, _, info = lapack.dgeqrf(A.T)
         if info == 0:
-            R = np.triu(qr[:m])
-            diagonal = np.abs(np.diag(R))
-            if diagonal.min() > tolerance * max(1.0, diagonal.max()):
+            # Python floats: numpy's reductions cost microseconds each on m <= 30 numbers.
+            diagonal = [abs(d) for d in qr.diagonal().tolist()]
+            if min(diagonal) > tolerance * max(1.0, max(diagonal)):
                 square = np.zeros((n, n), order="F")
                 square[:, :m] = qr
                 Q, _, info = lapack.dorgqr(square, tau)
                 if info == 0:
-                    return Q[:, :m], Q[:, m:], m, R
+                    # Below its diagonal qr holds the Householder vectors: masked, not np.triu
+                    # (which costs four times as much at this size).
+                    return Q[:, :m], Q[:, m:], m, qr[:m] * _upper_triangle_mask(m)
     elif m == 0:
         return np.zeros((n, 0)), np.eye(n), 0, np.zeros((0, 0))
     _, sigma, Vt = np.linalg.svd(A, full_matrices=True)
     rank = int(np.sum(sigma > tolerance * max(1.0, sigma[0] if len(sigma) else 0.0)))
     return Vt[:rank].T, Vt[rank:].T, rank, None
+
+
+@functools.lru_cache(maxsize=64)
+def _upper_triangle_mask(m: int) -> np.ndarray:
+    """(m, m) ones on and above the diagonal, zeros below (read-only)."""
+    mask = np.triu(np.ones((m, m)))
+    mask.flags.writeable = False
+    return mask
 
 
 def _min_norm_least_squares(A: np.ndarray, r: np.ndarray, split) -> np.ndarray:
@@ -223,7 +258,7 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
     num_verified = 0  # leading rows of G_all that x is known to meet (a level solved with them)
     for index, level in enumerate(levels):
         A, b = _stack_equalities(level.equalities, n)
-        Gh, hh, _ = _stack_inequalities([t for t in level.inequalities if t.hard], n)
+        Gh, hh, _ = _stack_inequalities([t for t in level.inequalities if t.hard], n, with_weights=False)
         Gs, hs, ws = _stack_inequalities([t for t in level.inequalities if not t.hard], n)
         stacked.append((A, b, Gh, hh, Gs, hs))
         if len(hh):
@@ -236,6 +271,13 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
         if len(b) == 0 and ms == 0 and index + 1 < len(levels):
             # Only hard constraints: nothing to optimise here. The levels below solve within them
             # (and report infeasibility); a feasibility QP here would only move x inside them.
+            continue
+        if len(b) == 0 and _meets(Gs, hs, x, 0.0) and _meets(G_all, h_all, x, settings.fix_tolerance):
+            # No equalities and x already meets every row: zero violation is this level's optimum
+            # (about half the ticks of the controller's feasibility level), so no QP is needed.
+            num_verified = len(h_all)
+            G_all = np.vstack([G_all, Gs])
+            h_all = np.concatenate([h_all, hs + settings.fix_tolerance])
             continue
         Az = A @ Z
         rz = b - A @ x
@@ -251,19 +293,21 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
             # Variables y = [z; v], with the soft violations v of this level.
             H = np.zeros((nz + ms, nz + ms))
             H[:nz, :nz] = Az.T @ Az
-            H[nz:, nz:] = np.diag(ws**2)
-            if settings.regularization:
-                H += settings.regularization * np.eye(nz + ms)
             f = np.zeros(nz + ms)
             f[:nz] = -Az.T @ rz
-            C = np.zeros((len(h_all) + ms, nz + ms))
-            C[: len(h_all), :nz] = G_all @ Z
-            upper = np.empty(len(h_all) + ms)
-            upper[: len(h_all)] = h_all - G_all @ x
+            mh = len(h_all)
+            C = np.zeros((mh + ms, nz + ms))
+            C[:mh, :nz] = G_all @ Z
+            upper = np.empty(mh + ms)
+            upper[:mh] = h_all - G_all @ x
             if ms:
-                C[len(h_all) :, :nz] = Gs @ Z
-                C[len(h_all) :, nz:] = -np.eye(ms)
-                upper[len(h_all) :] = hs - Gs @ x
+                soft = np.arange(ms)
+                H[nz + soft, nz + soft] = ws * ws
+                C[mh:, :nz] = Gs @ Z
+                C[mh + soft, nz + soft] = -1.0
+                upper[mh:] = hs - Gs @ x
+            if settings.regularization:
+                H[np.diag_indices(nz + ms)] += settings.regularization
             # The current x solved the levels above, so it meets the rows they verified up to the
             # solver's tolerance; clipping at zero keeps z = 0 feasible instead of failing on a
             # 1e-7 residue.
@@ -280,12 +324,12 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
             _, null_space, _, _ = svd or _row_space_split(Az, settings.rank_tolerance)
             Z = Z @ null_space
     solve_time = time.perf_counter() - start
-    residuals = [float(np.linalg.norm(A @ x - b)) if len(b) else 0.0 for A, b, *_ in stacked]
-    violations = [
-        max(float(np.max(G @ x - h)) if len(h) else -np.inf for G, h in ((Gh, hh), (Gs, hs)))
-        for _, _, Gh, hh, Gs, hs in stacked
-    ]
-    return HqpSolution(x, residuals, violations, solve_time)
+    residuals = []
+    for A, b, *_ in stacked:
+        r = A @ x - b
+        residuals.append(math.sqrt(float(r @ r)))
+    inequalities = [[(Gh, hh), (Gs, hs)] for _, _, Gh, hh, Gs, hs in stacked]
+    return HqpSolution(x, residuals, solve_time, inequalities)
 
 
 def solve_weighted(
@@ -327,14 +371,9 @@ def solve_weighted(
         Hfull, np.concatenate([f, np.zeros(ms)]), C, upper, "weighted", settings.proximal_weight, settings.backend
     )
     x = y[:n]
-    return HqpSolution(x, *_level_errors(levels, x, n), time.perf_counter() - start)
-
-
-def _level_errors(levels: list[Level], x: np.ndarray, n: int) -> tuple[list[float], list[float]]:
-    residuals, violations = [], []
+    residuals, inequalities = [], []
     for level in levels:
         A, b = _stack_equalities(level.equalities, n)
         residuals.append(float(np.linalg.norm(A @ x - b)) if len(b) else 0.0)
-        G, h, _ = _stack_inequalities(level.inequalities, n)
-        violations.append(float(np.max(G @ x - h)) if len(h) else -np.inf)
-    return residuals, violations
+        inequalities.append([(t.G, t.h) for t in level.inequalities])
+    return HqpSolution(x, residuals, time.perf_counter() - start, inequalities)

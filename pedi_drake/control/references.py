@@ -25,10 +25,10 @@ Layouts (world frame W, Unitree leg order FR, FL, RR, RL):
 import dataclasses
 
 import numpy as np
-from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RotationMatrix
 
 from pedi_drake import robot
+from pedi_drake.vector3 import rotation_matrix_wxyz
 
 BODY_REFERENCE_SIZE = 19
 LEG_REFERENCE_SIZE = 40
@@ -65,9 +65,7 @@ def body_reference_vector(
 
 
 def parse_body_reference(x: np.ndarray) -> BodyReference:
-    quaternion = np.asarray(x[3:7], float)
-    quaternion = quaternion / np.linalg.norm(quaternion)
-    R = RotationMatrix(Quaternion(quaternion)).matrix()
+    R = rotation_matrix_wxyz(x[3:7])
     return BodyReference(x[0:3], R, x[7:10], x[10:13], x[13:16], x[16:19])
 
 
@@ -94,11 +92,8 @@ def leg_reference_vector(
 
 
 def parse_leg_reference(x: np.ndarray) -> list[LegReference]:
-    legs = []
-    for i in range(len(robot.LEG_NAMES)):
-        block = np.asarray(x[i * LEG_BLOCK : (i + 1) * LEG_BLOCK], float)
-        legs.append(LegReference(int(round(block[0])), block[1:4], block[4:7], block[7:10]))
-    return legs
+    blocks = np.asarray(x, float).reshape(len(robot.LEG_NAMES), LEG_BLOCK)
+    return [LegReference(round(b[0]), b[1:4], b[4:7], b[7:10]) for b in blocks]
 
 
 def safety_polygon_vector(centre_xy=None, half_sizes=None, yaw: float = 0.0) -> np.ndarray:

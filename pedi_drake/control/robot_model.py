@@ -12,13 +12,13 @@ the joints at `plant_map.v_index` in Unitree order.
 """
 
 import dataclasses
+import math
 
 import numpy as np
 from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import Context
 
 from pedi_drake import robot
-from pedi_drake.estimation.base_state import BaseState
 from pedi_drake.prongs import ProngDesign
 
 # Contact names: the four feet (Unitree order) then the prongs.
@@ -50,22 +50,14 @@ class RobotSnapshot:
     Jdot_v_com: np.ndarray  # (3,) centre-of-mass bias acceleration [m/s^2]
     q_joints: np.ndarray  # (12,) Unitree order [rad]
     v_joints: np.ndarray  # (12,) Unitree order [rad/s]
+    V_trunk: np.ndarray  # (6,) trunk spatial velocity [w; v] in world [rad/s, m/s]
+    v_com: np.ndarray  # (3,) centre-of-mass velocity in world [m/s]
     # (T, t0) of tasks.torque_map, filled on first use.
     torque_map: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def num_contacts(self) -> int:
         return self.p_contacts.shape[0]
-
-    @property
-    def v_com(self) -> np.ndarray:
-        """Centre-of-mass velocity in world [m/s]."""
-        return self.J_com @ self.v
-
-    @property
-    def V_trunk(self) -> np.ndarray:
-        """Trunk spatial velocity [w; v] in world [rad/s, m/s]."""
-        return self.J_trunk @ self.v
 
 
 class ControllerModel:
@@ -91,6 +83,8 @@ class ControllerModel:
             points.append(np.array([0.0, 0.0, -prongs.length]))  # the tip sphere's centre
         self.contact_frames = tuple(frames)
         self.contact_points = tuple(points)
+        self._point_columns = tuple(p.reshape(3, 1) for p in points)
+        self._origin = np.zeros(3)
         self.nv = plant.num_velocities()
         self.nq = plant.num_positions()
         self.total_mass = plant.CalcTotalMass(self.context)
@@ -107,38 +101,48 @@ class ControllerModel:
     def update(self, base_state: np.ndarray, q_joints: np.ndarray, v_joints: np.ndarray) -> RobotSnapshot:
         """Sets the scratch context from the estimate and measured joints; returns the dynamics terms."""
         plant, context, pm = self.plant, self.context, self.plant_map
-        base = BaseState.from_vector(base_state)
-        quaternion = base.quaternion_wxyz / np.linalg.norm(base.quaternion_wxyz)
-        q = pm.full_positions(quaternion, base.p_WB, q_joints, self.nq)
-        v = pm.full_velocities(base.w_WB, base.v_WB, v_joints, self.nv)
-        plant.SetPositions(context, q)
-        plant.SetVelocities(context, v)
+        base = np.asarray(base_state, float)  # layout: pedi_drake.estimation.base_state
+        quaternion = base[0:4] / math.sqrt(float(base[0:4] @ base[0:4]))
+        q = pm.full_positions(quaternion, base[4:7], q_joints, self.nq)
+        v = pm.full_velocities(base[7:10], base[10:13], v_joints, self.nv)
+        plant.SetPositionsAndVelocities(context, np.concatenate([q, v]))
         M = plant.CalcMassMatrix(context)
         h = plant.CalcBiasTerm(context) - plant.CalcGravityGeneralizedForces(context) + self.damping * v
         kV = JacobianWrtVariable.kV
         world = self.world
-        Js, biases, positions = [], [], []
-        for frame, point in zip(self.contact_frames, self.contact_points, strict=True):
-            Js.append(plant.CalcJacobianTranslationalVelocity(context, kV, frame, point, world, world))
-            biases.append(plant.CalcBiasTranslationalAcceleration(context, kV, frame, point, world, world).ravel())
-            positions.append(plant.CalcPointsPositions(context, frame, point.reshape(3, 1), world).ravel())
-        J_trunk = plant.CalcJacobianSpatialVelocity(context, kV, self.trunk_frame, np.zeros(3), world, world)
-        Jdot_v_trunk = plant.CalcBiasSpatialAcceleration(context, kV, self.trunk_frame, np.zeros(3), world, world)
+        nc = self.num_contacts
+        # Filled in place: stacking the per-contact results afterwards costs as much as one of them.
+        J_contacts = np.empty((3 * nc, self.nv))
+        Jdot_v_contacts = np.empty(3 * nc)
+        p_contacts = np.empty((nc, 3))
+        for i, (frame, point, column) in enumerate(
+            zip(self.contact_frames, self.contact_points, self._point_columns, strict=True)
+        ):
+            rows = slice(3 * i, 3 * i + 3)
+            J_contacts[rows] = plant.CalcJacobianTranslationalVelocity(context, kV, frame, point, world, world)
+            Jdot_v_contacts[rows] = plant.CalcBiasTranslationalAcceleration(context, kV, frame, point, world, world)[
+                :, 0
+            ]
+            p_contacts[i] = plant.CalcPointsPositions(context, frame, column, world)[:, 0]
+        origin = self._origin
+        J_trunk = plant.CalcJacobianSpatialVelocity(context, kV, self.trunk_frame, origin, world, world)
+        A_bias_trunk = plant.CalcBiasSpatialAcceleration(context, kV, self.trunk_frame, origin, world, world)
         X_WB = plant.CalcRelativeTransform(context, world, self.trunk_frame)
+        J_com = plant.CalcJacobianCenterOfMassTranslationalVelocity(context, kV, world, world)
         return RobotSnapshot(
             q=q,
             v=v,
             M=M,
             h=h,
-            J_contacts=np.vstack(Js),
-            Jdot_v_contacts=np.concatenate(biases),
-            p_contacts=np.array(positions),
+            J_contacts=J_contacts,
+            Jdot_v_contacts=Jdot_v_contacts,
+            p_contacts=p_contacts,
             J_trunk=J_trunk,
-            Jdot_v_trunk=np.concatenate([Jdot_v_trunk.rotational(), Jdot_v_trunk.translational()]),
+            Jdot_v_trunk=A_bias_trunk.get_coeffs(),  # [angular; translational]
             R_WB=X_WB.rotation().matrix(),
             p_WB=X_WB.translation(),
             p_com=plant.CalcCenterOfMassPositionInWorld(context),
-            J_com=plant.CalcJacobianCenterOfMassTranslationalVelocity(context, kV, world, world),
+            J_com=J_com,
             Jdot_v_com=(
                 plant.CalcBiasCenterOfMassTranslationalAcceleration(context, kV, world, world)
                 if self.com_bias
@@ -146,4 +150,6 @@ class ControllerModel:
             ),
             q_joints=np.asarray(q_joints, float),
             v_joints=np.asarray(v_joints, float),
+            V_trunk=J_trunk @ v,
+            v_com=J_com @ v,
         )

@@ -65,6 +65,10 @@ class StackBuilder:
         self.force_regularization = tasks.ContactForceRegularization()
         self.torque_min = tasks.TorqueMinimization()
         self.nominal_q = np.tile(np.asarray(c.nominal_leg_posture, float), 4)
+        self.leg_joint_indices = [np.arange(3 * i, 3 * i + 3) for i in range(4)]  # Unitree order
+        self.all_joints = np.arange(12)
+        self.zero_joint_targets = np.zeros(12)
+        self.nominal_leg_q = [self.nominal_q[joints] for joints in self.leg_joint_indices]
 
     @property
     def num_levels(self) -> int:
@@ -98,7 +102,7 @@ class StackBuilder:
         """Pedipulation legs (foot or joint reference) and idle swing legs (held at the nominal posture)."""
         rows = []
         for i, (leg, ref) in enumerate(zip(robot.LEG_NAMES, inputs.legs, strict=True)):
-            joints = np.arange(3 * i, 3 * i + 3)
+            joints = self.leg_joint_indices[i]
             if ref.mode == LEG_MODE_FOOT:
                 rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, ref.acceleration))
                 rows[-1].name = f"foot_{leg}"
@@ -106,16 +110,16 @@ class StackBuilder:
                 rows.append(self.leg_joints.rows(s, self.layout, joints, ref.position, ref.velocity, ref.acceleration))
                 rows[-1].name = f"joints_{leg}"
             elif not inputs.no_motion[i]:
-                zero = np.zeros(3)
-                rows.append(self.leg_joints.rows(s, self.layout, joints, self.nominal_q[joints], zero, zero))
+                zero = self.zero_joint_targets[:3]
+                rows.append(self.leg_joints.rows(s, self.layout, joints, self.nominal_leg_q[i], zero, zero))
                 rows[-1].name = f"idle_{leg}"
         return rows
 
     def regularisation(self, s: RobotSnapshot, inputs: ResolvedInputs) -> list[EqualityTask]:
         c = self.config
-        zero = np.zeros(12)
+        zero = self.zero_joint_targets
         return [
-            self.posture.rows(s, self.layout, np.arange(12), self.nominal_q, zero, zero, c.posture_weight),
+            self.posture.rows(s, self.layout, self.all_joints, self.nominal_q, zero, zero, c.posture_weight),
             self.force_regularization.rows(self.layout, inputs.ramp, self.total_weight, c.force_regularization_weight),
             self.torque_min.rows(s, self.layout, c.torque_weight),
         ]

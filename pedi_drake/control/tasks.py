@@ -66,6 +66,14 @@ class VariableLayout:
         return x[: self.nv], x[self.nv :].reshape(self.nc, 3)
 
 
+def contact_rows(selected: np.ndarray) -> np.ndarray:
+    """Rows (3 per contact) of the stacked contact Jacobian of the contacts where `selected` is true."""
+    return (3 * np.flatnonzero(selected)[:, None] + _XYZ).ravel()
+
+
+_XYZ = np.arange(3)
+
+
 def torque_map(s: RobotSnapshot, layout: VariableLayout) -> tuple[np.ndarray, np.ndarray]:
     """(T, t0) with joint torques tau = T x + t0 in Unitree order [N m] (actuated dynamics rows).
 
@@ -73,7 +81,10 @@ def torque_map(s: RobotSnapshot, layout: VariableLayout) -> tuple[np.ndarray, np
     """
     if s.torque_map is None:
         rows = layout.v_joints
-        s.torque_map = (np.hstack([s.M[rows, :], -s.J_contacts[:, rows].T]), s.h[rows].copy())
+        T = np.empty((len(rows), layout.size))
+        T[:, : layout.nv] = s.M[rows]
+        np.negative(s.J_contacts[:, rows].T, out=T[:, layout.nv :])
+        s.torque_map = (T, s.h[rows])
     return s.torque_map
 
 
@@ -82,7 +93,9 @@ class FloatingBaseDynamics:
 
     def rows(self, s: RobotSnapshot, layout: VariableLayout) -> EqualityTask:
         u = layout.unactuated
-        A = np.hstack([s.M[u, :], -s.J_contacts[:, u].T])
+        A = np.empty((len(u), layout.size))
+        A[:, : layout.nv] = s.M[u]
+        np.negative(s.J_contacts[:, u].T, out=A[:, layout.nv :])
         return EqualityTask("floating_base_dynamics", A, -s.h[u])
 
 
@@ -97,13 +110,11 @@ class ContactNoMotion:
     kd: float = 10.0
 
     def rows(self, s: RobotSnapshot, layout: VariableLayout, in_contact: np.ndarray) -> EqualityTask:
-        idx = np.flatnonzero(in_contact)
-        A = np.zeros((3 * len(idx), layout.size))
-        b = np.zeros(3 * len(idx))
-        for k, i in enumerate(idx):
-            J = s.J_contacts[3 * i : 3 * i + 3]
-            A[3 * k : 3 * k + 3, : layout.nv] = J
-            b[3 * k : 3 * k + 3] = -s.Jdot_v_contacts[3 * i : 3 * i + 3] - self.kd * (J @ s.v)
+        rows = contact_rows(in_contact)
+        J = s.J_contacts[rows]
+        A = np.zeros((len(rows), layout.size))
+        A[:, : layout.nv] = J
+        b = -s.Jdot_v_contacts[rows] - self.kd * (J @ s.v)
         return EqualityTask("contact_no_motion", A, b)
 
 
@@ -119,8 +130,23 @@ class ContactForceLimits:
     f_min: float = 5.0  # [N]
     f_max: float = 250.0  # [N]
     inscribed: bool = True  # use mu / sqrt(2): the pyramid inside the cone, conservative
+    # G by (nc, size, mu): built once, as only the bounds change from tick to tick.
+    _matrices: dict = dataclasses.field(default_factory=dict, init=False, repr=False, compare=False)
 
     def rows(self, layout: VariableLayout, ramp: np.ndarray, mu: float) -> InequalityTask:
+        h = np.zeros(6 * layout.nc)
+        h[0::6] = -self.f_min * ramp
+        h[1::6] = self.f_max * ramp
+        key = (layout.nc, layout.size, mu)
+        G = self._matrices.get(key)
+        if G is None:
+            G = self._matrices[key] = self._matrix(layout, mu)
+        return InequalityTask("contact_forces", G, h, hard=True)
+
+    def _matrix(self, layout: VariableLayout, mu: float) -> np.ndarray:
+        """G (6 nc, size), read-only: it changes only with the friction coefficient."""
+        if len(self._matrices) > 16:
+            self._matrices.clear()  # a friction that keeps changing: do not grow without bound
         mu_eff = mu / np.sqrt(2.0) if self.inscribed else mu
         local = np.array(
             [
@@ -133,12 +159,10 @@ class ContactForceLimits:
             ]
         )
         G = np.zeros((6 * layout.nc, layout.size))
-        h = np.zeros(6 * layout.nc)
         for i in range(layout.nc):
             G[6 * i : 6 * i + 6, layout.force(i)] = local
-            h[6 * i] = -ramp[i] * self.f_min
-            h[6 * i + 1] = ramp[i] * self.f_max
-        return InequalityTask("contact_forces", G, h, hard=True)
+        G.flags.writeable = False
+        return G
 
 
 @dataclasses.dataclass
@@ -150,7 +174,14 @@ class TorqueLimits:
     def rows(self, s: RobotSnapshot, layout: VariableLayout, effort_limit: np.ndarray) -> InequalityTask:
         T, t0 = torque_map(s, layout)
         limit = self.scale * effort_limit
-        return InequalityTask("torque_limits", np.vstack([T, -T]), np.concatenate([limit - t0, limit + t0]), hard=True)
+        m = len(t0)
+        G = np.empty((2 * m, T.shape[1]))
+        G[:m] = T
+        np.negative(T, out=G[m:])
+        h = np.empty(2 * m)
+        np.subtract(limit, t0, out=h[:m])
+        np.add(limit, t0, out=h[m:])
+        return InequalityTask("torque_limits", G, h, hard=True)
 
 
 @dataclasses.dataclass
@@ -174,22 +205,31 @@ class JointLimits:
     ) -> InequalityTask:
         T = self.horizon
         q, qd = s.q_joints, s.v_joints
-        upper = np.minimum(2.0 * (q_upper - self.margin - q - qd * T) / T**2, (v_max - qd) / T)
-        lower = np.maximum(2.0 * (q_lower + self.margin - q - qd * T) / T**2, (-v_max - qd) / T)
-        # Never demand an impossible interval: keep the braking side only.
-        bad = lower > upper
-        mid = 0.5 * (lower + upper)
-        upper = np.where(bad, mid, upper)
-        lower = np.where(bad, mid, lower)
-        return InequalityTask("joint_limits", layout.joint_selector, np.concatenate([upper, -lower]), hard=True)
+        # h = [upper; -lower], filled in place (this runs every tick; each numpy call costs ~1 us).
+        h = np.empty(2 * len(q))
+        upper, minus_lower = h[: len(q)], h[len(q) :]
+        reach = q + qd * T  # where the joint would coast to
+        np.minimum((2.0 / T**2) * (q_upper - self.margin - reach), (v_max - qd) / T, out=upper)
+        np.minimum((2.0 / T**2) * (reach - q_lower - self.margin), (v_max + qd) / T, out=minus_lower)
+        # Never demand an impossible interval (lower > upper): keep the braking side only.
+        bad = upper + minus_lower < 0.0
+        if bad.any():
+            mid = 0.5 * (upper - minus_lower)
+            upper[bad] = mid[bad]
+            minus_lower[bad] = -mid[bad]
+        return InequalityTask("joint_limits", layout.joint_selector, h, hard=True)
 
 
 def convex_hull_ccw(points_xy: np.ndarray) -> np.ndarray:
     """Vertices of the convex hull of `points_xy` (k, 2), counter-clockwise (Andrew's monotone chain)."""
+    return np.array(_hull_vertices(points_xy))
+
+
+def _hull_vertices(points_xy: np.ndarray) -> list[tuple[float, float]]:
     # Python floats: the chain below does scalar arithmetic, slow on numpy scalars.
     pts = sorted(map(tuple, np.asarray(points_xy, float).tolist()))
     if len(pts) <= 2:
-        return np.array(pts)
+        return pts
 
     def half(sequence):
         chain: list[tuple[float, float]] = []
@@ -203,16 +243,23 @@ def convex_hull_ccw(points_xy: np.ndarray) -> np.ndarray:
         return chain
 
     lower, upper = half(pts), half(reversed(pts))
-    return np.array(lower[:-1] + upper[:-1])
+    return lower[:-1] + upper[:-1]
 
 
 def polygon_halfplanes(vertices_xy: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """(N, d) with N p <= d: the convex hull of `vertices_xy` (k >= 3, [m]) shrunk by `margin` [m]."""
-    hull = convex_hull_ccw(vertices_xy)
-    edges = np.roll(hull, -1, axis=0) - hull
-    normals = np.column_stack([edges[:, 1], -edges[:, 0]])  # outward for a counter-clockwise ring
-    normals /= np.sqrt(np.sum(normals * normals, axis=1))[:, None]
-    return normals, np.sum(normals * hull, axis=1) - margin
+    hull = _hull_vertices(vertices_xy)
+    normals, offsets = [], []
+    # Scalar maths over the few edges (at most 4 feet and the prongs): a quarter of the numpy cost.
+    for (ax, ay), (bx, by) in zip(hull, hull[1:] + hull[:1], strict=True):
+        nx, ny = by - ay, ax - bx  # outward for a counter-clockwise ring
+        length = math.hypot(nx, ny)
+        if length < 1e-12:
+            continue  # coincident points: no edge
+        nx, ny = nx / length, ny / length
+        normals.append((nx, ny))
+        offsets.append(nx * ax + ny * ay - margin)
+    return np.array(normals).reshape(-1, 2), np.array(offsets)
 
 
 def rectangle_halfplanes(centre: np.ndarray, half_sizes: np.ndarray, yaw: float) -> tuple[np.ndarray, np.ndarray]:
@@ -332,6 +379,8 @@ class JointPosture:
 
     gains: PdGains
     name: str = "joint_posture"
+    # Selection matrices by (size, joints...): constant, so built once.
+    _selectors: dict = dataclasses.field(default_factory=dict, init=False, repr=False, compare=False)
 
     def rows(
         self,
@@ -344,20 +393,33 @@ class JointPosture:
         weight: float = 1.0,
     ) -> EqualityTask:
         joints = np.asarray(joints, int)
-        A = np.zeros((len(joints), layout.size))
-        A[np.arange(len(joints)), layout.v_joints[joints]] = 1.0
+        key = (layout.size, *joints.tolist())
+        A = self._selectors.get(key)
+        if A is None:
+            A = np.zeros((len(joints), layout.size))
+            A[np.arange(len(joints)), layout.v_joints[joints]] = 1.0
+            A.flags.writeable = False
+            self._selectors[key] = A
         b = qdd_ref + self.gains.kp * (q_ref - s.q_joints[joints]) + self.gains.kd * (qd_ref - s.v_joints[joints])
         return EqualityTask(self.name, A, b, weight)
+
+
+@functools.lru_cache(maxsize=8)
+def _force_selector(nv: int, nc: int) -> np.ndarray:
+    """(3 nc, nv + 3 nc) [0 I]: the contact forces of x (read-only)."""
+    A = np.zeros((3 * nc, nv + 3 * nc))
+    A[:, nv:] = np.eye(3 * nc)
+    A.flags.writeable = False
+    return A
 
 
 class ContactForceRegularization:
     """Contact forces towards an even share of the weight over the loaded contacts (weighted rows)."""
 
     def rows(self, layout: VariableLayout, ramp: np.ndarray, total_weight: float, weight: float) -> EqualityTask:
-        A = np.zeros((3 * layout.nc, layout.size))
-        A[:, layout.nv :] = np.eye(3 * layout.nc)
+        A = _force_selector(layout.nv, layout.nc)
         b = np.zeros(3 * layout.nc)
-        share = total_weight / max(float(np.sum(ramp)), 1e-6)
+        share = total_weight / max(float(ramp.sum()), 1e-6)
         b[2::3] = ramp * share
         return EqualityTask("force_regularization", A, b, weight)
 

@@ -71,6 +71,17 @@ def diagnostics_layout(num_contacts: int) -> dict[str, slice]:
     return layout
 
 
+def _all_finite(*arrays: np.ndarray) -> bool:
+    """Whether every entry of every array is finite (one isfinite over them all: the cheapest test
+    at these sizes, and it runs twice a tick)."""
+    return bool(np.isfinite(np.concatenate(arrays)).all())
+
+
+def _clip(x: np.ndarray, lower, upper) -> np.ndarray:
+    """np.clip without its dispatch overhead (several microseconds on 12-vectors)."""
+    return np.minimum(np.maximum(x, lower), upper)
+
+
 class WholeBodyController(LeafSystem):
     """Hierarchical whole-body QP controller for the Go1 (and its prongs)."""
 
@@ -98,6 +109,7 @@ class WholeBodyController(LeafSystem):
                 f"got {len(config.level_weights)} weights"
             )
         self.diag = diagnostics_layout(nc)
+        self.command_gains = np.concatenate([np.full(12, config.joint_kp), np.full(12, config.joint_kd)])
         self.default_contact_set = references.contact_set_vector(num_prongs=nc - 4)
 
         self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
@@ -137,8 +149,8 @@ class WholeBodyController(LeafSystem):
         last_command = context.get_discrete_state(self.command_state).value().copy()
         diag = context.get_discrete_state(self.diagnostics_state).value().copy()
 
-        contact_set = np.clip(self._optional(self.contact_set_port, context, self.default_contact_set), 0.0, 1.0)
-        if not np.all(np.isfinite(np.concatenate([base, q, qd, contact_set]))):
+        contact_set = _clip(self._optional(self.contact_set_port, context, self.default_contact_set), 0.0, 1.0)
+        if not _all_finite(base, q, qd, contact_set):
             self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
             return
         if hold[0] == 0.0:
@@ -148,27 +160,28 @@ class WholeBodyController(LeafSystem):
             q_ref, qd_ref = q.copy(), qd.copy()
             ramp = contact_set.copy()
         step = c.period / max(c.contact_ramp_time, 1e-9)
-        ramp = np.clip(ramp + np.clip(contact_set - ramp, -step, step), 0.0, 1.0)
+        ramp = _clip(ramp + _clip(contact_set - ramp, -step, step), 0.0, 1.0)
 
         default_body = np.concatenate([hold[1:4], hold[4:8], np.zeros(12)])
         body_x = self._optional(self.body_reference_port, context, default_body)
         leg_x = self._optional(self.leg_reference_port, context, np.zeros(references.LEG_REFERENCE_SIZE))
         polygon_x = self._optional(self.safety_polygon_port, context, np.zeros(references.SAFETY_POLYGON_SIZE))
         mu_x = self._optional(self.friction_port, context, np.array([c.friction]))
-        if not all(np.all(np.isfinite(x)) for x in (body_x, leg_x, polygon_x, mu_x)) or mu_x[0] <= 0.0:
+        if not _all_finite(body_x, leg_x, polygon_x, mu_x) or mu_x[0] <= 0.0:
             self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
             return
 
         snapshot = self.model.update(base, q, qd)
         no_motion = (contact_set > 0.5) | (ramp > 0.0)
         loaded = contact_set > 0.5
-        if np.any(loaded):
-            ground = float(np.mean(snapshot.p_contacts[loaded, 2])) - robot.FOOT_RADIUS
+        num_loaded = int(np.count_nonzero(loaded))
+        if num_loaded:
+            ground = float(snapshot.p_contacts[loaded, 2].sum()) / num_loaded - robot.FOOT_RADIUS
         else:
             ground = 0.0
         if polygon_x[0] > 0.5:
             N, d = tasks.rectangle_halfplanes(polygon_x[1:3], polygon_x[3:5], polygon_x[5])
-        elif np.count_nonzero(loaded) >= 3:
+        elif num_loaded >= 3:
             N, d = tasks.polygon_halfplanes(snapshot.p_contacts[loaded, :2], c.safety_margin)
         else:
             N, d = np.zeros((0, 2)), np.zeros(0)
@@ -190,7 +203,7 @@ class WholeBodyController(LeafSystem):
             else:
                 solution = solve_hqp(levels, self.layout.size, self.hqp_settings)
             x = solution.x
-            if not np.all(np.isfinite(x)):
+            if not _all_finite(x):
                 raise QpInfeasible("non-finite QP solution")
         except (QpInfeasible, np.linalg.LinAlgError):
             self._fail(discrete_state, last_command, q, diag, STATUS_QP_FAILED, start, ramp=ramp, hold=hold)
@@ -202,11 +215,11 @@ class WholeBodyController(LeafSystem):
         qdd = vdot[self.layout.v_joints]
         # Integrate the QP's accelerations into the joint reference, kept near the measurement so
         # a long stall (e.g. contact with an obstacle) cannot wind up the PD.
-        qd_ref = np.clip(
+        qd_ref = _clip(
             qd_ref + qdd * c.period, qd - c.max_reference_rate_deviation, qd + c.max_reference_rate_deviation
         )
-        q_ref = np.clip(q_ref + qd_ref * c.period, q - c.max_reference_deviation, q + c.max_reference_deviation)
-        command = np.concatenate([q_ref, qd_ref, np.full(12, c.joint_kp), np.full(12, c.joint_kd), tau])
+        q_ref = _clip(q_ref + qd_ref * c.period, q - c.max_reference_deviation, q + c.max_reference_deviation)
+        command = np.concatenate([q_ref, qd_ref, self.command_gains, tau])
 
         diag[self.diag["status"]] = STATUS_OK
         diag[self.diag["solve_time"]] = solution.solve_time

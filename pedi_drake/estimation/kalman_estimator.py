@@ -19,18 +19,20 @@ Only go1.* signals are read, in simulation and on hardware alike.
 """
 
 import dataclasses
+import functools
+import math
 
 import numpy as np
-from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RotationMatrix
 from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
+from scipy.linalg import lapack
 
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.vector3 import cross3
+from pedi_drake.vector3 import cross3, rotation_matrix_wxyz
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
 NUM_STATES = 18
@@ -43,6 +45,27 @@ _I3.flags.writeable = False
 
 def _foot(i: int) -> slice:
     return slice(6 + 3 * i, 9 + 3 * i)
+
+
+_FEET = slice(6, 18)
+_DIAGONAL = np.diag_indices(NUM_STATES)
+# Rows of the four foot-position measurements p_WF - p_WB (they do not change).
+_FOOT_POSITION_ROWS = np.zeros((12, NUM_STATES))
+for _i in range(4):
+    _FOOT_POSITION_ROWS[3 * _i : 3 * _i + 3, _P] = -_I3
+    _FOOT_POSITION_ROWS[3 * _i : 3 * _i + 3, _foot(_i)] = _I3
+_FOOT_POSITION_ROWS.flags.writeable = False
+
+
+@functools.lru_cache(maxsize=8)
+def _velocity_rows(num_stance: int) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, columns) of the ones of the no-slip rows H[12:12 + 3 ns, v_WB] (identity blocks)."""
+    return np.arange(12, 12 + 3 * num_stance), np.tile(np.arange(3, 6), num_stance)
+
+
+def _skew(w: np.ndarray) -> np.ndarray:
+    """[w]x, with [w]x p = w x p."""
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
 def imu_offset_B() -> np.ndarray:
@@ -61,18 +84,24 @@ class ImuSample:
     R_WB: np.ndarray
     w_B: np.ndarray
     f_B: np.ndarray
+    # R_WB's quaternion (unit norm, w >= 0); from R_WB when not given.
+    quaternion_wxyz: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.quaternion_wxyz is None:
+            object.__setattr__(self, "quaternion_wxyz", RotationMatrix(self.R_WB).ToQuaternion().wxyz())
 
     @staticmethod
     def from_vector(imu: np.ndarray) -> "ImuSample | None":
         """None when the quaternion is not usable (all zeros before the first message, NaN)."""
         imu = np.asarray(imu, dtype=float)
-        if imu.shape != (10,) or not np.all(np.isfinite(imu)):
+        if imu.shape != (10,) or not np.isfinite(imu).all():
             return None
-        norm = np.linalg.norm(imu[0:4])
+        norm = math.sqrt(float(imu[0:4] @ imu[0:4]))
         if norm < 0.5:
             return None
-        R = RotationMatrix(Quaternion(imu[0:4] / norm)).matrix()
-        return ImuSample(R, imu[4:7].copy(), imu[7:10].copy())
+        quaternion = imu[0:4] / (norm if imu[0] >= 0.0 else -norm)
+        return ImuSample(rotation_matrix_wxyz(quaternion), imu[4:7].copy(), imu[7:10].copy(), quaternion)
 
 
 def rolling_velocities_W(R_WB: np.ndarray, w_B: np.ndarray, q: np.ndarray, qd: np.ndarray, radius: float) -> np.ndarray:
@@ -82,13 +111,17 @@ def rolling_velocities_W(R_WB: np.ndarray, w_B: np.ndarray, q: np.ndarray, qd: n
     (trunk frame), and its centre moves at w_calf x (radius z) above the contact point on flat
     ground. Standing up turns the calves by about a radian: 2 cm of travel the filter must expect.
     """
-    rolling = np.empty((4, 3))
-    up = np.array([0.0, 0.0, radius])
-    for i in range(4):
-        hip, thigh, calf = q[3 * i : 3 * i + 3]
-        rate_hip, rate_sagittal = qd[3 * i], qd[3 * i + 1] + qd[3 * i + 2]
-        w_calf_B = w_B + np.array([rate_hip, np.cos(hip) * rate_sagittal, np.sin(hip) * rate_sagittal])
-        rolling[i] = cross3(R_WB @ w_calf_B, up)
+    q, qd = np.asarray(q, float).reshape(4, 3), np.asarray(qd, float).reshape(4, 3)
+    hip, rate_sagittal = q[:, 0], qd[:, 1] + qd[:, 2]
+    w_calf_B = np.empty((4, 3))
+    w_calf_B[:, 0] = qd[:, 0]
+    w_calf_B[:, 1] = np.cos(hip) * rate_sagittal
+    w_calf_B[:, 2] = np.sin(hip) * rate_sagittal
+    w_calf_W = (w_calf_B + w_B) @ R_WB.T
+    # w x (0, 0, radius) = radius (w_y, -w_x, 0)
+    rolling = np.zeros((4, 3))
+    rolling[:, 0] = radius * w_calf_W[:, 1]
+    rolling[:, 1] = -radius * w_calf_W[:, 0]
     return rolling
 
 
@@ -142,10 +175,9 @@ class FloatingBaseKalmanFilter:
         x = x.copy()
         x[_P] += x[_V] * dt + 0.5 * a_W * dt * dt
         x[_V] += a_W * dt
+        in_contact = np.asarray(contact[:4], bool)
         if rolling is not None:
-            for i in range(4):
-                if contact[i]:
-                    x[_foot(i)] += rolling[i] * dt
+            x[_FEET] += (rolling * (dt * in_contact)[:, None]).ravel()
         # F = I + dt E_pv: P <- F P F^T + Q, written out to skip two 18x18 products.
         P = P.copy()
         P[_P, :] += dt * P[_V, :]
@@ -153,10 +185,9 @@ class FloatingBaseKalmanFilter:
         q = np.empty(NUM_STATES)
         q[_P] = c.position_process_noise**2 * dt
         q[_V] = c.accelerometer_noise**2 * dt
-        for i in range(4):
-            sigma = c.stance_foot_process_noise if contact[i] else c.swing_foot_process_noise
-            q[_foot(i)] = sigma**2 * dt
-        P[np.diag_indices(NUM_STATES)] += q
+        sigma = np.where(in_contact, c.stance_foot_process_noise, c.swing_foot_process_noise)
+        q[_FEET] = np.repeat(sigma * sigma * dt, 3)
+        P[_DIAGONAL] += q
         return x, P
 
     def update(
@@ -176,37 +207,43 @@ class FloatingBaseKalmanFilter:
         c = self.config
         R = imu.R_WB
         p_BF, J = foot_kinematics_B(q)
-        stance = [i for i in range(4) if contact[i]]
+        in_contact = np.asarray(contact[:4], bool)
+        stance = np.flatnonzero(in_contact)
+        ns = len(stance)
         use_height = c.ground_height_measurement
         tips = self.prong_tips_B if prongs_loaded else np.zeros((0, 3))
         # No foot or prong loaded: the trunk rests on the ground (on its belly or knees) while
         # the legs move freely; it does not slide, so a zero horizontal velocity keeps the IMU
         # from drifting while the legs unfold (the knees may push it up: z is left to the IMU).
-        resting = not stance and not len(tips)
-        m = 12 + 3 * len(stance) + (len(stance) if use_height else 0) + (2 if resting else 0) + 4 * len(tips)
+        resting = ns == 0 and not len(tips)
+        m = 12 + 3 * ns + (ns if use_height else 0) + (2 if resting else 0) + 4 * len(tips)
         H = np.zeros((m, NUM_STATES))
         y = np.empty(m)
         noise = np.empty(m)
-        for i in range(4):
-            rows = slice(3 * i, 3 * i + 3)
-            H[rows, _P] = -_I3
-            H[rows, _foot(i)] = _I3
-            y[rows] = R @ p_BF[i]
-            # A foot in the air is carried by the kinematics: a loose measurement of it costs nothing.
-            noise[rows] = c.foot_position_noise**2 if contact[i] else c.foot_position_noise**2 * 4.0
+        # Every foot: p_WF - p_WB = R p_BF. A foot in the air is carried by the kinematics: a
+        # loose measurement of it costs nothing.
+        H[:12] = _FOOT_POSITION_ROWS
+        y[:12] = (p_BF @ R.T).ravel()
+        sigma2 = c.foot_position_noise**2
+        noise[:12] = np.repeat(np.where(in_contact, sigma2, 4.0 * sigma2), 3)
         row = 12
-        for i in stance:
-            v_BF = J[i] @ qd[3 * i : 3 * i + 3] + cross3(imu.w_B, p_BF[i])
-            H[row : row + 3, _V] = _I3
-            y[row : row + 3] = -(R @ v_BF) + (rolling[i] if rolling is not None else 0.0)
-            noise[row : row + 3] = c.foot_velocity_noise**2
-            row += 3
-        if use_height:
-            for i in stance:
-                H[row, 6 + 3 * i + 2] = 1.0
-                y[row] = self.foot_radius
-                noise[row] = c.ground_height_noise**2
-                row += 1
+        if ns:
+            # Feet in contact do not slip: v_WB = -R (J qd + w x p_BF) + rolling.
+            rows = slice(row, row + 3 * ns)
+            legs_qd = np.asarray(qd, float).reshape(4, 3)[stance]
+            v_BF = (J[stance] @ legs_qd[:, :, None])[:, :, 0] + p_BF[stance] @ _skew(imu.w_B).T
+            v_WB = -(v_BF @ R.T)
+            if rolling is not None:
+                v_WB += rolling[stance]
+            H[_velocity_rows(ns)] = 1.0
+            y[rows] = v_WB.ravel()
+            noise[rows] = c.foot_velocity_noise**2
+            row += 3 * ns
+            if use_height:
+                H[np.arange(row, row + ns), 6 + 3 * stance + 2] = 1.0
+                y[row : row + ns] = self.foot_radius
+                noise[row : row + ns] = c.ground_height_noise**2
+                row += ns
         for tip in tips:
             H[row : row + 3, _V] = _I3
             y[row : row + 3] = -(R @ cross3(imu.w_B, tip))
@@ -224,9 +261,12 @@ class FloatingBaseKalmanFilter:
         PHt = P @ H.T
         S = H @ PHt
         S[np.diag_indices(m)] += noise
-        K = np.linalg.solve(S, PHt.T).T
-        x = x + K @ innovation
-        P = P - K @ PHt.T
+        # S is symmetric positive definite: a Cholesky solve, at a third of numpy.linalg.solve's cost.
+        _, KT, info = lapack.dposv(S, PHt.T)
+        if info != 0:
+            KT = np.linalg.solve(S, PHt.T)
+        x = x + KT.T @ innovation
+        P = P - KT.T @ PHt.T
         P = 0.5 * (P + P.T)
         return x, P
 
@@ -281,7 +321,7 @@ class KalmanEstimator(LeafSystem):
         qd = np.asarray(self.velocity_port.Eval(context), dtype=float)
         force = np.asarray(self.foot_contact_port.Eval(context), dtype=float)
         schedule = self.contact_set_port.Eval(context) if self.contact_set_port.HasValue(context) else None
-        finite = all(np.all(np.isfinite(v)) for v in (q, qd, force))
+        finite = bool(np.isfinite(np.concatenate([q, qd, force])).all())
         return imu, q, qd, force, schedule, finite
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
@@ -301,12 +341,12 @@ class KalmanEstimator(LeafSystem):
             x, P = self.filter.predict(x, P, imu, contact, self.config.period, rolling)
         prongs_loaded = schedule is not None and len(schedule) > 4 and bool(np.any(np.asarray(schedule[4:]) > 0.5))
         x, P = self.filter.update(x, P, imu, q, qd, contact, rolling, prongs_loaded)
-        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(P))):
+        if not (np.isfinite(x).all() and np.isfinite(P).all()):
             return
         s[0] = 1.0
         s[self._layout["x"]] = x
         s[self._layout["P"]] = P.ravel()
-        s[self._quat] = RotationMatrix(imu.R_WB).ToQuaternion().wxyz()
+        s[self._quat] = imu.quaternion_wxyz
         s[self._w] = imu.R_WB @ imu.w_B
         discrete_state.get_mutable_vector(self._state).SetFromVector(s)
 

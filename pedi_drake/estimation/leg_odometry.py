@@ -52,8 +52,8 @@ def foot_kinematics_B(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     `q` holds the 12 joint angles in Unitree order [rad].
     """
     q = np.asarray(q, dtype=float).tolist()
-    positions = np.empty((4, 3))
-    jacobians = np.empty((4, 3, 3))
+    # Python floats throughout, one array each at the end: numpy calls per leg cost more than the maths.
+    positions, jacobians = [], []
     for i, o in enumerate(_offsets()):
         q0, q1, q2 = q[3 * i : 3 * i + 3]
         c0, s0 = math.cos(q0), math.sin(q0)
@@ -64,9 +64,9 @@ def foot_kinematics_B(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         rv = _rot_y(c1, s1, v)
         w = (o.p_HT[0] + rv[0], o.p_HT[1] + rv[1], o.p_HT[2] + rv[2])  # hip joint -> foot, hip frame
         rw = _rot_x(c0, s0, w)
-        positions[i] = (o.p_BH[0] + rw[0], o.p_BH[1] + rw[1], o.p_BH[2] + rw[2])
+        positions.append((o.p_BH[0] + rw[0], o.p_BH[1] + rw[1], o.p_BH[2] + rw[2]))
         # d/dq0: x x (Rx w); d/dq1: Rx (y x Ry v); d/dq2: Rx Ry1 (y x Ry2 p_CF). (y x u = (u_z, 0, -u_x))
         d1 = _rot_x(c0, s0, (rv[2], 0.0, -rv[0]))
         d2 = _rot_x(c0, s0, _rot_y(c1, s1, (f[2], 0.0, -f[0])))
-        jacobians[i] = np.array([[0.0, d1[0], d2[0]], [-rw[2], d1[1], d2[1]], [rw[1], d1[2], d2[2]]])
-    return positions, jacobians
+        jacobians.append(((0.0, d1[0], d2[0]), (-rw[2], d1[1], d2[1]), (rw[1], d1[2], d2[2])))
+    return np.array(positions), np.array(jacobians)

@@ -65,14 +65,19 @@ class MissionManager(LeafSystem):
         self._progress = self.DeclareAbstractState(AbstractValue.Make(MissionProgress()))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
+        # Trajectory samples change with time; the contact set and the status only with the progress
+        # (so they are computed once per mission update, not at every step).
         deps = {self.time_ticket(), self.abstract_state_ticket(self._progress)}
+        progress_only = {self.abstract_state_ticket(self._progress)}
         self.DeclareVectorOutputPort(
             "body_reference", controller_refs.BODY_REFERENCE_SIZE, self._calc_body, prerequisites_of_calc=deps
         )
         self.DeclareVectorOutputPort(
             "leg_reference", controller_refs.LEG_REFERENCE_SIZE, self._calc_legs, prerequisites_of_calc=deps
         )
-        self.DeclareVectorOutputPort("contact_set", num_contacts, self._calc_contacts, prerequisites_of_calc=deps)
+        self.DeclareVectorOutputPort(
+            "contact_set", num_contacts, self._calc_contacts, prerequisites_of_calc=progress_only
+        )
         self.DeclareVectorOutputPort(
             "safety_polygon",
             controller_refs.SAFETY_POLYGON_SIZE,
@@ -83,7 +88,7 @@ class MissionManager(LeafSystem):
             "friction", 1, lambda c, o: o.SetFromVector([self._friction]), prerequisites_of_calc={self.nothing_ticket()}
         )
         self.DeclareVectorOutputPort(
-            "mission_status", MISSION_STATUS_SIZE, self._calc_status, prerequisites_of_calc=deps
+            "mission_status", MISSION_STATUS_SIZE, self._calc_status, prerequisites_of_calc=progress_only
         )
 
     @property

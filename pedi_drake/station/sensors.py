@@ -12,7 +12,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from pedi_drake import robot
 from pedi_drake.station.scenario import SensorNoiseConfig
-from pedi_drake.vector3 import cross3
+from pedi_drake.vector3 import cross3, rotation_matrix_wxyz
 
 IMU_SIZE = 10  # quaternion w, x, y, z; gyro (3); accelerometer (3)
 
@@ -46,7 +46,18 @@ class Go1SensorModel(LeafSystem):
         self._period = sample_period
         trunk = plant.GetBodyByName(robot.TRUNK_BODY_NAME, plant_map.model)
         imu = plant.GetBodyByName(robot.IMU_BODY_NAME, plant_map.model)
-        self._trunk_index = int(trunk.index())
+        if not trunk.is_floating_base_body() or not trunk.has_quaternion_dofs():
+            raise ValueError(f"Go1SensorModel: the trunk {trunk.name()!r} must be a quaternion floating body")
+        # The trunk's floating joint: q = [quaternion R_WB (w, x, y, z), p_WB], v = [w_WB, v_WB]
+        # (world frame), so its slices of the state and of vdot are the trunk's pose, velocity
+        # and acceleration: cheaper to read than the plant's per-body output ports (a Python
+        # object per body each).
+        self._quaternion = slice(trunk.floating_positions_start(), trunk.floating_positions_start() + 4)
+        v_start = self._nq + trunk.floating_velocities_start_in_v()
+        self._w_WB = slice(v_start, v_start + 3)
+        a_start = trunk.floating_velocities_start_in_v()
+        self._alpha_WB = slice(a_start, a_start + 3)
+        self._a_WB = slice(a_start + 3, a_start + 6)
         # The IMU is welded to the trunk with the trunk's orientation; keep its offset p_BI.
         context = plant.CreateDefaultContext()
         self._p_BI = plant.CalcRelativeTransform(context, trunk.body_frame(), imu.body_frame()).translation()
@@ -55,13 +66,7 @@ class Go1SensorModel(LeafSystem):
 
         nx = plant.num_positions() + plant.num_velocities()
         self._state = self.DeclareVectorInputPort("plant_state", nx)
-        self._poses = self.DeclareAbstractInputPort("body_poses", plant.get_body_poses_output_port().Allocate())
-        self._velocities = self.DeclareAbstractInputPort(
-            "body_spatial_velocities", plant.get_body_spatial_velocities_output_port().Allocate()
-        )
-        self._accelerations = self.DeclareAbstractInputPort(
-            "body_spatial_accelerations", plant.get_body_spatial_accelerations_output_port().Allocate()
-        )
+        self._vdot = self.DeclareVectorInputPort("generalized_acceleration", plant.num_velocities())
         self._contacts = self.DeclareAbstractInputPort(
             "contact_results", plant.get_contact_results_output_port().Allocate()
         )
@@ -101,15 +106,14 @@ class Go1SensorModel(LeafSystem):
         output.SetFromVector(tau)
 
     def _calc_imu(self, context, output: BasicVector) -> None:
-        X_WB = self._poses.Eval(context)[self._trunk_index]
-        V_WB = self._velocities.Eval(context)[self._trunk_index]
-        A_WB = self._accelerations.Eval(context)[self._trunk_index]
-        R_WB = X_WB.rotation().matrix()
-        w_W = V_WB.rotational()
-        alpha_W = A_WB.rotational()
+        x = self._state.Eval(context)
+        vdot = self._vdot.Eval(context)
+        R_WB = rotation_matrix_wxyz(x[self._quaternion])
+        w_W = x[self._w_WB]
+        alpha_W = vdot[self._alpha_WB]
         p_BI_W = R_WB @ self._p_BI
         # Acceleration of the IMU point, then the specific force a - g in the trunk frame.
-        a_WI = A_WB.translational() + cross3(alpha_W, p_BI_W) + cross3(w_W, cross3(w_W, p_BI_W))
+        a_WI = vdot[self._a_WB] + cross3(alpha_W, p_BI_W) + cross3(w_W, cross3(w_W, p_BI_W))
         gyro = R_WB.T @ w_W
         accel = R_WB.T @ (a_WI - self._gravity_W)
         rng = self._rng(context, 3)
@@ -132,12 +136,17 @@ class Go1SensorModel(LeafSystem):
 
 def foot_normal_forces(contact_results: ContactResults, foot_bodies) -> np.ndarray:
     """Normal contact force magnitude on each foot [N], summed over its point contacts."""
-    forces = np.zeros(len(foot_bodies))
+    foot_of_body = {int(body): k for k, body in enumerate(foot_bodies)}
+    forces = [0.0] * len(foot_bodies)
     for i in range(contact_results.num_point_pair_contacts()):
         info = contact_results.point_pair_contact_info(i)
-        normal = info.point_pair().nhat_BA_W
-        force = abs(float(np.dot(info.contact_force(), normal)))
-        for k, body in enumerate(foot_bodies):
-            if info.bodyA_index() == body or info.bodyB_index() == body:
+        a, b = foot_of_body.get(int(info.bodyA_index())), foot_of_body.get(int(info.bodyB_index()))
+        if a is None and b is None:
+            continue
+        # Scalar maths: this runs for every contact every tick, and np.dot costs more than the rest.
+        f, n = info.contact_force().tolist(), info.point_pair().nhat_BA_W.tolist()
+        force = abs(f[0] * n[0] + f[1] * n[1] + f[2] * n[2])
+        for k in (a, b):
+            if k is not None:
                 forces[k] += force
-    return forces
+    return np.array(forces)

@@ -49,11 +49,7 @@ def MakeSimulationStation(scenario: Scenario, meshcat: Meshcat | None = None) ->
         Go1SensorModel(plant, plant_map, scenario.sensor_noise, scenario.random_seed, plant.time_step()),
     )
     builder.Connect(plant.get_state_output_port(), sensors.GetInputPort("plant_state"))
-    builder.Connect(plant.get_body_poses_output_port(), sensors.GetInputPort("body_poses"))
-    builder.Connect(plant.get_body_spatial_velocities_output_port(), sensors.GetInputPort("body_spatial_velocities"))
-    builder.Connect(
-        plant.get_body_spatial_accelerations_output_port(), sensors.GetInputPort("body_spatial_accelerations")
-    )
+    builder.Connect(plant.get_generalized_acceleration_output_port(), sensors.GetInputPort("generalized_acceleration"))
     builder.Connect(plant.get_contact_results_output_port(), sensors.GetInputPort("contact_results"))
     builder.Connect(motors.GetOutputPort("torque"), sensors.GetInputPort("motor_torque"))
     for name in GO1_OUTPUT_PORTS:
