@@ -93,8 +93,17 @@ class QuinticSegment:
     def sample(self, t: float) -> TrajectorySample:
         """Position, velocity and acceleration at time `t` [s]."""
         s, ds, dds = quintic_time_law(t, self.t0, self.duration)
+        if s == 0.0 or s == 1.0:
+            return self._at_rest[int(s)]
         delta = self.end - self.start
         return TrajectorySample(self.start + s * delta, ds * delta, dds * delta)
+
+    @functools.cached_property
+    def _at_rest(self) -> tuple[TrajectorySample, TrajectorySample]:
+        """The samples before the start and after the end (read-only arrays, made once)."""
+        zero = np.zeros_like(self.start)
+        zero.flags.writeable = False
+        return TrajectorySample(self.start, zero, zero), TrajectorySample(self.end, zero, zero)
 
 
 @dataclasses.dataclass(frozen=True)

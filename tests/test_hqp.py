@@ -188,3 +188,18 @@ def test_weighted_mode_matches_brute_force_weighted_qp(seed):
     result = ClarabelSolver().Solve(prog)
     assert result.is_success()
     np.testing.assert_allclose(solution.x, result.GetSolution(x), atol=1e-4)
+
+
+@pytest.mark.parametrize("target, expected", [(0.5, 0.5), (2.0, 1.0)])
+@pytest.mark.parametrize("rows", ["square", "tall"])
+def test_an_unconstrained_optimum_is_kept_only_when_it_meets_the_constraints(target, expected, rows):
+    # x0 <= 1 (hard) above a target x = (target, 0): inside the bound the least-squares step is the
+    # answer (taken without the QP), beyond it the QP stops x0 at the bound. "tall" repeats a row,
+    # the shape of the controller's regularisation level (solved by its normal equations).
+    A = np.eye(2) if rows == "square" else np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 0.0]])
+    b = A @ np.array([target, 0.0])
+    levels = [
+        Level("bound", [], [InequalityTask("x0<=1", np.array([[1.0, 0.0]]), np.array([1.0]))]),
+        Level("target", [EqualityTask("target", A, b)]),
+    ]
+    np.testing.assert_allclose(solve_hqp(levels, 2).x, [expected, 0.0], atol=1e-6)

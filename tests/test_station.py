@@ -6,7 +6,7 @@ from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.station.motor_model import motor_torque, pack_command
+from pedi_drake.station.motor_model import Go1MotorModel, motor_torque, pack_command
 from pedi_drake.station.scenario import Scenario, load_scenario
 from pedi_drake.station.station import STATION_PORTS, MakeStation
 
@@ -51,6 +51,28 @@ def test_motor_model_clamps_to_effort_limits_and_zeroes_non_finite_commands():
     command[48] = np.nan
     tau = motor_torque(command, q, q)
     assert tau[0] == 0.0 and np.all(tau[1:] == 1.0)
+
+
+def test_the_motor_model_system_applies_the_motor_law_in_plant_order():
+    plant, plant_map = robot.make_go1_plant()
+    motors = Go1MotorModel(plant_map, plant.num_positions(), plant.num_velocities(), plant.num_actuators())
+    context = motors.CreateDefaultContext()
+    rng = np.random.default_rng(3)
+    state = rng.normal(size=plant.num_positions() + plant.num_velocities())
+    q = plant_map.joint_positions(state[: plant.num_positions()])
+    qd = plant_map.joint_velocities(state[plant.num_positions() :])
+    command = pack_command(rng.normal(size=12), rng.normal(size=12), 40.0, 1.5, 5.0 * rng.normal(size=12))
+    command[40] = np.inf  # motor 4's kd: that motor gets no torque
+    motors.GetInputPort("command").FixValue(context, command)
+    motors.GetInputPort("plant_state").FixValue(context, state)
+    expected = motor_torque(command, q, qd)
+    assert expected[4] == 0.0 and np.count_nonzero(expected) == 11
+    np.testing.assert_allclose(motors.GetOutputPort("torque").Eval(context), expected, rtol=1e-14)
+    np.testing.assert_allclose(
+        motors.GetOutputPort("actuation").Eval(context),
+        plant_map.actuation(expected, plant.num_actuators()),
+        rtol=1e-14,
+    )
 
 
 @pytest.fixture(scope="module")

@@ -228,6 +228,24 @@ def _upper_triangle_mask(m: int) -> np.ndarray:
     return mask
 
 
+def _least_squares_step(A: np.ndarray, r: np.ndarray, tolerance: float):
+    """(argmin ||A z - r|| of least norm, or None when A is numerically rank-deficient and tall;
+    the `_row_space_split` of A when it was computed, else None)."""
+    m, n = A.shape
+    if m <= n:
+        split = _row_space_split(A, tolerance)
+        return _min_norm_least_squares(A, r, split), split
+    # Tall: the normal equations by Cholesky, accepted only when well conditioned (the
+    # regularisation level, whose posture, force and torque rows cover every variable).
+    factor, z, info = lapack.dposv(A.T @ A, A.T @ r)
+    if info != 0:
+        return None, None
+    diagonal = [abs(d) for d in factor.diagonal().tolist()]
+    if min(diagonal) <= math.sqrt(tolerance) * max(diagonal):
+        return None, None
+    return z, None
+
+
 def _min_norm_least_squares(A: np.ndarray, r: np.ndarray, split) -> np.ndarray:
     """argmin ||z|| among the minimisers of ||A z - r||, using a `_row_space_split` of A."""
     Y, _, rank, R = split
@@ -290,16 +308,30 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
                 svd = _row_space_split(Az, settings.rank_tolerance)
                 z = _min_norm_least_squares(Az, rz, svd)
         else:
+            mh = len(h_all)
+            GZ = G_all @ Z
+            upper = np.empty(mh + ms)
+            upper[:mh] = h_all - G_all @ x
+            # The current x solved the levels above, so it meets the rows they verified up to the
+            # solver's tolerance; clipping at zero keeps z = 0 feasible instead of failing on a
+            # 1e-7 residue.
+            upper[:num_verified] = np.maximum(upper[:num_verified], 0.0)
+            z = None
+            if ms == 0 and Az.shape[0]:
+                # The unconstrained least-squares step: when it meets every inequality it is an
+                # optimum of this level's QP too (the QP cannot do better than the unconstrained
+                # minimum), so the solver is not needed. Most controller ticks, for both QP levels.
+                z, svd = _least_squares_step(Az, rz, settings.rank_tolerance)
+                if z is not None and not _meets(GZ, upper, z, 0.0):
+                    z = None
+        if z is None:
             # Variables y = [z; v], with the soft violations v of this level.
             H = np.zeros((nz + ms, nz + ms))
             H[:nz, :nz] = Az.T @ Az
             f = np.zeros(nz + ms)
             f[:nz] = -Az.T @ rz
-            mh = len(h_all)
             C = np.zeros((mh + ms, nz + ms))
-            C[:mh, :nz] = G_all @ Z
-            upper = np.empty(mh + ms)
-            upper[:mh] = h_all - G_all @ x
+            C[:mh, :nz] = GZ
             if ms:
                 soft = np.arange(ms)
                 H[nz + soft, nz + soft] = ws * ws
@@ -308,10 +340,6 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
                 upper[mh:] = hs - Gs @ x
             if settings.regularization:
                 H[np.diag_indices(nz + ms)] += settings.regularization
-            # The current x solved the levels above, so it meets the rows they verified up to the
-            # solver's tolerance; clipping at zero keeps z = 0 feasible instead of failing on a
-            # 1e-7 residue.
-            upper[:num_verified] = np.maximum(upper[:num_verified], 0.0)
             z = _solve_dense_qp(H, f, C, upper, level.name, settings.proximal_weight, settings.backend)[:nz]
         x = x + Z @ z
         num_verified = len(h_all)

@@ -147,6 +147,7 @@ class FloatingBaseKalmanFilter:
         # Prong tip centres in the trunk frame (k, 3) [m]: a loaded tip pins the trunk like a foot.
         self.prong_tips_B = np.zeros((0, 3)) if prong_tips_B is None else np.asarray(prong_tips_B, dtype=float)
         self.prong_tip_radius = prong_tip_radius
+        self._process_noise_cache: dict[tuple, np.ndarray] = {}
 
     def initial_state(self, imu: ImuSample, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(x, P) for a robot at rest with its lowest foot on the ground, trunk at `xy` [m]."""
@@ -168,7 +169,6 @@ class FloatingBaseKalmanFilter:
     ):
         """Propagates (x, P) over dt [s] with the IMU acceleration; feet in contact move by their
         `rolling` velocities (4, 3) [m/s] (see rolling_velocities_W), when given."""
-        c = self.config
         w = imu.w_B
         a_B = imu.f_B - cross3(w, cross3(w, self.p_BI))  # specific force at the trunk origin
         a_W = imu.R_WB @ a_B + GRAVITY_W
@@ -182,13 +182,25 @@ class FloatingBaseKalmanFilter:
         P = P.copy()
         P[_P, :] += dt * P[_V, :]
         P[:, _P] += dt * P[:, _V]
-        q = np.empty(NUM_STATES)
-        q[_P] = c.position_process_noise**2 * dt
-        q[_V] = c.accelerometer_noise**2 * dt
-        sigma = np.where(in_contact, c.stance_foot_process_noise, c.swing_foot_process_noise)
-        q[_FEET] = np.repeat(sigma * sigma * dt, 3)
-        P[_DIAGONAL] += q
+        P[_DIAGONAL] += self._process_noise(tuple(in_contact.tolist()), dt)
         return x, P
+
+    def _process_noise(self, contact: tuple[bool, ...], dt: float) -> np.ndarray:
+        """Diagonal of Q over dt [s] for the feet in `contact` (one of 16 patterns: kept once made)."""
+        key = (contact, dt)
+        q = self._process_noise_cache.get(key)
+        if q is None:
+            c = self.config
+            q = np.empty(NUM_STATES)
+            q[_P] = c.position_process_noise**2 * dt
+            q[_V] = c.accelerometer_noise**2 * dt
+            sigma = np.where(contact, c.stance_foot_process_noise, c.swing_foot_process_noise)
+            q[_FEET] = np.repeat(sigma * sigma * dt, 3)
+            q.flags.writeable = False
+            if len(self._process_noise_cache) > 64:
+                self._process_noise_cache.clear()  # dt keeps changing: do not grow without bound
+            self._process_noise_cache[key] = q
+        return q
 
     def update(
         self,

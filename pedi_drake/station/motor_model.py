@@ -43,7 +43,10 @@ def guarded_command(command: np.ndarray) -> np.ndarray:
     (no torque: a driver that rejects the command), and every entry is clipped to
     +-COMMAND_MAGNITUDE_LIMIT. The controllers must never send non-finite commands, and the
     hardware safety layer replaces them; this only keeps the simulation defined."""
-    parts = np.array(command, dtype=float).reshape(5, 12)  # rows: q_des, qd_des, kp, kd, tau_ff
+    command = np.asarray(command, dtype=float)
+    if np.abs(command).max() <= COMMAND_MAGNITUDE_LIMIT:  # False for NaN too: the usual case, cheaply
+        return command.copy()
+    parts = command.reshape(5, 12).copy()  # rows: q_des, qd_des, kp, kd, tau_ff
     parts[:, ~np.isfinite(parts).all(axis=0)] = 0.0
     return np.clip(parts, -COMMAND_MAGNITUDE_LIMIT, COMMAND_MAGNITUDE_LIMIT).ravel()
 
