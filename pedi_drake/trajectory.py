@@ -113,6 +113,12 @@ class OrientationSample:
     rotation: RotationMatrix
     angular_velocity: np.ndarray
     angular_acceleration: np.ndarray
+    # The rotation's quaternion (w, x, y, z), when already known.
+    wxyz: np.ndarray | None = None
+
+    def quaternion_wxyz(self) -> np.ndarray:
+        """The rotation's quaternion (w, x, y, z), w >= 0."""
+        return self.wxyz if self.wxyz is not None else self.rotation.ToQuaternion().wxyz()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -143,13 +149,20 @@ class QuinticOrientationSegment:
         axis = np.asarray(rel.axis())
         return axis, float(rel.angle()), self.start.multiply(axis)
 
+    @functools.cached_property
+    def _at_rest(self) -> tuple[OrientationSample, OrientationSample]:
+        """The samples before the start and after the end (made once)."""
+        zero = np.zeros(3)
+        zero.flags.writeable = False
+        return tuple(OrientationSample(R, zero, zero, R.ToQuaternion().wxyz()) for R in (self.start, self.end))
+
     def sample(self, t: float) -> OrientationSample:
         """Orientation, angular velocity and acceleration (in the world frame) at time `t` [s]."""
         axis, angle, axis_W = self._axis_angle
         s, ds, dds = quintic_time_law(t, self.t0, self.duration)
         if s == 0.0 or s == 1.0:
             # At rest at either end (most samples: the phases hold a pose far longer than they move).
-            return OrientationSample(self.start if s == 0.0 else self.end, np.zeros(3), np.zeros(3))
+            return self._at_rest[int(s)]
         rotation = self.start.multiply(RotationMatrix(AngleAxis(s * angle, axis)))
         return OrientationSample(rotation, ds * angle * axis_W, dds * angle * axis_W)
 

@@ -108,8 +108,10 @@ class HqpSettings:
 def _stack_equalities(tasks: list[EqualityTask], n: int) -> tuple[np.ndarray, np.ndarray]:
     if not tasks:
         return np.zeros((0, n)), np.zeros(0)
-    if len(tasks) == 1 and tasks[0].weight == 1.0:
-        return tasks[0].A, tasks[0].b
+    if all(t.weight == 1.0 for t in tasks):
+        if len(tasks) == 1:
+            return tasks[0].A, tasks[0].b
+        return np.concatenate([t.A for t in tasks]), np.concatenate([t.b for t in tasks])
     # Filled in place: vstack of scaled copies costs twice as much at these sizes.
     m = sum(len(t.b) for t in tasks)
     A, b = np.empty((m, n)), np.empty(m)

@@ -88,6 +88,7 @@ class ControllerModel:
         self.nv = plant.num_velocities()
         self.nq = plant.num_positions()
         self.total_mass = plant.CalcTotalMass(self.context)
+        self._weight_W = self.total_mass * plant.gravity_field().gravity_vector()  # m g [N]
         # Viscous joint damping of the model [N m s/rad], part of the dynamics the plant integrates
         # but not of CalcBiasTerm: added to h so torques computed from the QP match the plant.
         self.damping = np.zeros(self.nv)
@@ -106,10 +107,13 @@ class ControllerModel:
         q = pm.full_positions(quaternion, base[4:7], q_joints, self.nq)
         v = pm.full_velocities(base[7:10], base[10:13], v_joints, self.nv)
         plant.SetPositionsAndVelocities(context, np.concatenate([q, v]))
-        M = plant.CalcMassMatrix(context)
-        h = plant.CalcBiasTerm(context) - plant.CalcGravityGeneralizedForces(context) + self.damping * v
         kV = JacobianWrtVariable.kV
         world = self.world
+        M = plant.CalcMassMatrix(context)
+        J_com = plant.CalcJacobianCenterOfMassTranslationalVelocity(context, kV, world, world)
+        # Uniform gravity's generalised force is J_com^T m g (one less Drake call than
+        # CalcGravityGeneralizedForces, the same to rounding).
+        h = plant.CalcBiasTerm(context) - J_com.T @ self._weight_W + self.damping * v
         nc = self.num_contacts
         # Filled in place: stacking the per-contact results afterwards costs as much as one of them.
         J_contacts = np.empty((3 * nc, self.nv))
@@ -128,7 +132,6 @@ class ControllerModel:
         J_trunk = plant.CalcJacobianSpatialVelocity(context, kV, self.trunk_frame, origin, world, world)
         A_bias_trunk = plant.CalcBiasSpatialAcceleration(context, kV, self.trunk_frame, origin, world, world)
         X_WB = plant.CalcRelativeTransform(context, world, self.trunk_frame)
-        J_com = plant.CalcJacobianCenterOfMassTranslationalVelocity(context, kV, world, world)
         return RobotSnapshot(
             q=q,
             v=v,

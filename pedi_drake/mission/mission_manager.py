@@ -9,7 +9,6 @@ A failed phase (IK unreachable, timeout, fall) fails the mission with a reason; 
 places any lifted leg back on the ground ("recovering") and holds the robot standing.
 """
 
-import copy
 import math
 
 import numpy as np
@@ -118,7 +117,7 @@ class MissionManager(LeafSystem):
         state.get_mutable_abstract_state(self._progress).set_value(progress)
 
     def _update(self, context, state) -> None:
-        progress = copy.deepcopy(self.progress(context))
+        progress = self.progress(context).copy()
         if progress.status in (SUCCEEDED, FAILED):
             return
         view = self._view(context)
@@ -193,11 +192,11 @@ class MissionManager(LeafSystem):
         t = context.get_time()
         p = refs.body_position.sample(t)
         R = refs.body_orientation.sample(t)
-        output.SetFromVector(
-            controller_refs.body_reference_vector(
-                p.position, R.rotation, p.velocity, p.acceleration, R.angular_velocity, R.angular_acceleration
-            )
-        )
+        # The layout of controller_refs.body_reference_vector, filled in place (every tick).
+        x = np.empty(controller_refs.BODY_REFERENCE_SIZE)
+        x[0:3], x[3:7], x[7:10], x[10:13] = p.position, R.quaternion_wxyz(), p.velocity, p.acceleration
+        x[13:16], x[16:19] = R.angular_velocity, R.angular_acceleration
+        output.SetFromVector(x)
 
     def _calc_legs(self, context, output: BasicVector) -> None:
         refs = self.progress(context).references

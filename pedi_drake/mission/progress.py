@@ -1,9 +1,11 @@
 """The mission's changing state, held by the MissionManager as one abstract state value.
 
-It is plain, deep-copyable data: the phase index and timing, the reference trajectories the
-controller is following, the contact set, and the record of finished phases.
+It is plain data: the phase index and timing, the reference trajectories the controller is
+following, the contact set, and the record of finished phases. Once stored in a Context it is
+treated as immutable (`MissionProgress.copy()` gives the copy to change).
 """
 
+import copy
 import dataclasses
 
 import numpy as np
@@ -73,3 +75,16 @@ class MissionProgress:
     records: list[PhaseRecord] = dataclasses.field(default_factory=list)
     # Recovery after a failure: the phases still to run to reach a safe posture.
     recovery: list = dataclasses.field(default_factory=list)
+
+    def copy(self) -> "MissionProgress":
+        """An independent deep copy: the one to change (a progress in a Context is never changed)."""
+        clone = copy.copy(self)
+        clone.__dict__.update(copy.deepcopy(self.__dict__))
+        return clone
+
+    def __deepcopy__(self, memo) -> "MissionProgress":
+        # Shared, not copied: a progress stored in a Context is never changed in place (the
+        # MissionManager changes a `copy()` and stores that), and Drake copies the whole state
+        # for every unrestricted update, among them the plant's at each step (its sampled
+        # output ports): about 25 us a copy, twice a control tick.
+        return self

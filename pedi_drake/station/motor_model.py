@@ -39,13 +39,15 @@ COMMAND_MAGNITUDE_LIMIT = 1e6
 
 
 def guarded_command(command: np.ndarray) -> np.ndarray:
-    """The command the drivers act on: a motor with any non-finite entry gets all-zero entries
-    (no torque: a driver that rejects the command), and every entry is clipped to
-    +-COMMAND_MAGNITUDE_LIMIT. The controllers must never send non-finite commands, and the
-    hardware safety layer replaces them; this only keeps the simulation defined."""
+    """The command the drivers act on (`command` itself when it needs no change).
+
+    A motor with any non-finite entry gets all-zero entries (no torque: a driver that rejects the
+    command), and every entry is clipped to +-COMMAND_MAGNITUDE_LIMIT. The controllers must never
+    send non-finite commands, and the hardware safety layer replaces them; this only keeps the
+    simulation defined."""
     command = np.asarray(command, dtype=float)
     if np.abs(command).max() <= COMMAND_MAGNITUDE_LIMIT:  # False for NaN too: the usual case, cheaply
-        return command.copy()
+        return command  # unchanged (not a copy)
     parts = command.reshape(5, 12).copy()  # rows: q_des, qd_des, kp, kd, tau_ff
     parts[:, ~np.isfinite(parts).all(axis=0)] = 0.0
     return np.clip(parts, -COMMAND_MAGNITUDE_LIMIT, COMMAND_MAGNITUDE_LIMIT).ravel()
