@@ -25,6 +25,7 @@ from pedi_drake.viz import plots
 
 SETTLE_AFTER_MISSION = 0.5  # [s] simulated after the mission ends, then the run stops
 PROGRESS_EVERY = 2.0  # [s] of simulated time between progress lines
+MONITOR_PERIOD = 0.005  # [s] between looks at the mission's status (it changes at 100 Hz)
 
 
 def run(
@@ -57,10 +58,14 @@ def run(
     if hardware:
         simulator.set_target_realtime_rate(realtime_rate)
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
-    state = {"next_print": PROGRESS_EVERY, "ended": None}
+    state = {"next_print": PROGRESS_EVERY, "ended": None, "next_check": 0.0}
 
     def monitor(root_context):
         t = root_context.get_time()
+        # The mission's status changes only at the manager's updates: no need to look every step.
+        if t < state["next_check"]:
+            return EventStatus.Succeeded()
+        state["next_check"] = t + MONITOR_PERIOD
         progress = manager.progress(manager.GetMyContextFromRoot(root_context)) if manager else None
         if not quiet and t >= state["next_print"]:
             state["next_print"] += PROGRESS_EVERY

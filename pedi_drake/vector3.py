@@ -19,7 +19,7 @@ def rotation_matrix_wxyz(quaternion: np.ndarray) -> np.ndarray:
 
     Same result as RotationMatrix(Quaternion(q / |q|)).matrix() to rounding.
     """
-    w, x, y, z = (float(c) for c in quaternion)
+    w, x, y, z = np.asarray(quaternion, dtype=float).tolist()
     s = 2.0 / (w * w + x * x + y * y + z * z)
     xx, yy, zz = x * x * s, y * y * s, z * z * s
     xy, xz, yz = x * y * s, x * z * s, y * z * s

@@ -147,7 +147,7 @@ _EMPTY.flags.writeable = False
 
 def _meets(G: np.ndarray, h: np.ndarray, x: np.ndarray, tolerance: float) -> bool:
     """Whether G x <= h + tolerance on every row."""
-    return len(h) == 0 or bool(np.all(G @ x - h <= tolerance))
+    return len(h) == 0 or bool((G @ x - h).max() <= tolerance)
 
 
 def _solve_osqp(H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, level: str) -> np.ndarray:
@@ -282,8 +282,8 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
         Gs, hs, ws = _stack_inequalities([t for t in level.inequalities if not t.hard], n)
         stacked.append((A, b, Gh, hh, Gs, hs))
         if len(hh):
-            G_all = np.vstack([G_all, Gh])
-            h_all = np.concatenate([h_all, hh])
+            G_all = Gh if not len(h_all) else np.vstack([G_all, Gh])
+            h_all = hh if not len(h_all) else np.concatenate([h_all, hh])
         nz = Z.shape[1]
         ms = len(hs)
         if nz == 0 and ms == 0:
