@@ -19,7 +19,6 @@ Only go1.* signals are read, in simulation and on hardware alike.
 """
 
 import dataclasses
-import functools
 import math
 
 import numpy as np
@@ -55,12 +54,6 @@ for _i in range(4):
     _FOOT_POSITION_ROWS[3 * _i : 3 * _i + 3, _P] = -_I3
     _FOOT_POSITION_ROWS[3 * _i : 3 * _i + 3, _foot(_i)] = _I3
 _FOOT_POSITION_ROWS.flags.writeable = False
-
-
-@functools.lru_cache(maxsize=8)
-def _velocity_rows(num_stance: int) -> tuple[np.ndarray, np.ndarray]:
-    """(rows, columns) of the ones of the no-slip rows H[12:12 + 3 ns, v_WB] (identity blocks)."""
-    return np.arange(12, 12 + 3 * num_stance), np.tile(np.arange(3, 6), num_stance)
 
 
 def _skew(w: np.ndarray) -> np.ndarray:
@@ -148,6 +141,7 @@ class FloatingBaseKalmanFilter:
         self.prong_tips_B = np.zeros((0, 3)) if prong_tips_B is None else np.asarray(prong_tips_B, dtype=float)
         self.prong_tip_radius = prong_tip_radius
         self._process_noise_cache: dict[tuple, np.ndarray] = {}
+        self._measurement_models: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
     def initial_state(self, imu: ImuSample, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(x, P) for a robot at rest with its lowest foot on the ground, trunk at `xy` [m]."""
@@ -202,6 +196,53 @@ class FloatingBaseKalmanFilter:
             self._process_noise_cache[key] = q
         return q
 
+    def _measurement_model(self, contact: tuple[bool, ...], num_tips: int) -> tuple[np.ndarray, np.ndarray]:
+        """(H, measurement noise variances) for the feet in `contact` and `num_tips` loaded prong
+        tips, in the row order of `update`. Constant for a contact pattern: made once each."""
+        key = (contact, num_tips)
+        model = self._measurement_models.get(key)
+        if model is not None:
+            return model
+        c = self.config
+        stance = [i for i in range(4) if contact[i]]
+        use_height = c.ground_height_measurement
+        # No foot or prong loaded: the trunk rests on the ground (on its belly or knees) while
+        # the legs move freely; it does not slide, so a zero horizontal velocity keeps the IMU
+        # from drifting while the legs unfold (the knees may push it up: z is left to the IMU).
+        resting = not stance and not num_tips
+        m = 12 + 3 * len(stance) + (len(stance) if use_height else 0) + (2 if resting else 0) + 4 * num_tips
+        H = np.zeros((m, NUM_STATES))
+        noise = np.empty(m)
+        # Every foot's position; a foot in the air is carried by the kinematics: a loose
+        # measurement of it costs nothing.
+        H[:12] = _FOOT_POSITION_ROWS
+        for i in range(4):
+            noise[3 * i : 3 * i + 3] = c.foot_position_noise**2 * (1.0 if contact[i] else 4.0)
+        row = 12
+        for _ in stance:  # no-slip velocity rows
+            H[row : row + 3, _V] = _I3
+            noise[row : row + 3] = c.foot_velocity_noise**2
+            row += 3
+        if use_height:
+            for i in stance:  # flat ground under the feet in contact
+                H[row, 6 + 3 * i + 2] = 1.0
+                noise[row] = c.ground_height_noise**2
+                row += 1
+        for _ in range(num_tips):  # tip velocity (3) and height (1)
+            H[row : row + 3, _V] = _I3
+            noise[row : row + 3] = c.foot_velocity_noise**2
+            H[row + 3, 2] = 1.0
+            noise[row + 3] = c.ground_height_noise**2
+            row += 4
+        if resting:
+            H[row : row + 2, _V] = _I3[:2]
+            noise[row : row + 2] = c.resting_velocity_noise**2
+            row += 2
+        H.flags.writeable = False
+        noise.flags.writeable = False
+        self._measurement_models[key] = (H, noise)
+        return H, noise
+
     def update(
         self,
         x: np.ndarray,
@@ -216,63 +257,40 @@ class FloatingBaseKalmanFilter:
         """Corrects (x, P) with the leg kinematics of all feet and the no-slip of the feet in contact
         (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with the
         prong tips when `prongs_loaded` (they do not move, and touch the ground)."""
-        c = self.config
         R = imu.R_WB
         p_BF, J = foot_kinematics_B(q)
         in_contact = np.asarray(contact[:4], bool)
         stance = np.flatnonzero(in_contact)
         ns = len(stance)
-        use_height = c.ground_height_measurement
-        tips = self.prong_tips_B if prongs_loaded else np.zeros((0, 3))
-        # No foot or prong loaded: the trunk rests on the ground (on its belly or knees) while
-        # the legs move freely; it does not slide, so a zero horizontal velocity keeps the IMU
-        # from drifting while the legs unfold (the knees may push it up: z is left to the IMU).
-        resting = ns == 0 and not len(tips)
-        m = 12 + 3 * ns + (ns if use_height else 0) + (2 if resting else 0) + 4 * len(tips)
-        H = np.zeros((m, NUM_STATES))
-        y = np.empty(m)
-        noise = np.empty(m)
-        # Every foot: p_WF - p_WB = R p_BF. A foot in the air is carried by the kinematics: a
-        # loose measurement of it costs nothing.
-        H[:12] = _FOOT_POSITION_ROWS
-        y[:12] = (p_BF @ R.T).ravel()
-        sigma2 = c.foot_position_noise**2
-        noise[:12] = np.repeat(np.where(in_contact, sigma2, 4.0 * sigma2), 3)
-        row = 12
+        num_tips = len(self.prong_tips_B) if prongs_loaded else 0
+        H, noise = self._measurement_model(tuple(in_contact.tolist()), num_tips)
+        # Every foot: p_WF - p_WB = R p_BF.
+        parts = [(p_BF @ R.T).ravel()]
         if ns:
             # Feet in contact do not slip: v_WB = -R (J qd + w x p_BF) + rolling.
-            rows = slice(row, row + 3 * ns)
             legs_qd = np.asarray(qd, float).reshape(4, 3)[stance]
             v_BF = (J[stance] @ legs_qd[:, :, None])[:, :, 0] + p_BF[stance] @ _skew(imu.w_B).T
             v_WB = -(v_BF @ R.T)
             if rolling is not None:
                 v_WB += rolling[stance]
-            H[_velocity_rows(ns)] = 1.0
-            y[rows] = v_WB.ravel()
-            noise[rows] = c.foot_velocity_noise**2
-            row += 3 * ns
-            if use_height:
-                H[np.arange(row, row + ns), 6 + 3 * stance + 2] = 1.0
-                y[row : row + ns] = self.foot_radius
-                noise[row : row + ns] = c.ground_height_noise**2
-                row += ns
-        for tip in tips:
-            H[row : row + 3, _V] = _I3
-            y[row : row + 3] = -(R @ cross3(imu.w_B, tip))
-            noise[row : row + 3] = c.foot_velocity_noise**2
-            H[row + 3, 2] = 1.0
-            y[row + 3] = self.prong_tip_radius - (R @ tip)[2]
-            noise[row + 3] = c.ground_height_noise**2
-            row += 4
-        if resting:
-            H[row : row + 2, _V] = _I3[:2]
-            y[row : row + 2] = 0.0
-            noise[row : row + 2] = c.resting_velocity_noise**2
-            row += 2
+            parts.append(v_WB.ravel())
+            if self.config.ground_height_measurement:
+                parts.append(np.full(ns, self.foot_radius))
+        if num_tips:
+            # Loaded prong tips do not move and touch the ground: per tip, v_WB = -R (w x p_BT)
+            # and p_WB,z = tip radius - (R p_BT)_z.
+            tips = self.prong_tips_B
+            rows = np.empty((num_tips, 4))
+            rows[:, :3] = -((tips @ _skew(imu.w_B).T) @ R.T)
+            rows[:, 3] = self.prong_tip_radius - tips @ R[2]
+            parts.append(rows.ravel())
+        if ns == 0 and not num_tips:
+            parts.append(np.zeros(2))  # resting on the ground: no horizontal velocity
+        y = np.concatenate(parts)
         innovation = y - H @ x
         PHt = P @ H.T
         S = H @ PHt
-        S[np.diag_indices(m)] += noise
+        S[np.diag_indices(len(y))] += noise
         # S is symmetric positive definite: a Cholesky solve, at a third of numpy.linalg.solve's cost.
         _, KT, info = lapack.dposv(S, PHt.T)
         if info != 0:
