@@ -5,6 +5,7 @@ model, never from simulation ground truth.
 """
 
 import dataclasses
+import functools
 
 import numpy as np
 from pydrake.math import RigidTransform
@@ -25,8 +26,9 @@ class RobotView:
     tau: np.ndarray  # (12,) estimated joint torques [N m]
     foot_force: np.ndarray  # (4,) foot sensor values (normal force [N] in simulation)
 
-    @property
+    @functools.cached_property
     def X_WB(self) -> RigidTransform:
+        """The trunk pose estimate (made once per view: phases read it several times)."""
         return self.base.pose()
 
     def leg_q(self, leg: str) -> np.ndarray:

@@ -62,7 +62,8 @@ class Go1SensorModel(LeafSystem):
         context = plant.CreateDefaultContext()
         self._p_BI = plant.CalcRelativeTransform(context, trunk.body_frame(), imu.body_frame()).translation()
         self._gravity_W = plant.gravity_field().gravity_vector()
-        self._foot_bodies = [plant.GetBodyByName(name, plant_map.model).index() for name in robot.FOOT_BODY_NAMES]
+        # Plain ints: the contact loop compares them with every contact's bodies, every tick.
+        self._foot_bodies = [int(plant.GetBodyByName(name, plant_map.model).index()) for name in robot.FOOT_BODY_NAMES]
 
         nx = plant.num_positions() + plant.num_velocities()
         self._state = self.DeclareVectorInputPort("plant_state", nx)
