@@ -1,5 +1,6 @@
 """MissionManager in closed loop: phase transitions, failures with reasons, recovery to four legs."""
 
+import copy
 from pathlib import Path
 
 import numpy as np
@@ -187,3 +188,19 @@ phases:"""
     records = {r.name: r for r in progress.records}
     assert records["press"].metrics["stopped_by"] == "force"
     assert records["place"].metrics["placement_error_m"] < 0.02, records["place"].metrics
+
+
+def test_a_stored_progress_is_shared_by_state_copies_and_changed_only_through_copy():
+    # Drake deep-copies the whole State for every unrestricted update (the plant's, each step):
+    # the progress is shared then, and the manager changes a copy() that owns all its parts.
+    progress = MissionProgress()
+    progress.records.append(PhaseRecord("stand", "stand_up", "running", 0.0))
+    progress.memo["samples"] = [1.0]
+    assert copy.deepcopy(progress) is progress
+    changed = progress.copy()
+    changed.index = 2
+    changed.records.append(PhaseRecord("reach", "reach", "running", 1.0))
+    changed.records[0].status = SUCCEEDED
+    changed.memo["samples"].append(2.0)
+    assert progress.index == 0 and len(progress.records) == 1 and progress.records[0].status == "running"
+    assert progress.memo == {"samples": [1.0]}

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from pedi_drake.exceptions import MissionFileError
-from pedi_drake.mission.spec import PHASE_KINDS, Reach, load_mission, shipped_missions
+from pedi_drake.mission.spec import PHASE_KINDS, LegToSupport, Reach, load_mission, shipped_missions
 
 PAPER_MISSIONS = {
     "hit_target_front",
@@ -114,3 +114,14 @@ def test_every_phase_kind_has_a_timeout_and_a_name():
     for kind in PHASE_KINDS.values():
         phase = kind()
         assert phase.timeout > 0 and hasattr(phase, "name")
+
+
+def test_the_longest_duration_lets_every_phase_time_out_then_recover(tmp_path):
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "phases:\n"
+        "  - {kind: stand_up, height: 0.28, duration: 2.0, timeout: 4.0}\n"
+        "  - {kind: wait, duration: 1.0, timeout: 2.5}\n"
+    )
+    recovery = 2 * LegToSupport().timeout  # both front legs put back after a failure
+    assert load_mission(str(path)).longest_duration() == pytest.approx(4.0 + 2.5 + recovery)
