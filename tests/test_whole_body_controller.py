@@ -11,10 +11,12 @@ from pedi_drake.control.config import WholeBodyControllerConfig
 from pedi_drake.control.demos import DemoTiming, demo_scenario, run_demo
 from pedi_drake.control.whole_body_controller import (
     STATUS_BAD_INPUT,
+    STATUS_CONTACTS_RELAXED,
     STATUS_OK,
     STATUS_QP_FAILED,
     WholeBodyController,
 )
+from pedi_drake.prongs import ProngDesign
 from pedi_drake.station.initial_state import initial_trunk_pose
 from pedi_drake.station.scenario import RobotConfig
 
@@ -148,3 +150,26 @@ def test_prongs_carry_the_trunk_with_both_front_feet_lifted():
     assert r.prong_force > 20.0
     assert max(r.foot_errors) < 0.005
     assert r.max_torque_ratio <= 1.0
+
+
+def test_sliding_prongs_that_friction_cannot_stop_brake_at_the_limit_instead_of_failing():
+    # Trunk and loaded prong tips slide at 1.5 m/s (a push): stopping the tips, which are fixed to
+    # the trunk, at the no-motion task's rate needs more horizontal force than friction allows, so
+    # the strict stack is infeasible. The controller then demotes contact no-motion below the
+    # force limits rather than fail: the contacts brake at the friction limit.
+    controller = WholeBodyController(WholeBodyControllerConfig(), ProngDesign())
+    context = controller.CreateDefaultContext()
+    X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
+    sliding = np.concatenate([X.rotation().ToQuaternion().wxyz(), X.translation(), np.zeros(3), [1.5, 0.0, 0.0]])
+    controller.base_state_port.FixValue(context, sliding)
+    controller.position_port.FixValue(context, robot.STANDING_Q)
+    controller.velocity_port.FixValue(context, np.zeros(12))
+    controller.contact_set_port.FixValue(context, references.contact_set_vector(num_prongs=2, prongs=True))
+    command, diag = tick(controller, context, 1)
+    assert diag[controller.diag["status"]][0] == STATUS_CONTACTS_RELAXED
+    assert diag[controller.diag["total_failures"]][0] == 0
+    assert np.all(np.isfinite(command)) and np.all(np.abs(command[48:60]) <= robot.EFFORT_LIMIT)
+    forces = diag[controller.diag["contact_forces"]].reshape(-1, 3)
+    mu = controller.config.friction / np.sqrt(2.0)
+    assert np.all(np.abs(forces[:, 0]) <= mu * forces[:, 2] + 1e-6)
+    assert np.sum(forces[:, 0]) < -0.9 * mu * np.sum(forces[:, 2])  # braking, at the friction limit

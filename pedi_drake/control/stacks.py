@@ -28,6 +28,10 @@ from pedi_drake.control.hqp import EqualityTask, Level
 from pedi_drake.control.references import LEG_MODE_FOOT, LEG_MODE_JOINTS, BodyReference, LegReference
 from pedi_drake.control.robot_model import RobotSnapshot
 
+# A held contact moving faster than this along the ground is sliding [m/s] (well above the
+# estimator's velocity noise of a few mm/s).
+SLIDING_SPEED = 0.02
+
 
 @dataclasses.dataclass
 class ResolvedInputs:
@@ -124,23 +128,57 @@ class StackBuilder:
             self.torque_min.rows(s, self.layout, c.torque_weight),
         ]
 
-    def levels(self, s: RobotSnapshot, inputs: ResolvedInputs) -> list[Level]:
+    def sliding_contacts(self, s: RobotSnapshot, inputs: ResolvedInputs) -> np.ndarray:
+        """Indices of the held contacts whose tangential (horizontal) speed exceeds SLIDING_SPEED."""
+        held = np.flatnonzero(inputs.no_motion)
+        velocities = (s.J_contacts @ s.v).reshape(-1, 3)[held]
+        return held[np.hypot(velocities[:, 0], velocities[:, 1]) > SLIDING_SPEED]
+
+    def levels(self, s: RobotSnapshot, inputs: ResolvedInputs, relax_contacts: bool = False) -> list[Level]:
+        """The stack's levels. `relax_contacts` is the fallback for an instant at which the
+        contacts cannot be held still within the force limits (prong tips sliding under a push,
+        say): the tangential no-motion rows of the sliding contacts then leave the physics level
+        for a least-squares level just below the limits, so they brake as hard as friction allows
+        instead of the QP failing and the controller dropping to damping."""
         lay, body = self.layout, inputs.body
         orientation = self.trunk_orientation.rows(s, lay, body.R, body.w, body.alpha)
         position = self.trunk_position.rows(s, lay, body.p, body.v, body.a)
         legs = self.leg_tasks(s, inputs)
+        sliding = self.sliding_contacts(s, inputs) if relax_contacts else np.zeros(0, dtype=int)
+        if len(sliding):
+            # Only the tangential rows of contacts already sliding yield: a slip cannot be stopped
+            # at once when friction cannot hold it. The normal rows and the contacts at rest stay
+            # exact, so no force is bought by a contact accelerating into, off or along the ground.
+            no_motion = self.no_motion.rows(s, self.layout, inputs.no_motion)
+            held = np.ones(len(no_motion.b), dtype=bool)
+            in_contact = list(np.flatnonzero(inputs.no_motion))
+            for i in sliding:
+                k = in_contact.index(i)
+                held[3 * k : 3 * k + 2] = False  # x, y rows of contact i (world frame, flat ground)
+            physics = Level(
+                "physics",
+                [
+                    self.dynamics.rows(s, self.layout),
+                    EqualityTask("contact_no_motion", no_motion.A[held], no_motion.b[held]),
+                ],
+            )
+            contacts = [Level("contact_sliding", [EqualityTask("sliding", no_motion.A[~held], no_motion.b[~held])])]
+        else:
+            physics, contacts = self.physics(s, inputs), []
         if self.config.stack == "paper003":
             return [
-                self.physics(s, inputs),
+                physics,
                 self.feasibility(s, inputs, self.config.paper003_balance),
+                *contacts,
                 Level("torso_angular", [orientation]),
                 Level("torso_linear", [position]),
                 Level("swing_foot", legs),
                 Level("torque_minimisation", self.regularisation(s, inputs)),
             ]
         return [
-            self.physics(s, inputs),
+            physics,
             self.feasibility(s, inputs, True),
+            *contacts,
             Level("pose", [orientation, position] + legs),
             Level("regularisation", self.regularisation(s, inputs)),
         ]

@@ -44,13 +44,15 @@ from pedi_drake.prongs import ProngDesign
 
 COMMAND_SIZE = 60
 STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0
+# Solved with sliding contacts' tangential no-motion below the force limits (see StackBuilder.levels).
+STATUS_CONTACTS_RELAXED = 3.0
 MAX_LEVELS = 5
 
 
 def diagnostics_layout(num_contacts: int) -> dict[str, slice]:
     """Named slices of the diagnostics vector."""
     sizes = [
-        ("status", 1),  # 0 ok, 1 QP failed (last command held), 2 non-finite input
+        ("status", 1),  # 0 ok, 1 QP failed (last command held), 2 non-finite input, 3 contacts relaxed
         ("solve_time", 1),  # wall time of the HQP solve [s]
         ("tick_time", 1),  # wall time of the whole update [s]
         ("consecutive_failures", 1),
@@ -195,19 +197,20 @@ class WholeBodyController(LeafSystem):
             friction=float(mu_x[0]),
             ground_height=ground,
         )
+        status = STATUS_OK
         try:
-            levels = self.builder.levels(snapshot, inputs)
-            if c.hqp_mode == "weighted":
-                weights = list(c.level_weights) or [100.0 ** (len(levels) - 1 - k) for k in range(len(levels))]
-                solution = solve_weighted(levels, self.layout.size, weights, self.hqp_settings)
-            else:
-                solution = solve_hqp(levels, self.layout.size, self.hqp_settings)
-            x = solution.x
-            if not _all_finite(x):
-                raise QpInfeasible("non-finite QP solution")
+            solution = self._solve(snapshot, inputs, relax_contacts=False)
         except (QpInfeasible, np.linalg.LinAlgError):
-            self._fail(discrete_state, last_command, q, diag, STATUS_QP_FAILED, start, ramp=ramp, hold=hold)
-            return
+            try:
+                if not len(self.builder.sliding_contacts(snapshot, inputs)):
+                    raise QpInfeasible("infeasible with every contact at rest")
+                # Sliding contacts that friction cannot stop at once: let them brake.
+                solution = self._solve(snapshot, inputs, relax_contacts=True)
+                status = STATUS_CONTACTS_RELAXED
+            except (QpInfeasible, np.linalg.LinAlgError):
+                self._fail(discrete_state, last_command, q, diag, STATUS_QP_FAILED, start, ramp=ramp, hold=hold)
+                return
+        x = solution.x
 
         vdot, forces = self.layout.split(x)
         T, t0 = tasks.torque_map(snapshot, self.layout)
@@ -221,7 +224,7 @@ class WholeBodyController(LeafSystem):
         q_ref = _clip(q_ref + qd_ref * c.period, q - c.max_reference_deviation, q + c.max_reference_deviation)
         command = np.concatenate([q_ref, qd_ref, self.command_gains, tau])
 
-        diag[self.diag["status"]] = STATUS_OK
+        diag[self.diag["status"]] = status
         diag[self.diag["solve_time"]] = solution.solve_time
         diag[self.diag["consecutive_failures"]] = 0.0
         xi, _ = self.builder.balance.capture_point(snapshot, ground)
@@ -246,6 +249,22 @@ class WholeBodyController(LeafSystem):
         discrete_state.get_mutable_vector(self.ramp_state).SetFromVector(ramp)
         discrete_state.get_mutable_vector(self.hold_state).SetFromVector(hold)
         discrete_state.get_mutable_vector(self.diagnostics_state).SetFromVector(diag)
+
+    def _solve(self, snapshot, inputs: ResolvedInputs, relax_contacts: bool):
+        """The configured stack at this instant, solved (strict or weighted); raises QpInfeasible."""
+        c = self.config
+        levels = self.builder.levels(snapshot, inputs, relax_contacts=relax_contacts)
+        if c.hqp_mode == "weighted":
+            weights = list(c.level_weights)
+            if weights and relax_contacts:
+                weights.insert(2, weights[1])  # the demoted contacts weigh as the limits' level
+            weights = weights or [100.0 ** (len(levels) - 1 - k) for k in range(len(levels))]
+            solution = solve_weighted(levels, self.layout.size, weights, self.hqp_settings)
+        else:
+            solution = solve_hqp(levels, self.layout.size, self.hqp_settings)
+        if not _all_finite(solution.x):
+            raise QpInfeasible("non-finite QP solution")
+        return solution
 
     def _fail(
         self,
