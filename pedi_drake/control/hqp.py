@@ -292,13 +292,6 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
             # Only hard constraints: nothing to optimise here. The levels below solve within them
             # (and report infeasibility); a feasibility QP here would only move x inside them.
             continue
-        if len(b) == 0 and _meets(Gs, hs, x, 0.0) and _meets(G_all, h_all, x, settings.fix_tolerance):
-            # No equalities and x already meets every row: zero violation is this level's optimum
-            # (about half the ticks of the controller's feasibility level), so no QP is needed.
-            num_verified = len(h_all)
-            G_all = np.vstack([G_all, Gs])
-            h_all = np.concatenate([h_all, hs + settings.fix_tolerance])
-            continue
         Az = A @ Z
         rz = b - A @ x
         svd = None
@@ -318,14 +311,17 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
             # solver's tolerance; clipping at zero keeps z = 0 feasible instead of failing on a
             # 1e-7 residue.
             upper[:num_verified] = np.maximum(upper[:num_verified], 0.0)
-            z = None
-            if ms == 0 and Az.shape[0]:
-                # The unconstrained least-squares step: when it meets every inequality it is an
-                # optimum of this level's QP too (the QP cannot do better than the unconstrained
-                # minimum), so the solver is not needed. Most controller ticks, for both QP levels.
-                z, svd = _least_squares_step(Az, rz, settings.rank_tolerance)
-                if z is not None and not _meets(GZ, upper, z, 0.0):
-                    z = None
+            # The unconstrained step (least squares of the equalities; none: stay) is an optimum
+            # of this level's QP whenever it meets every hard row and every soft row with zero
+            # violation: the QP cannot do better. Then the solver is not needed (most controller
+            # ticks, at every QP level).
+            z, svd = (
+                _least_squares_step(Az, rz, settings.rank_tolerance) if Az.shape[0] and nz else (np.zeros(nz), None)
+            )
+            if z is not None and not (
+                _meets(GZ, upper[:mh], z, 0.0) and (ms == 0 or _meets(Gs @ Z, hs - Gs @ x, z, 0.0))
+            ):
+                z = None
         if z is None:
             # Variables y = [z; v], with the soft violations v of this level.
             H = np.zeros((nz + ms, nz + ms))

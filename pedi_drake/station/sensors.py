@@ -62,8 +62,11 @@ class Go1SensorModel(LeafSystem):
         context = plant.CreateDefaultContext()
         self._p_BI = plant.CalcRelativeTransform(context, trunk.body_frame(), imu.body_frame()).translation()
         self._gravity_W = plant.gravity_field().gravity_vector()
-        # Plain ints: the contact loop compares them with every contact's bodies, every tick.
-        self._foot_bodies = [int(plant.GetBodyByName(name, plant_map.model).index()) for name in robot.FOOT_BODY_NAMES]
+        # Foot number by body index (plain ints), made once: the contact loop looks up every
+        # contact's two bodies in it, every tick.
+        self._foot_of_body = foot_index_of_body(
+            [plant.GetBodyByName(name, plant_map.model).index() for name in robot.FOOT_BODY_NAMES]
+        )
 
         nx = plant.num_positions() + plant.num_velocities()
         self._state = self.DeclareVectorInputPort("plant_state", nx)
@@ -128,17 +131,24 @@ class Go1SensorModel(LeafSystem):
         )
 
     def _calc_foot_contact(self, context, output: BasicVector) -> None:
-        forces = foot_normal_forces(self._contacts.Eval(context), self._foot_bodies)
+        forces = foot_normal_forces(self._contacts.Eval(context), self._foot_of_body)
         rng = self._rng(context, 4)
         if rng is not None:
             forces = np.maximum(forces + rng.normal(0.0, self._noise.foot_force, 4), 0.0)
         output.SetFromVector(forces)
 
 
-def foot_normal_forces(contact_results: ContactResults, foot_bodies) -> np.ndarray:
-    """Normal contact force magnitude on each foot [N], summed over its point contacts."""
-    foot_of_body = {int(body): k for k, body in enumerate(foot_bodies)}
-    forces = [0.0] * len(foot_bodies)
+def foot_index_of_body(foot_bodies) -> dict[int, int]:
+    """{body index: foot number} for `foot_normal_forces`, from the feet's body indices in foot order."""
+    return {int(body): k for k, body in enumerate(foot_bodies)}
+
+
+def foot_normal_forces(contact_results: ContactResults, foot_of_body: dict[int, int]) -> np.ndarray:
+    """Normal contact force magnitude on each foot [N], summed over its point contacts.
+
+    `foot_of_body` maps body indices to foot numbers (see `foot_index_of_body`).
+    """
+    forces = [0.0] * len(foot_of_body)
     for i in range(contact_results.num_point_pair_contacts()):
         info = contact_results.point_pair_contact_info(i)
         a, b = foot_of_body.get(int(info.bodyA_index())), foot_of_body.get(int(info.bodyB_index()))
