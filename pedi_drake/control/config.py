@@ -89,3 +89,18 @@ class WholeBodyControllerConfig:
     max_reference_rate_deviation: float = 0.5
     # Joint damping sent while holding the last good command after a failed QP [N m s/rad].
     failure_kd: float = 1.0
+
+
+@dataclasses.dataclass
+class StandControllerConfig:
+    """The joint-space PD that takes the Go1 from its initial pose to standing and holds it."""
+
+    # Target joint pose, (hip, thigh, calf) applied to all legs [rad].
+    target_leg_pose: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.9, -1.8])
+    # Duration of the quintic blend from the measured pose to the target [s].
+    duration: float = 1.5
+    # Motor PD gains [N m/rad], [N m s/rad].
+    kp: float = 60.0
+    kd: float = 2.0
+    # Control period [s].
+    period: float = 0.002
