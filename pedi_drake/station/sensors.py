@@ -1,6 +1,6 @@
 """Simulated Go1 sensors: joint encoders, torque estimate, IMU and foot force sensors.
 
-Outputs follow the station ports of DESIGN.md section 2 (Unitree order). Optional Gaussian
+Outputs follow the station ports of docs/conventions.md (Unitree order). Optional Gaussian
 noise is drawn from a generator seeded by (scenario seed, sample index), so a run is
 deterministic and the sensors keep no hidden state.
 """
