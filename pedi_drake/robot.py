@@ -32,7 +32,7 @@ GO1_URL = "package://pedi_drake/go1/go1.urdf"
 NUM_JOINTS = 12
 FOOT_RADIUS = 0.02  # [m]
 FOOT_FRICTION = 0.8  # [-] Coulomb friction of the foot spheres (rubber on floor).
-TOTAL_MASS = 13.099448  # [kg] without prongs, rotors included.
+TOTAL_MASS = 13.100448  # [kg] without prongs, rotors and IMU included.
 
 # URDF limits in Unitree motor order.
 Q_LOWER = np.tile([-0.863, -0.686, -2.818], 4)  # [rad]
