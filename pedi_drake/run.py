@@ -13,17 +13,18 @@ import sys
 import time
 from pathlib import Path
 
-from pydrake.geometry import Meshcat
+from pydrake.geometry import Meshcat, MeshcatAnimation
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import Context, EventStatus
 
-from pedi_drake.diagram import MakePedipulationDiagram, PedipulationDiagram
+from pedi_drake.diagram import MakePedipulationDiagram, PedipulationDiagram, apply_mission
 from pedi_drake.evaluation.judge import judge_run, write_run
 from pedi_drake.evaluation.out_dir import claim_out_dir
 from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.interrupt import StopRequest
 from pedi_drake.mission.progress import FAILED, RUNNING, SUCCEEDED, MissionProgress
 from pedi_drake.scenario import Scenario
+from pedi_drake.viz.meshcat_camera import frame_scene
 
 SETTLE_AFTER_MISSION = 0.5  # [s] simulated after the mission ends, then the run stops
 PROGRESS_EVERY = 2.0  # [s] of simulated time between progress lines (not on a terminal)
@@ -97,6 +98,8 @@ def simulate(
     simulator.Initialize()
     recording = meshcat is not None and not hardware
     if recording:
+        # The view opens on the robot and the mission's objects, live and in the replay.
+        frame_scene(meshcat, apply_mission(scenario, built.mission) if built.mission else scenario)
         meshcat.StartRecording(set_visualizations_while_recording=False)
     wall_start = time.perf_counter()
     if stop.reason is None:
@@ -106,6 +109,11 @@ def simulate(
     replay_html = None
     if recording:
         meshcat.StopRecording()
+        # The replay plays on opening, once, and stays on the last frame (where the run ended).
+        animation = meshcat.get_mutable_recording()
+        animation.set_autoplay(True)
+        animation.set_loop_mode(MeshcatAnimation.LoopMode.kLoopOnce)
+        animation.set_clamp_when_finished(True)
         meshcat.PublishRecording()
         replay_html = meshcat.StaticHtml()
     context = simulator.get_context()

@@ -217,3 +217,21 @@ def test_every_shipped_scenario_and_mission_passes_the_scene_check(run_sim):
     for mission in shipped_missions():
         scenario = load_scenario(scenario_text=f"{{mission: {mission}}}")
         check_scene_geometry(apply_mission(scenario, load_mission(mission)))
+
+
+def test_sil_with_an_unknown_mission_exits_2_with_the_real_error_before_starting_the_bridge(tmp_path):
+    import os
+    import subprocess
+
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
+    done = subprocess.run(
+        [sys.executable, "-m", "pedi_drake.apps.sil", "--mission", "nope", "--out", str(tmp_path / "sil")],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 2, done.stderr
+    assert "unknown mission 'nope'" in done.stderr and "hit_target_front" in done.stderr
+    assert "Traceback" not in done.stderr and not (tmp_path / "sil").exists()
