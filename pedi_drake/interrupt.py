@@ -4,9 +4,11 @@ Python's default SIGINT handler raises KeyboardInterrupt wherever the interprete
 which inside `Simulator.AdvanceTo` unwinds through C++ and loses everything the run did. Here a
 signal only records why the run should stop; the simulator's monitor reads that and ends the
 simulation at the current time, so the run is judged and written like any other, marked
-`interrupted`. The module imports nothing heavy so a program can install it before pydrake loads.
+`interrupted`. A second signal aborts at once (KeyboardInterrupt), for a user who cannot wait for
+the files. The module imports nothing heavy so a program can install it before pydrake loads.
 """
 
+import os
 import signal
 import threading
 
@@ -27,7 +29,13 @@ class StopRequest:
             self.reason = reason
 
     def _handle(self, signum, frame) -> None:
+        if self.reason is not None:
+            # A second signal while the results are written: the user wants out now.
+            self.restore()
+            raise KeyboardInterrupt(f"{signal.Signals(signum).name} received twice")
         self.request(f"{signal.Signals(signum).name} received")
+        # os.write, not print: a handler may run in the middle of another write to stdout.
+        os.write(2, b"\nstopping at the current time; writing what ran (signal again to abort)\n")
 
     def install(self) -> "StopRequest":
         """Routes SIGINT and SIGTERM here (only the main thread may set signal handlers)."""

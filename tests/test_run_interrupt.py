@@ -77,3 +77,22 @@ def test_sigterm_mid_simulation_writes_what_ran_and_exits_130(tmp_path):
 
     logs = read_run_logs(out)
     assert abs(logs["base_state"].times[-1] - result["sim_time_s"]) < 0.01  # the logs hold what ran
+
+
+def test_a_second_signal_aborts_and_gives_back_the_previous_handlers():
+    import pytest
+
+    from pedi_drake.interrupt import StopRequest
+
+    before = signal.getsignal(signal.SIGINT)
+    stop = StopRequest().install()
+    try:
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)  # the handler runs between bytecodes of this thread
+        assert stop.reason == "SIGINT received"
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+        assert signal.getsignal(signal.SIGINT) is before
+    finally:
+        stop.restore()
