@@ -131,6 +131,7 @@ def MakePedipulationDiagram(
                     mission,
                     prongs=scenario.robot.prongs,
                     friction=scenario.ground_friction,
+                    safety_margin=scenario.whole_body.safety_margin,
                 ),
             )
             _add_leg_ik(builder, manager)
@@ -144,6 +145,8 @@ def MakePedipulationDiagram(
             extra_logs["mission.status"] = manager.GetOutputPort("mission_status")
             extra_logs["mission.body_reference"] = manager.GetOutputPort("body_reference")
             extra_logs["mission.leg_reference"] = manager.GetOutputPort("leg_reference")
+            extra_logs["mission.contact_set"] = manager.GetOutputPort("contact_set")
+            extra_logs["mission.safety_polygon"] = manager.GetOutputPort("safety_polygon")
     command = controller.GetOutputPort("command")
     builder.Connect(command, station.GetInputPort("go1.command"))
 

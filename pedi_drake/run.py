@@ -15,7 +15,7 @@ from pydrake.systems.framework import EventStatus
 
 from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.evaluation import mission_results
+from pedi_drake.evaluation import capture_point, mission_results
 from pedi_drake.evaluation.result_file import write_result
 from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
 from pedi_drake.fall import fell_during
@@ -167,6 +167,13 @@ def run(
         status_log, body_log = logs["mission.status"].data(), logs["mission.body_reference"].data()
         result["max_base_drift_m"] = mission_results.max_base_drift(p_WB, body_log, status_log)
         result["presses"] = mission_results.press_results(progress)
+        result["three_leg_capture_point_margin_m"] = capture_point.three_leg_margin(
+            logs["mission.safety_polygon"].sample_times(),
+            logs["controller.diagnostics"].data(),
+            logs["mission.safety_polygon"].data(),
+            logs["mission.contact_set"].data(),
+            result["phases"],
+        )
         if hardware:
             result["foot_errors_m"] = mission_results.estimated_foot_errors(progress)
         else:

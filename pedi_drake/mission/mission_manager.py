@@ -13,6 +13,9 @@ the trunk pose the target was planned in on `ik_X_WB` and the solve's start angl
 manager tick (the IK updates between the manager's ticks): a phase asks, holds its legs, and
 plans its motion when the answers are in (a path of waypoints takes one tick a waypoint).
 
+`safety_polygon` is the capture-point polygon of the current stance (see
+`phases.stance_safety_polygon`), recomputed at every update from the estimated support points.
+
 A failed phase (IK unreachable, timeout, fall) fails the mission with a reason; the manager then
 places any lifted leg back on the ground ("recovering") and holds the robot standing.
 """
@@ -24,7 +27,7 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 from pedi_drake import robot
 from pedi_drake.control import references as controller_refs
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE, BaseState
-from pedi_drake.exceptions import PediError
+from pedi_drake.exceptions import ConfigError, PediError
 from pedi_drake.fall import trunk_has_fallen
 from pedi_drake.mission import spec
 from pedi_drake.mission.phases import (
@@ -34,6 +37,7 @@ from pedi_drake.mission.phases import (
     ReachRunner,
     kind_name,
     receive_ik_answers,
+    stance_safety_polygon,
 )
 from pedi_drake.mission.progress import (
     FAILED,
@@ -73,6 +77,7 @@ class MissionManager(LeafSystem):
         *,
         prongs: ProngDesign | None = None,
         friction: float = 0.8,
+        safety_margin: float = 0.03,
         period: float = 0.01,
     ):
         """
@@ -80,13 +85,21 @@ class MissionManager(LeafSystem):
             mission: the phases to run.
             prongs: the robot's prongs (their tips count as supports when loaded), or None.
             friction: ground friction coefficient sent to the controller [-].
+            safety_margin: the stance's support polygon is shrunk by this for the capture point [m].
             period: update period [s].
         """
         super().__init__()
         self._mission = mission
         self._env = MissionEnvironment(prongs)
         self._friction = friction
+        self._safety_margin = float(safety_margin)
         num_contacts = 4 + self._env.num_prongs
+        if num_contacts > controller_refs.SAFETY_POLYGON_MAX_VERTICES:
+            raise ConfigError(
+                f"robot.prongs: {self._env.num_prongs} prongs; the safety polygon holds at most "
+                f"{controller_refs.SAFETY_POLYGON_MAX_VERTICES} supports (four feet and "
+                f"{controller_refs.SAFETY_POLYGON_MAX_VERTICES - 4} prong tips)"
+            )
         self.ik_legs = ik_legs_of(mission)
         self._period = period
         self._base_state = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
@@ -104,6 +117,7 @@ class MissionManager(LeafSystem):
             for leg in self.ik_legs
         }
         self._progress = self.DeclareAbstractState(AbstractValue.Make(MissionProgress()))
+        self._polygon = self.DeclareDiscreteState(controller_refs.SAFETY_POLYGON_SIZE)
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
         # Trajectory samples change with time; the contact set and the status only with the progress
@@ -119,12 +133,7 @@ class MissionManager(LeafSystem):
         self.DeclareVectorOutputPort(
             "contact_set", num_contacts, self._calc_contacts, prerequisites_of_calc=progress_only
         )
-        self.DeclareVectorOutputPort(
-            "safety_polygon",
-            controller_refs.SAFETY_POLYGON_SIZE,
-            lambda context, output: output.SetFromVector(np.zeros(controller_refs.SAFETY_POLYGON_SIZE)),
-            prerequisites_of_calc={self.nothing_ticket()},
-        )
+        self.DeclareStateOutputPort("safety_polygon", self._polygon)
         for leg in self.ik_legs:
             self.DeclareVectorOutputPort(
                 f"ik_foot_target_W.{leg}",
@@ -173,6 +182,11 @@ class MissionManager(LeafSystem):
         progress = MissionProgress(phase_start=view.time)
         progress.references = References.holding(view.base.p_WB, view.X_WB.rotation(), view.time, self._env.num_prongs)
         state.get_mutable_abstract_state(self._progress).set_value(progress)
+        self._set_polygon(state, view, progress)
+
+    def _set_polygon(self, state, view: RobotView, progress: MissionProgress) -> None:
+        polygon = stance_safety_polygon(view, self._env, progress.references.contacts, self._safety_margin)
+        state.get_mutable_discrete_state(self._polygon).SetFromVector(polygon)
 
     def _ik_answers(self, context) -> dict[str, IkAnswer]:
         answers = {}
@@ -187,9 +201,10 @@ class MissionManager(LeafSystem):
 
     def _update(self, context, state) -> None:
         progress = self.progress(context).copy()
-        if progress.status in (SUCCEEDED, FAILED):
-            return
         view = self._view(context)
+        if progress.status in (SUCCEEDED, FAILED):
+            self._set_polygon(state, view, progress)  # the robot still stands on whatever it stands on
+            return
         phases = self._mission.phases if progress.status == RUNNING else progress.recovery
         phase = phases[progress.index]
         runner = RUNNERS[type(phase)]
@@ -223,6 +238,7 @@ class MissionManager(LeafSystem):
         if outcome != RUNNING:
             self._finish_phase(progress, phases, outcome, view)
         state.get_mutable_abstract_state(self._progress).set_value(progress)
+        self._set_polygon(state, view, progress)
 
     def _fell(self, view: RobotView, progress: MissionProgress) -> bool:
         standing_started = any(r.kind == "stand_up" and r.status == SUCCEEDED for r in progress.records)

@@ -13,6 +13,8 @@ import numpy as np
 from pydrake.math import RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
+from pedi_drake.control.references import safety_polygon_vector
+from pedi_drake.control.tasks import shrink_polygon
 from pedi_drake.exceptions import UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
@@ -72,6 +74,27 @@ def _support_points_W(view: RobotView, env: MissionEnvironment, contacts: np.nda
             if contacts[4 + k] > 0.5:
                 points.append(view.X_WB @ tip_B)
     return np.array(points)
+
+
+def stance_safety_polygon(view: RobotView, env: MissionEnvironment, contacts: np.ndarray, margin: float) -> np.ndarray:
+    """The controller's `safety_polygon` for the loaded contacts (three feet: a triangle).
+
+    Their support polygon (prong tips included) shrunk by `margin` [m], in a frame at the shrunk
+    polygon's vertex centroid turned to the trunk's heading. With fewer than three supports, or
+    nothing left after the shrink, the controller's default (an empty polygon vector).
+    """
+    points = _support_points_W(view, env, contacts)
+    if len(points) < 3:
+        return safety_polygon_vector()
+    vertices_W = shrink_polygon(points[:, :2], margin)
+    if len(vertices_W) < 3:
+        return safety_polygon_vector()
+    origin = vertices_W.mean(axis=0)
+    yaw = RollPitchYaw(view.X_WB.rotation()).yaw_angle()
+    c, s = math.cos(yaw), math.sin(yaw)
+    # Rows are vertices: (v - origin) R_WP, i.e. R_PW (v - origin) for each.
+    vertices_P = (vertices_W - origin) @ np.array([[c, -s], [s, c]])
+    return safety_polygon_vector(vertices_P, origin, yaw)
 
 
 def _trunk_target_for_com(view: RobotView, p_body_ref: np.ndarray, com_xy_goal: np.ndarray) -> np.ndarray:
