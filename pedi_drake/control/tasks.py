@@ -276,15 +276,6 @@ def shrink_polygon(points_xy: np.ndarray, margin: float) -> np.ndarray:
     return convex_hull_ccw(corners)
 
 
-def rectangle_halfplanes(centre: np.ndarray, half_sizes: np.ndarray, yaw: float) -> tuple[np.ndarray, np.ndarray]:
-    """(N, d) with N p <= d of a rectangle of `half_sizes` [m] at `centre` [m], rotated by `yaw` [rad]."""
-    c, s_ = np.cos(yaw), np.sin(yaw)
-    axes = np.array([[c, s_], [-s_, c]])  # rows: the rectangle's x and y axes in world
-    N = np.vstack([axes, -axes])
-    d = N @ np.asarray(centre, float) + np.concatenate([half_sizes, half_sizes])
-    return N, d
-
-
 @dataclasses.dataclass
 class CapturePointBalance:
     """Keeps the capture point xi = c + cdot / omega inside a polygon N xi <= d (paper 000, task 2).
