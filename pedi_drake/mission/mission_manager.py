@@ -182,7 +182,8 @@ class MissionManager(LeafSystem):
         progress = MissionProgress(phase_start=view.time)
         progress.references = References.holding(view.base.p_WB, view.X_WB.rotation(), view.time, self._env.num_prongs)
         state.get_mutable_abstract_state(self._progress).set_value(progress)
-        self._set_polygon(state, view, progress)
+        # The polygon stays the default (zeros) until the first update: the estimate seen here
+        # may not be initialised yet (see `_update`).
 
     def _set_polygon(self, state, view: RobotView, progress: MissionProgress) -> None:
         polygon = stance_safety_polygon(view, self._env, progress.references.contacts, self._safety_margin)
