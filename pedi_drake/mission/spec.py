@@ -24,6 +24,7 @@ from pydrake.common.yaml import yaml_load
 
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.exceptions import MissionFileError
+from pedi_drake.resources import missions_dir
 from pedi_drake.robot import LEG_NAMES
 from pedi_drake.scenario import RobotConfig, SceneObject
 
@@ -211,15 +212,6 @@ class _MissionFile:
     scene: list[SceneObject] = dataclasses.field(default_factory=list)
     robot: RobotConfig | None = None
     phases: list[dict] = dataclasses.field(default_factory=list)
-
-
-def missions_dir() -> Path:
-    """<repo>/missions in a source checkout, pedi_drake/missions in an installed wheel."""
-    package = Path(__file__).resolve().parents[1]
-    for candidate in (package.parent / "missions", package / "missions"):
-        if candidate.is_dir():
-            return candidate
-    raise MissionFileError(f"the shipped missions folder was not found next to {package}")
 
 
 def shipped_missions() -> list[str]:
