@@ -235,7 +235,12 @@ class MissionManager(LeafSystem):
             detail = ReachRunner.timeout_reason(phase, progress) if isinstance(phase, spec.Reach) else "not done"
             outcome, progress.reason = FAILED, f"{phase.name}: timed out after {phase.timeout:.1f} s ({detail})"
         if outcome == RUNNING and self._fell(view, progress):
-            outcome, progress.reason = FAILED, f"{phase.name}: the robot fell (trunk height or tilt out of range)"
+            # The manager sees only the estimate: the judge compares this with what the robot did.
+            outcome = FAILED
+            progress.reason = (
+                f"{phase.name}: the state estimate says the robot fell (trunk height or tilt out of range)"
+            )
+            progress.records[-1].metrics["estimate_fell"] = True
         if outcome != RUNNING:
             self._finish_phase(progress, phases, outcome, view)
         state.get_mutable_abstract_state(self._progress).set_value(progress)

@@ -158,6 +158,24 @@ def _to_trunk(view: RobotView, point, frame: str) -> np.ndarray:
     return view.X_WB.inverse() @ point if frame == "world" else point
 
 
+def target_problem(p_W: np.ndarray, X_WB) -> str | None:
+    """Why no foot can be at `p_W` (a foot centre in the world, trunk at X_WB), or None.
+
+    The ground is the plane z = 0, so a foot centre lower than its radius is in the floor; a foot
+    centre within a radius of the trunk's box is inside the robot.
+    """
+    p_W = np.asarray(p_W, float)
+    if p_W[2] < robot.FOOT_RADIUS:
+        return (
+            f"target below the floor: the foot centre would be at z = {p_W[2]:.3f} m in the world, "
+            f"below the foot radius ({robot.FOOT_RADIUS} m) above the ground"
+        )
+    p_B = X_WB.inverse() @ p_W
+    if np.all(np.abs(p_B) < np.asarray(robot.TRUNK_HALF_EXTENTS) + robot.FOOT_RADIUS):
+        return f"target inside the robot: {np.round(p_B, 3).tolist()} m in the trunk frame is within the trunk"
+    return None
+
+
 def _foot_error(view: RobotView, leg: str, target_W: np.ndarray) -> float:
     return float(np.linalg.norm(view.foot_W(leg) - target_W))
 
@@ -309,6 +327,10 @@ class ReachRunner(PhaseRunner):
             if phase.approach_offset:
                 points.append(np.asarray(target) + np.asarray(phase.approach_offset))
             points.append(np.asarray(target, float))
+            for point in points:
+                problem = target_problem(point if phase.frame == "world" else view.X_WB @ point, view.X_WB)
+                if problem is not None:
+                    raise UnreachableTarget(f"{phase.name}: {leg}: {problem}")
             targets_B[leg] = [_to_trunk(view, point, phase.frame) for point in points]
             targets_W[leg] = np.asarray(target, float) if phase.frame == "world" else view.X_WB @ points[-1]
         _ask_ik(progress, view, targets_B, phase.name)
