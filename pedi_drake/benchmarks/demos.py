@@ -59,7 +59,9 @@ def main() -> int:
     record, judged = simulate_demo(args.name)
     metrics = controller_metrics(record, judged)
     if args.out:
-        write_run(record, judged, Path(args.out))
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        write_run(record, judged, out)
     print(
         json.dumps({"success": judged["success"], "reason": judged["reason"], **dataclasses.asdict(metrics)}, indent=2)
     )
