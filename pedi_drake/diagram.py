@@ -35,7 +35,8 @@ LOGGED_SIGNALS = (
     "go1.imu",
     "base_state",
 )
-SIM_LOGGED_SIGNALS = ("sim.plant_state",)
+# Simulation ground truth for judging: the plant state, the torques the motors applied, the pushes.
+SIM_LOGGED_SIGNALS = ("sim.plant_state", "sim.motor_torque", "sim.push_force")
 # The tolerance of the mission's IK solves [m]: well inside every reach phase's tolerance.
 MISSION_IK_TOLERANCE = 5e-4
 # Simulated sensor signals that are costly to compute: logged through a sample-and-hold.
@@ -55,8 +56,10 @@ class PedipulationDiagram:
 
 
 def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
-    """The scenario with the mission's scene objects added and its robot variant applied."""
-    merged = dataclasses.replace(scenario, scene=list(scenario.scene) + list(mission.scene))
+    """The scenario with the mission's scene objects and pushes added and its robot variant applied."""
+    merged = dataclasses.replace(
+        scenario, scene=list(scenario.scene) + list(mission.scene), pushes=list(scenario.pushes) + list(mission.pushes)
+    )
     if mission.robot is not None:
         merged.robot = dataclasses.replace(scenario.robot, prongs=mission.robot.prongs)
     return merged

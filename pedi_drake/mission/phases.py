@@ -228,6 +228,8 @@ class BodyMoveRunner(PhaseRunner):
     def start(self, phase, progress, view, env):
         p_now, _ = _body_sample(progress, view.time)
         goal = p_now + np.asarray(phase.offset)
+        if phase.height is not None:
+            goal[2] = phase.height
         _move_body(progress, view.time, goal, None, phase.duration)
         progress.memo["goal"] = goal
 
