@@ -13,6 +13,7 @@ Examples:
     python run_sim.py --mission my_mission.yaml --meshcat
     python run_sim.py --scenario_name stand --out out/stand
     python run_sim.py --scenario_text "{sensor_noise: {enabled: true}, random_seed: 3}"
+    python run_sim.py --graphviz out/diagram.dot       # also write the run's diagram (Graphviz)
     python run_sim.py --hardware --mission hit_target_front   # over LCM: a Go1, or the simulator
         # bridge started first in another terminal:
         #   python -m pedi_drake.apps.sim_bridge --mission hit_target_front
@@ -31,7 +32,7 @@ from pathlib import Path  # noqa: E402
 from pydrake.common.yaml import yaml_load  # noqa: E402
 from pydrake.geometry import Meshcat  # noqa: E402
 
-from pedi_drake.diagram import apply_mission  # noqa: E402
+from pedi_drake.diagram import MakePedipulationDiagram, apply_mission  # noqa: E402
 from pedi_drake.exceptions import ConfigError, LcmTimeout  # noqa: E402
 from pedi_drake.mission.spec import load_mission  # noqa: E402
 from pedi_drake.run import run  # noqa: E402
@@ -100,6 +101,11 @@ def main() -> int:
         action="store_true",
         help="Drive the Go1 over LCM (the scenario's bus 'go1') in real time instead of simulating it.",
     )
+    parser.add_argument(
+        "--graphviz",
+        default=None,
+        help="Also write the run's diagram (its systems and their wiring) to this Graphviz file.",
+    )
     args = parser.parse_args()
     try:
         scenario, name, out_dir = _prepare(args)
@@ -110,6 +116,13 @@ def main() -> int:
     if args.meshcat:
         meshcat = Meshcat()
         print(f"Meshcat: {meshcat.web_url()}")
+    if args.graphviz:
+        # The same function builds the run's diagram below; this copy is only drawn. Depth 1
+        # keeps the station one box, as controllers see it.
+        diagram = MakePedipulationDiagram(scenario, hardware=args.hardware).diagram
+        Path(args.graphviz).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.graphviz).write_text(diagram.GetGraphvizString(max_depth=1))
+        print(f"diagram written to {args.graphviz}")
     where = f"over LCM ({scenario.lcm_buses['go1'].lcm_url})" if args.hardware else "in simulation"
     print(f"running {name} {where} ({scenario.simulation_duration:.1f} s max, seed {scenario.random_seed})", flush=True)
     try:

@@ -24,7 +24,8 @@ setup(
     package_data={
         "pedi_drake.models": ["*.xml", "**/*.urdf", "**/*.sdf", "**/*.obj", "**/*.py"],
         "pedi_drake.scenarios": ["*.yaml"],
-        "pedi_drake.missions": ["*.yaml"],
+        # The controller demonstrations (pedi_drake.benchmarks.demos) in their subfolder.
+        "pedi_drake.missions": ["*.yaml", "demos/*.yaml"],
         "pedi_drake.studies": ["*.yaml"],
         "pedi_drake.go1_driver": ["README.md"],
         "pedi_drake.go1_driver.lcmtypes": ["*.lcm", "*.sh"],

@@ -100,6 +100,52 @@ class SceneObject:
 
 
 @dataclasses.dataclass
+class Push:
+    """A push on a body of the simulated world: ramps up, holds, ramps down (a disturbance).
+
+    Applied in the simulated station only (never on hardware, never seen by a controller), and
+    logged as `sim.push_force`.
+    """
+
+    # Force at full strength [N] (>= 0).
+    force: float = 0.0
+    # Name of the pushed body (unique in the plant: a Go1 link or a scene object's body).
+    body: str = "trunk"
+    # Where the force acts, in the body's frame [m].
+    point: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+    # Direction of the force in the world (a unit vector) [-].
+    direction: list[float] = dataclasses.field(default_factory=lambda: [1.0, 0.0, 0.0])
+    # Simulated time the ramp up begins [s].
+    start: float = 0.0
+    # Time to ramp from zero to full force, and from full force back to zero [s] (0: a step).
+    ramp: float = 0.0
+    # Time at full force, between the two ramps [s].
+    duration: float = 1.0
+
+    def end(self) -> float:
+        """Simulated time the push has ramped back to zero [s]."""
+        return self.start + 2 * self.ramp + self.duration
+
+    def problems(self) -> list[tuple[str, str]]:
+        """(field, problem) for every invalid value; empty when the push is valid."""
+        found = []
+        for name in ("force", "start", "ramp", "duration"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                found.append((name, f"must be a finite number >= 0, got {value}"))
+        if not self.body:
+            found.append(("body", "must name a body of the plant (default trunk)"))
+        if len(self.point) != 3:
+            found.append(("point", f"expected [x, y, z] in metres (body frame), got {self.point}"))
+        if len(self.direction) != 3:
+            found.append(("direction", f"expected a unit [x, y, z] vector (world), got {self.direction}"))
+        # 1e-3: a direction written to four digits, such as [0.7071, 0.7071, 0], is unit enough.
+        elif abs(math.sqrt(sum(v * v for v in self.direction)) - 1.0) > 1e-3:
+            found.append(("direction", f"must be a unit vector (world), got {self.direction}"))
+        return found
+
+
+@dataclasses.dataclass
 class SensorNoiseConfig:
     """Gaussian noise of the simulated sensors (standard deviations); off unless enabled."""
 
@@ -129,6 +175,8 @@ class Scenario:
     scene: list[SceneObject] = dataclasses.field(default_factory=list)
     # Coulomb friction of the ground [-].
     ground_friction: float = 0.8
+    # Pushes on the simulated world (disturbances; simulation only), in any order.
+    pushes: list[Push] = dataclasses.field(default_factory=list)
     # Simulated sensor noise.
     sensor_noise: SensorNoiseConfig = dataclasses.field(default_factory=SensorNoiseConfig)
     # Which controller drives the robot: "stand_pd" or "whole_body".
@@ -225,6 +273,9 @@ class Scenario:
         need(self.stand.duration > 0 and self.stand.period > 0, "stand", "duration and period must be > 0")
         for problem in scene_problems(self.scene, base_dir):
             raise ScenarioError(f"{where}: {problem}")
+        for i, push in enumerate(self.pushes):
+            for field, problem in push.problems():
+                need(False, f"pushes[{i}].{field}", problem)
         if self.robot.prongs is not None:
             try:
                 self.robot.prongs.validate(where="robot.prongs")

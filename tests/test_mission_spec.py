@@ -3,9 +3,12 @@
 from pathlib import Path
 
 import pytest
+from pydrake.common.yaml import yaml_load
 
 from pedi_drake.exceptions import MissionFileError
-from pedi_drake.mission.spec import PHASE_KINDS, LegToSupport, Reach, load_mission, shipped_missions
+from pedi_drake.mission.spec import PHASE_KINDS, LegToSupport, Reach, load_mission, shipped_demos, shipped_missions
+from pedi_drake.resources import scenarios_dir
+from pedi_drake.scenario import load_scenario
 
 PAPER_MISSIONS = {
     "hit_target_front",
@@ -34,6 +37,18 @@ def test_shipped_mission_loads_and_starts_by_standing_up(name):
     mission = load_mission(name)
     assert mission.phases[0].__class__.__name__ == "StandUp"
     assert any(isinstance(phase, Reach) for phase in mission.phases)
+
+
+def test_every_demo_mission_loads_with_a_demo_scenario_of_its_name():
+    demos_file = scenarios_dir() / "wbc_demos.yaml"
+    names = {name.removeprefix("demos/") for name in shipped_demos()}
+    assert names == set(yaml_load(filename=str(demos_file)))
+    for name in names:
+        scenario = load_scenario(filename=demos_file, scenario_name=name)
+        assert scenario.mission == f"demos/{name}" and scenario.estimator == "ground_truth"
+        assert load_mission(scenario.mission).name == name
+    # The demos are not library missions (those run on the default scenario).
+    assert not names & set(shipped_missions())
 
 
 def test_numbers_are_read_as_floats(tmp_path):

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake import robot
-from pedi_drake.evaluation import mission_results
+from pedi_drake.evaluation import capture_point, mission_results
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
 from pedi_drake.evaluation.result_file import write_result
 from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
@@ -109,6 +109,14 @@ def judge_run(record) -> dict:
         status_log, body_log = logs["mission.status"].data, logs["mission.body_reference"].data
         result["max_base_drift_m"] = mission_results.max_base_drift(p_WB, body_log, status_log)
         result["presses"] = mission_results.press_results(progress)
+        polygon = logs["mission.safety_polygon"]
+        result["three_leg_capture_point_margin_m"] = capture_point.three_leg_margin(
+            polygon.times,
+            logs["controller.diagnostics"].data,
+            polygon.data,
+            logs["mission.contact_set"].data,
+            result["phases"],
+        )
         if hardware:
             result["foot_errors_m"] = mission_results.estimated_foot_errors(progress)
         else:
