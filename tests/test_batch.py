@@ -26,7 +26,8 @@ REPO = Path(__file__).resolve().parents[1]
 STANDS = {
     "name": "stands",
     "kind": "mission",
-    "base": {"scenario_name": "stand", "scenario_text": "{simulation_duration: 0.6}"},
+    # A stand succeeds once the trunk is at its height: a quick blend, and time to get there.
+    "base": {"scenario_name": "stand", "scenario_text": "{simulation_duration: 0.8, stand: {duration: 0.5}}"},
     "factors": [
         {"name": "ground_friction", "values": [0.6, 0.9]},
         {"name": "seed", "field": "random_seed", "values": [0, 1]},

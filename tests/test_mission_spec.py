@@ -52,14 +52,14 @@ def test_every_demo_mission_loads_with_a_demo_scenario_of_its_name():
 
 
 def test_numbers_are_read_as_floats(tmp_path):
-    mission = load_mission(_write(tmp_path, "phases:\n  - {kind: reach, leg: FL, target: [1, 0, 0]}\n"))
-    assert mission.phases[0].target == [1.0, 0.0, 0.0] and isinstance(mission.phases[0].target[0], float)
+    mission = load_mission(_write(tmp_path, "phases:\n  - {kind: reach, leg: FL, target: [1, 0, 1]}\n"))
+    assert mission.phases[0].target == [1.0, 0.0, 1.0] and isinstance(mission.phases[0].target[0], float)
 
 
 def test_reach_takes_companion_legs(tmp_path):
-    body = "phases:\n  - {kind: reach, leg: FR, target: [1, -1, 0], together: [{leg: FL, target: [1, 1, 0]}]}\n"
+    body = "phases:\n  - {kind: reach, leg: FR, target: [1, -1, 1], together: [{leg: FL, target: [1, 1, 1]}]}\n"
     (phase,) = load_mission(_write(tmp_path, body)).phases
-    assert [(c.leg, c.target) for c in phase.together] == [("FL", [1.0, 1.0, 0.0])]
+    assert [(c.leg, c.target) for c in phase.together] == [("FL", [1.0, 1.0, 1.0])]
     assert isinstance(phase.together[0].target[0], float)
     shipped = {phase.name: phase for phase in load_mission("prong_push_box").phases}
     assert [shipped[name].together[0].leg for name in ("touch_box", "push_box")] == ["FL", "FL"]

@@ -172,3 +172,15 @@ def test_sliding_prongs_that_friction_cannot_stop_brake_at_the_limit_instead_of_
     mu = controller.config.friction / np.sqrt(2.0)
     assert np.all(np.abs(forces[:, 0]) <= mu * forces[:, 2] + 1e-6)
     assert np.sum(forces[:, 0]) < -0.9 * mu * np.sum(forces[:, 2])  # braking, at the friction limit
+
+
+def test_a_safety_polygon_with_two_vertices_is_rejected_as_bad_input():
+    controller, context = standing_controller()
+    polygon = references.safety_polygon_vector(np.array([[0.1, 0.0], [0.0, 0.1], [-0.1, 0.0]]))
+    controller.safety_polygon_port.FixValue(context, polygon)
+    _, diag = tick(controller, context, 2)
+    assert diag[controller.diag["status"]][0] == STATUS_OK
+    polygon[0] = 2.0  # a count the layout does not allow
+    controller.safety_polygon_port.FixValue(context, polygon)
+    _, diag = tick(controller, context, 1)
+    assert diag[controller.diag["status"]][0] == STATUS_BAD_INPUT

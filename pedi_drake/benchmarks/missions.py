@@ -6,8 +6,9 @@
 A batch study (the same as studies/missions_benchmark.yaml), run on Ray (every core of this
 machine) or serially. Prints one row per mission (successes, foot errors, trunk drift,
 real-time factor without any visualisation, the estimator's largest errors against the
-simulated truth, and the mission-specific checks: door opening, box push, obstacle
-classification) and writes every run's result.json content to the JSON file.
+simulated truth, the capture point's smallest margin in the safety polygon on three feet [mm],
+and the mission-specific checks: door opening, box push, obstacle classification) and writes
+every run's result.json content to the JSON file.
 """
 
 import argparse
@@ -68,6 +69,10 @@ def summarise(mission: str, runs: list[dict]) -> dict:
         "real_time_factor_median": statistics.median(r["real_time_factor"] for r in runs),
         "failures": [r["reason"] for r in runs if not r["success"]],
     }
+    margins = [r["three_leg_capture_point_margin_m"] for r in runs if r.get("three_leg_capture_point_margin_m")]
+    if margins:
+        # The capture point's smallest distance inside the manager's safety polygon on three feet.
+        row["capture_point_margin_min_m"] = min(m["min"] for m in margins)
     estimates = [r["estimator_errors"] for r in runs if "estimator_errors" in r]
     if estimates:
         row["estimator_position_error_max_m"] = max(e["position_error_max_m"] for e in estimates)
@@ -112,7 +117,7 @@ def main() -> None:
     summary = {m: summarise(m, runs) for m, runs in results.items()}
     print(
         f"\n{'mission':<24} {'ok':>5} {'err med':>8} {'err max':>8} {'drift':>7} {'RTF':>5} "
-        f"{'est pos':>8} {'est vel':>8} {'est ori':>8}  extra"
+        f"{'est pos':>8} {'est vel':>8} {'est ori':>8} {'cp marg':>8}  extra"
     )
     for mission, row in summary.items():
         extra = ""
@@ -134,7 +139,7 @@ def main() -> None:
             f"{mm(row['foot_error_max_m'])} {mm(row['max_base_drift_m'])} "
             f"{row['real_time_factor_median']:5.2f} {mm(row.get('estimator_position_error_max_m'))} "
             f"{mm(row.get('estimator_velocity_rms_max_m_s'))} {deg(row.get('estimator_orientation_error_max_deg'))}"
-            f"  {extra}"
+            f" {mm(row.get('capture_point_margin_min_m'))}  {extra}"
         )
     all_errors = [row["error"] for runs in results.values() for r in runs for row in r["foot_errors_m"]]
     if all_errors:
