@@ -163,4 +163,8 @@ def _internal_error(error: Exception, out_dir: Path) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    code = main()
+    # The run is over and written: a signal now has nothing to stop. Ignored rather than left to
+    # Python's shutdown, which puts the default handlers back and would die of it (exit -2).
+    STOP.ignore_from_now_on()
+    sys.exit(code)
