@@ -76,6 +76,7 @@ def test_reach_takes_companion_legs(tmp_path):
         ("phases:\n  - {kind: wait, timeout: -1}\n", r"phases\[0\]\.timeout: must be > 0"),
         ("phases:\n  - {kind: reach, frame: hip}\n", r"phases\[0\]\.frame: must be one of"),
         ("phases:\n  - {kind: press, direction: [0, 0, 0]}\n", r"phases\[0\]\.direction: expected a unit"),
+        ("phases:\n  - {kind: body_move, height: -0.1}\n", r"phases\[0\]\.height: must be a finite number >= 0"),
         ("phases: []\n", r"phases: expected a non-empty list"),
         ("phases:\n  - {kind: wait, name: a}\n  - {kind: wait, name: a}\n", r"duplicate phase names \['a'\]"),
         ("scene:\n  - {kind: box, positon: [0, 0, 0]}\nphases:\n  - {kind: wait}\n", r"scene\[0\]\.positon: unknown"),
