@@ -7,6 +7,7 @@ replay.html, PNG plots and the logged signals (logs.npz, read back with
 `pedi_drake.evaluation.run_logs.read_run_logs`).
 """
 
+import contextlib
 import dataclasses
 import time
 from pathlib import Path
@@ -18,6 +19,7 @@ from pydrake.systems.framework import Context, EventStatus
 from pedi_drake.diagram import MakePedipulationDiagram, PedipulationDiagram
 from pedi_drake.evaluation.judge import judge_run, write_run
 from pedi_drake.evaluation.run_logs import SignalLog
+from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.mission.progress import FAILED, SUCCEEDED, MissionProgress
 from pedi_drake.scenario import Scenario
 
@@ -82,13 +84,15 @@ def simulate(
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
     monitor = _MissionMonitor(diagram, manager, len(built.mission.phases) if built.mission else 0, quiet)
     simulator.set_monitor(monitor)
-    simulator.Initialize()
-    recording = meshcat is not None and not hardware
-    if recording:
-        meshcat.StartRecording(set_visualizations_while_recording=False)
-    wall_start = time.perf_counter()
-    simulator.AdvanceTo(scenario.simulation_duration)
-    wall_time = time.perf_counter() - wall_start
+    # On hardware every exit of the loop (its end, Ctrl-C, SIGTERM, an exception) leaves damping on the wire.
+    with hardware_run(diagram, realtime_rate=realtime_rate) if hardware else contextlib.nullcontext():
+        simulator.Initialize()
+        recording = meshcat is not None and not hardware
+        if recording:
+            meshcat.StartRecording(set_visualizations_while_recording=False)
+        wall_start = time.perf_counter()
+        simulator.AdvanceTo(scenario.simulation_duration)
+        wall_time = time.perf_counter() - wall_start
     replay_html = None
     if recording:
         meshcat.StopRecording()

@@ -68,7 +68,9 @@ class Harness:
             t = self.context.get_time()
             if fresh_status:
                 self.status_time = t + self.wall_offset
-            self.filter.GetInputPort("status_receipt_times").FixValue(self.context, [self.status_time] * 2)
+            self.filter.GetInputPort("status_silence").FixValue(
+                self.context, [t + self.wall_offset - self.status_time] * 2
+            )
             self.simulator.AdvanceTo(t + PERIOD)
         return self.command()
 

@@ -51,6 +51,10 @@ class Go1DriverConfig:
 
     # Wait this long for the first status message when the driver starts [s].
     first_status_timeout: float = 5.0
+    # Every exit of a hardware run (mission end, Ctrl-C, SIGTERM, an exception) puts damping on the
+    # wire for this long before the process leaves [s]: the bridge holds the last command it
+    # received, so the last one must be damping, repeated in case a datagram is lost.
+    shutdown_damping_duration: float = 0.3
     # Safety layer bounds and watchdogs.
     safety: Go1SafetyConfig = dataclasses.field(default_factory=Go1SafetyConfig)
     # The simulator bridge's latency and message drops.
