@@ -31,7 +31,6 @@ from pydrake.systems.framework import Diagram
 
 from pedi_drake.go1_driver.hardware_station import hardware_link
 
-
 # [s] how long a thread computing in Python may keep the GIL while another waits for it.
 SWITCH_INTERVAL = 0.0005
 
