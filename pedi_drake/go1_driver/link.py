@@ -235,6 +235,11 @@ class Go1Link:
     def config(self) -> Go1DriverConfig:
         return self._config
 
+    @property
+    def transport(self):
+        """The bus itself (an `lcm.LCM`): for a replay on an in-process bus, which it shares."""
+        return self._transport
+
     @staticmethod
     def from_url(url: str, config: Go1DriverConfig, *, threaded: bool = True) -> "Go1Link":
         return Go1Link(lcm_module.LCM(url), config, url=url, threaded=threaded)
