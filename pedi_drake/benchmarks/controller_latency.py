@@ -133,6 +133,9 @@ class Replay:
         context = self.simulator.get_context()
         manager_context = self.manager.GetMyContextFromRoot(context)
         tick_ms = np.zeros(ticks)
+        # The loop thread's own CPU time in the tick: wall time far above it means the thread was
+        # waiting (preempted by other processes), not computing.
+        cpu_ms = np.zeros(ticks)
         phase_index = np.zeros(ticks, dtype=int)
         gc_generation = np.full(ticks, -1)
         gc.callbacks.append(on_gc)
@@ -142,9 +145,10 @@ class Replay:
                 collections.clear()
                 if profile is not None:
                     profile.enable()
-                start = time.perf_counter()
+                start, cpu_start = time.perf_counter(), time.thread_time()
                 self.simulator.AdvanceTo((k + 1) * self.period)
                 tick_ms[k] = 1e3 * (time.perf_counter() - start)
+                cpu_ms[k] = 1e3 * (time.thread_time() - cpu_start)
                 if profile is not None:
                     profile.disable()
                 phase_index[k] = self.manager.progress(manager_context).index
@@ -156,7 +160,7 @@ class Replay:
             self.link.close()
         transition = np.zeros(ticks, dtype=bool)
         transition[1:] = phase_index[1:] != phase_index[:-1]
-        return {"tick_ms": tick_ms, "gc_generation": gc_generation, "transition": transition}
+        return {"tick_ms": tick_ms, "cpu_ms": cpu_ms, "gc_generation": gc_generation, "transition": transition}
 
 
 def _max_or_none(x: np.ndarray) -> float | None:
@@ -171,6 +175,7 @@ def _summary(run: dict, period_ms: float) -> dict:
     return {
         "ticks": int(tick.size),
         "tick_ms": _distribution(tick),
+        "tick_cpu_ms": _distribution(run["cpu_ms"]),
         "deadline_misses_per_10000": float(1e4 * np.count_nonzero(late) / tick.size),
         "ticks_with_gc": {f"gen{g}": int(np.count_nonzero(run["gc_generation"] == g)) for g in range(3)},
         "max_tick_with_full_gc_ms": float(tick[run["gc_generation"] == 2].max())
@@ -182,6 +187,7 @@ def _summary(run: dict, period_ms: float) -> dict:
             {
                 "tick": int(k),
                 "ms": float(tick[k]),
+                "cpu_ms": float(run["cpu_ms"][k]),
                 "gc_generation": int(run["gc_generation"][k]),
                 "phase_transition": bool(run["transition"][k]),
             }
@@ -236,12 +242,15 @@ def main() -> None:
     for name, row in rows.items():
         t = row["tick_ms"]
         worst = row["worst_ticks"][0]
-        cause = f"gc gen{worst['gc_generation']}" if worst["gc_generation"] >= 0 else ""
-        cause += " phase transition" if worst["phase_transition"] else ""
+        cause = f"gc gen{worst['gc_generation']} " if worst["gc_generation"] >= 0 else ""
+        cause += "phase transition " if worst["phase_transition"] else ""
+        cause += f"(its CPU time {worst['cpu_ms']:.2f} ms)"
         print(
             f"{name:<18}{t['median']:8.3f}{t['p99']:8.3f}{t['p99_9']:8.3f}{t['max']:9.2f}"
-            f"{row['deadline_misses_per_10000']:10.1f}{t['median'] / baseline_ms:14.2f}  {cause or 'none'}"
+            f"{row['deadline_misses_per_10000']:10.1f}{t['median'] / baseline_ms:14.2f}  {cause}"
         )
+        cpu = row["tick_cpu_ms"]
+        print(f"{'  CPU time':<18}{cpu['median']:8.3f}{cpu['p99']:8.3f}{cpu['p99_9']:8.3f}{cpu['max']:9.2f}")
     total = sum(stages.values())
     print("mean own time per tick by stage (profiled pass, cProfile inflates Python calls):")
     for stage, ms in stages.items():
