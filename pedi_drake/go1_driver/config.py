@@ -29,6 +29,11 @@ class Go1SafetyConfig:
     # Switch to damping when the driver's own loop has not published for this long [s]: the
     # controller stopped producing (a hang); the robot-side bridge would hold the last command.
     command_timeout: float = 0.05
+    # The first ticks of a run do one-time work (the mission's first update, the first solves, the
+    # first evaluations of every cache) while the soft start publishes the measured pose: during
+    # the first `warmup_duration` [s] of the loop the loop-silence limit is `warmup_command_timeout` [s].
+    warmup_duration: float = 0.1
+    warmup_command_timeout: float = 0.5
     # Duration of the soft start that blends targets from the measured pose [s].
     soft_start_duration: float = 1.0
     # rc_command fields whose non-zero value latches the E-stop (the remote's button).

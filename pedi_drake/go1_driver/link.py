@@ -43,7 +43,7 @@ import numpy as np
 
 from pedi_drake.go1_driver import constants as c
 from pedi_drake.go1_driver.config import Go1DriverConfig
-from pedi_drake.go1_driver.safety import SafetyLimits, damping_command
+from pedi_drake.go1_driver.safety import SafetyLimits, command_timeout, damping_command
 
 _log = logging.getLogger(__name__)
 
@@ -350,7 +350,8 @@ class Go1Link:
         now = self._clock()
         with self._publish_lock:
             silent = now - self._last_publish
-            if self.guard_latched is None and silent > self._config.safety.command_timeout:
+            elapsed = self._message_id * self._period
+            if self.guard_latched is None and silent > command_timeout(self._config.safety, elapsed):
                 self.guard_latched = "controller_silence"
                 _log.error("Go1 driver: the control loop has not published for %.0f ms, damping", 1e3 * silent)
             if self.guard_latched is not None and silent >= self._period:

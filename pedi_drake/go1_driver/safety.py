@@ -181,6 +181,11 @@ def bound_command(
     return pack_command(q_des, qd_des, kp, kd, tau_ff), flags
 
 
+def command_timeout(config: Go1SafetyConfig, elapsed: float) -> float:
+    """The loop-silence limit [s] after `elapsed` [s] of the loop (longer while it warms up)."""
+    return config.warmup_command_timeout if elapsed < config.warmup_duration else config.command_timeout
+
+
 def soft_start_blend(command: np.ndarray, q_start: np.ndarray, fraction: float) -> np.ndarray:
     """The command with targets blended from q_start [rad]: fraction 0 holds q_start, 1 passes through.
 
@@ -275,7 +280,7 @@ class Go1SafetyFilter(LeafSystem):
             x[_T_START] = context.get_time()
             x[_CMD] = pack_command(x[_Q_START], 0.0, 0.0, 0.0, 0.0)
             x[_STARTED] = 1.0
-        elif now - x[_LAST_WALL] > config.command_timeout:
+        elif now - x[_LAST_WALL] > command_timeout(config, context.get_time() - x[_T_START]):
             fired.add("controller_silence")
         x[_LAST_WALL] = now
 
