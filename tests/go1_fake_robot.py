@@ -60,7 +60,8 @@ def main() -> int:
     parser = argparse.ArgumentParser()
     parser.add_argument("url")
     parser.add_argument("out")
-    parser.add_argument("--flood_at", type=float, default=None, help="start of the flood after publishing begins [s]")
+    # After the first command, so that the driver has certainly joined the bus when the flood starts.
+    parser.add_argument("--flood_at", type=float, default=None, help="start of the flood after the first command [s]")
     parser.add_argument("--flood_duration", type=float, default=1.0)
     parser.add_argument("--flood_rate", type=float, default=500.0, help="messages per second per channel and kind")
     parser.add_argument("--silent_at", type=float, default=None, help="stop publishing status after this long [s]")
@@ -83,10 +84,12 @@ def main() -> int:
     print("publishing", flush=True)
     start = time.monotonic()
     next_status = start
-    next_flood = start + args.flood_at if args.flood_at is not None else None
-    flood_end = next_flood + args.flood_duration if next_flood is not None else None
+    next_flood = flood_end = None
     while not stop.is_set():
         now = time.monotonic()
+        if args.flood_at is not None and next_flood is None and arrivals:
+            next_flood = arrivals[0] + args.flood_at
+            flood_end = next_flood + args.flood_duration
         silent = args.silent_at is not None and now > start + args.silent_at
         if now >= next_status and not silent:
             bus.publish(c.LEG_CONTROL_CHANNEL, leg)
