@@ -281,6 +281,19 @@ class Scenario:
                 self.robot.prongs.validate(where="robot.prongs")
             except ProngDesignError as error:
                 raise ScenarioError(f"{where}: {error}") from None
+        # One control period: the estimator, the controller and the driver tick together (the
+        # estimator integrates over its period and the driver's rate limit and watchdogs count it).
+        if self.controller == "whole_body":
+            periods = {
+                "whole_body.period": self.whole_body.period,
+                "kalman.period": self.kalman.period,
+                "go1_driver.safety.period": self.go1_driver.safety.period,
+            }
+            need(
+                len(set(periods.values())) == 1,
+                "whole_body.period",
+                f"the control period must be the same everywhere, got {periods}",
+            )
         for problem in self.kalman.validate(where="kalman"):
             raise ScenarioError(f"{where}: {problem}")
 

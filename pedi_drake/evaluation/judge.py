@@ -14,6 +14,7 @@ from pedi_drake.evaluation.estimator_accuracy import estimate_errors
 from pedi_drake.evaluation.result_file import write_result
 from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
 from pedi_drake.fall import fell_during
+from pedi_drake.go1_driver.hardware_station import hardware_link
 from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
 from pedi_drake.run_checks import control_period
@@ -82,6 +83,12 @@ def judge_run(record) -> dict:
             station.GetOutputPort("driver.status").Eval(station_context),
             station.GetOutputPort("driver.message_counts").Eval(station_context),
         )
+        # The link's own view: every message by channel (rejected ones by reason), the loop's
+        # lateness and deadline misses, and whether its guard had to damp a silent loop.
+        link_report = hardware_link(station).report()
+        result["driver"].update(link_report)
+        if result["driver"]["latched"] is None and link_report["guard"]["latched"] == "controller_silence":
+            result["driver"]["latched"] = "controller_silence"
     if "controller.diagnostics" in logs:
         tick_ms = 1e3 * logs["controller.diagnostics"].data[2]
         tick_ms = tick_ms[tick_ms > 0]
