@@ -24,12 +24,16 @@ from pydrake.geometry import Meshcat
 from pedi_drake.exceptions import ConfigError, LcmTimeout
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.simulation_run import run
-from pedi_drake.station.scenario import default_scenario_file, load_scenario
+from pedi_drake.station.scenario import MISSION_CONTROLLERS, default_scenario_file, load_scenario
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--mission", default=None, help="Mission name (missions/) or YAML file; runs under whole_body.")
+    parser.add_argument(
+        "--mission",
+        default=None,
+        help="Mission name (missions/) or YAML file (controller: whole_body unless the scenario picks one).",
+    )
     parser.add_argument("--scenario_file", default=str(default_scenario_file()), help="YAML file of named scenarios.")
     parser.add_argument("--scenario_name", default="default", help="Scenario to run from --scenario_file.")
     parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto the scenario.")
@@ -55,7 +59,9 @@ def main() -> int:
         mission = None
         if args.mission is not None:
             mission = load_mission(args.mission)  # validate now: bad input exits 2 before anything runs
-            scenario.mission, scenario.controller = args.mission, "whole_body"
+            scenario.mission = args.mission
+            if scenario.controller not in MISSION_CONTROLLERS:
+                scenario.controller = "whole_body"
         elif scenario.mission:
             mission = load_mission(scenario.mission)
         if mission is not None and args.duration is None:

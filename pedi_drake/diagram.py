@@ -10,6 +10,7 @@ from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import VectorLogSink
 
+from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.stand_controller import StandController
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
@@ -18,7 +19,7 @@ from pedi_drake.exceptions import ScenarioError
 from pedi_drake.log_hold import LogHold
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
-from pedi_drake.station.scenario import Scenario
+from pedi_drake.station.scenario import MISSION_CONTROLLERS, Scenario
 from pedi_drake.station.station import MakeStation
 from pedi_drake.station.wall_clock import WallClock
 
@@ -63,8 +64,8 @@ def MakePedipulationDiagram(
     """Wires station, estimator and controller for `scenario`, with loggers of LOGGED_SIGNALS."""
     mission = load_mission(scenario.mission) if scenario.mission else None
     if mission is not None:
-        if scenario.controller != "whole_body":
-            raise ScenarioError(f"mission: {scenario.mission!r} needs controller: whole_body")
+        if scenario.controller not in MISSION_CONTROLLERS:
+            raise ScenarioError(f"mission: {scenario.mission!r} needs controller: one of {MISSION_CONTROLLERS}")
         scenario = apply_mission(scenario, mission)
     builder = DiagramBuilder()
     station = builder.AddNamedSystem("station", MakeStation(scenario, meshcat, hardware=hardware))
@@ -88,9 +89,11 @@ def MakePedipulationDiagram(
         controller = builder.AddNamedSystem("controller", StandController(scenario.stand))
         builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
     else:
-        controller = builder.AddNamedSystem(
-            "controller", WholeBodyController(scenario.whole_body, scenario.robot.prongs)
-        )
+        if scenario.controller == "projected_impedance":
+            system = ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs)
+        else:
+            system = WholeBodyController(scenario.whole_body, scenario.robot.prongs)
+        controller = builder.AddNamedSystem("controller", system)
         builder.Connect(base_state, controller.base_state_port)
         builder.Connect(station.GetOutputPort("go1.position_measured"), controller.position_port)
         builder.Connect(station.GetOutputPort("go1.velocity_measured"), controller.velocity_port)

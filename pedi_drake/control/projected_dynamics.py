@@ -91,14 +91,22 @@ _INFINITY = 1e30
 _DAQP_OK = (1, 2)
 
 
-def pseudo_inverse(A: np.ndarray, rank_tolerance: float = RANK_TOLERANCE) -> tuple[np.ndarray, int]:
-    """(A^+, rank) of A (m, n) by SVD, singular values below `rank_tolerance * sigma_max` dropped."""
+def pseudo_inverse(
+    A: np.ndarray, rank_tolerance: float = RANK_TOLERANCE, scale: float | None = None
+) -> tuple[np.ndarray, int]:
+    """(A^+, rank) of A (m, n) by SVD, singular values below `rank_tolerance * scale` dropped.
+
+    `scale` defaults to the largest singular value; a task projected into a null space passes the
+    scale of its unprojected matrix, so that a null space that is used up (all singular values at
+    rounding level) gives rank 0 instead of amplified rounding noise.
+    """
     if A.size == 0:
         return np.zeros((A.shape[1], A.shape[0])), 0
     U, sigma, Vt = np.linalg.svd(A, full_matrices=False)
-    if sigma[0] <= 0.0:
+    reference = sigma[0] if scale is None else scale
+    if sigma[0] <= 0.0 or reference <= 0.0:
         return np.zeros((A.shape[1], A.shape[0])), 0
-    rank = int(np.count_nonzero(sigma > rank_tolerance * sigma[0]))
+    rank = int(np.count_nonzero(sigma > rank_tolerance * reference))
     return (Vt[:rank].T / sigma[:rank]) @ U[:, :rank].T, rank
 
 
@@ -234,7 +242,8 @@ def prioritized_force(
         residuals.append(float(np.linalg.norm(loop)))
     for task in lower:
         J_prec = task.J @ N
-        Lambda, rank = pseudo_inverse(J_prec @ A @ J_prec.T, rank_tolerance)
+        scale = float(np.linalg.norm(task.J @ A @ task.J.T))  # the unprojected task's inverse inertia
+        Lambda, rank = pseudo_inverse(J_prec @ A @ J_prec.T, rank_tolerance, scale)
         if rank == 0:
             residuals.append(float(np.linalg.norm(task.desired - task.J @ (A @ u + vdot_0) - task.Jdot_v)))
             continue

@@ -15,7 +15,7 @@ from pydrake.lcm import DrakeLcmParams
 from pydrake.multibody.plant import MultibodyPlantConfig
 
 from pedi_drake.config_validation import check_against_schema
-from pedi_drake.control.config import WholeBodyControllerConfig
+from pedi_drake.control.config import ProjectedImpedanceConfig, WholeBodyControllerConfig
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.exceptions import ProngDesignError, ScenarioError
 from pedi_drake.prongs import ProngDesign
@@ -23,7 +23,9 @@ from pedi_drake.prongs import ProngDesign
 SCENE_OBJECT_KINDS = ("door", "box", "target_panel", "back_object", "fixed_obstacle", "soft_obstacle")
 INITIAL_POSES = ("lying", "standing")
 ESTIMATORS = ("ground_truth", "kalman")
-CONTROLLERS = ("stand_pd", "whole_body")
+CONTROLLERS = ("stand_pd", "whole_body", "projected_impedance")
+# The controllers that run missions (the same ports; see pedi_drake.control).
+MISSION_CONTROLLERS = ("whole_body", "projected_impedance")
 DEFAULT_GO1_LCM_URL = "udpm://239.255.76.67:7667?ttl=0"
 
 
@@ -119,12 +121,15 @@ class Scenario:
     ground_friction: float = 0.8
     # Simulated sensor noise.
     sensor_noise: SensorNoiseConfig = dataclasses.field(default_factory=SensorNoiseConfig)
-    # Which controller drives the robot: "stand_pd" or "whole_body".
+    # Which controller drives the robot: "stand_pd", "whole_body" (the HQP of papers 000 / 003) or
+    # "projected_impedance" (paper 002's projected inverse dynamics with foot impedance).
     controller: str = "stand_pd"
     # Settings of the stand controller.
     stand: StandControllerConfig = dataclasses.field(default_factory=StandControllerConfig)
     # Settings of the whole-body controller.
     whole_body: WholeBodyControllerConfig = dataclasses.field(default_factory=WholeBodyControllerConfig)
+    # Settings of paper 002's projected-impedance controller.
+    projected_impedance: ProjectedImpedanceConfig = dataclasses.field(default_factory=ProjectedImpedanceConfig)
     # The mission to run (a name in missions/ or a YAML path); empty for none.
     mission: str = ""
     # Floating-base estimate used by controllers: "kalman" (IMU + leg kinematics, simulation and
@@ -181,6 +186,8 @@ class Scenario:
             except ProngDesignError as error:
                 raise ScenarioError(f"{where}: {error}") from None
         for problem in self.kalman.validate(where="kalman"):
+            raise ScenarioError(f"{where}: {problem}")
+        for problem in self.projected_impedance.validate(where="projected_impedance"):
             raise ScenarioError(f"{where}: {problem}")
         for number_field in ("simulation_duration", "visualization_period", "ground_friction"):
             need(math.isfinite(getattr(self, number_field)), number_field, "must be finite")
