@@ -139,9 +139,11 @@ class ProjectedImpedanceConfig:
     # Fraction of the effort limits the contact QP may use [-].
     torque_limit_scale: float = 0.9
     # Contact QP weights: squared torques [1/(N m)^2] and squared distance of the forces from an
-    # even share of the weight [1/N^2].
+    # even share of the weight [1/N^2]. The share term keeps load on the feet when prongs are down
+    # (torques alone would put it all on the prongs, which cost no torque, and leave a placed foot
+    # at its minimum force).
     torque_weight: float = 1.0
-    force_regularization_weight: float = 1e-3
+    force_regularization_weight: float = 0.1
 
     # Low-pass time constant of the foot error acceleration in the force estimate (Eq. 11) [s].
     force_estimate_filter_time: float = 0.02

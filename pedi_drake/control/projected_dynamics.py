@@ -14,8 +14,10 @@ Jc vdot + Jcdot v = 0. (The contact velocity damping kd [1/s] of the HQP is kept
 contacts obey Jc vdot = -(Jcdot v + kd Jc v), which bleeds estimator drift off.)
 
 Eq. 2, projector. P = I - Jc^+ Jc (nv, nv, dimensionless) is the orthogonal projector onto the
-null space of Jc: the motions the contacts allow. Jc^+ is the SVD pseudo-inverse with singular
-values below `rank_tolerance * sigma_max` dropped; two prong tips on the rigid trunk give rows
+null space of Jc: the motions the contacts allow. Jc^+ is the pseudo-inverse from the singular
+value decomposition, with singular values below `rank_tolerance * sigma_max` dropped (computed as
+Jc^T (Jc Jc^T)^+ from the eigendecomposition of Jc Jc^T, whose eigenvalues are the squared
+singular values and whose eigenvectors the left singular vectors); two prong tips on the rigid trunk give rows
 that are linearly dependent (the trunk can still roll about the line through them), and the
 SVD removes that dependency instead of failing. P is symmetric and idempotent and P Jc^T = 0.
 
@@ -77,10 +79,12 @@ enter because the torso lives in the foot's null space.
 """
 
 import dataclasses
+import functools
 import time
 
 import daqp
 import numpy as np
+from scipy.linalg import lapack
 
 from pedi_drake.exceptions import QpInfeasible
 
@@ -91,23 +95,30 @@ _INFINITY = 1e30
 _DAQP_OK = (1, 2)
 
 
-def pseudo_inverse(
+def symmetric_pseudo_inverse(
     A: np.ndarray, rank_tolerance: float = RANK_TOLERANCE, scale: float | None = None
 ) -> tuple[np.ndarray, int]:
-    """(A^+, rank) of A (m, n) by SVD, singular values below `rank_tolerance * scale` dropped.
+    """(A^+, rank) of a symmetric positive semi-definite A (n, n) by its eigendecomposition.
 
-    `scale` defaults to the largest singular value; a task projected into a null space passes the
-    scale of its unprojected matrix, so that a null space that is used up (all singular values at
-    rounding level) gives rank 0 instead of amplified rounding noise.
+    For such a matrix the eigenvalues are its singular values, so this is `pseudo_inverse` with
+    the same rule (eigenvalues below `rank_tolerance * scale` dropped, `scale` the largest by
+    default), at a fraction of the cost of an SVD: LAPACK's dsyevd is called directly, as numpy's
+    wrappers cost more than the decomposition at these sizes. A task projected into a null space
+    passes the scale of its unprojected matrix, so that a null space that is used up (every
+    eigenvalue at rounding level) gives rank 0 instead of amplified rounding noise.
     """
-    if A.size == 0:
-        return np.zeros((A.shape[1], A.shape[0])), 0
-    U, sigma, Vt = np.linalg.svd(A, full_matrices=False)
-    reference = sigma[0] if scale is None else scale
-    if sigma[0] <= 0.0 or reference <= 0.0:
-        return np.zeros((A.shape[1], A.shape[0])), 0
-    rank = int(np.count_nonzero(sigma > rank_tolerance * reference))
-    return (Vt[:rank].T / sigma[:rank]) @ U[:, :rank].T, rank
+    n = A.shape[0]
+    if n == 0:
+        return np.zeros((0, 0)), 0
+    w, V, info = lapack.dsyevd(A)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
+    reference = w[-1] if scale is None else scale
+    if w[-1] <= 0.0 or reference <= 0.0:
+        return np.zeros((n, n)), 0
+    keep = w > rank_tolerance * reference
+    Vk = V[:, keep]
+    return (Vk / w[keep]) @ Vk.T, int(np.count_nonzero(keep))
 
 
 @dataclasses.dataclass
@@ -122,7 +133,9 @@ class ConstraintProjection:
 def constraint_projection(Jc: np.ndarray, rank_tolerance: float = RANK_TOLERANCE) -> ConstraintProjection:
     """P = I - Jc^+ Jc of the stacked contact Jacobian Jc (3k, nv); k = 0 gives P = I."""
     nv = Jc.shape[1]
-    Jc_pinv, rank = pseudo_inverse(Jc, rank_tolerance)
+    # Jc^+ = Jc^T (Jc Jc^T)^+; the eigenvalues of Jc Jc^T are the squared singular values of Jc.
+    gram_pinv, rank = symmetric_pseudo_inverse(Jc @ Jc.T, rank_tolerance**2)
+    Jc_pinv = Jc.T @ gram_pinv
     P = np.eye(nv) - Jc_pinv @ Jc
     P = 0.5 * (P + P.T)  # symmetric to rounding
     return ConstraintProjection(P, Jc_pinv, rank)
@@ -228,9 +241,11 @@ def prioritized_force(
     m = impedance.J.shape[0]
     Lambda_s = np.zeros((0, 0))
     F_s = np.zeros(0)
+    free_dimensions = nv - dynamics.projection.rank  # of the constraint-free space
+    used = 0
     if m:
         J = impedance.J
-        Lambda_s, _ = pseudo_inverse(J @ A @ J.T, rank_tolerance)
+        Lambda_s, used = symmetric_pseudo_inverse(J @ A @ J.T, rank_tolerance)
         free = impedance.acceleration_ref - J @ vdot_0 - impedance.Jdot_v
         F_s = Lambda_s @ free - impedance.stiffness * impedance.error - impedance.damping * impedance.error_rate
         u = J.T @ F_s
@@ -241,9 +256,14 @@ def prioritized_force(
         loop += impedance.stiffness * impedance.error + impedance.damping * impedance.error_rate
         residuals.append(float(np.linalg.norm(loop)))
     for task in lower:
+        if used >= free_dimensions:
+            # The tasks above use every constraint-free direction: nothing is left for this one.
+            residuals.append(float(np.linalg.norm(task.desired - task.J @ (A @ u + vdot_0) - task.Jdot_v)))
+            continue
         J_prec = task.J @ N
         scale = float(np.linalg.norm(task.J @ A @ task.J.T))  # the unprojected task's inverse inertia
-        Lambda, rank = pseudo_inverse(J_prec @ A @ J_prec.T, rank_tolerance, scale)
+        Lambda, rank = symmetric_pseudo_inverse(J_prec @ A @ J_prec.T, rank_tolerance, scale)
+        used += rank
         if rank == 0:
             residuals.append(float(np.linalg.norm(task.desired - task.J @ (A @ u + vdot_0) - task.Jdot_v)))
             continue
@@ -267,15 +287,19 @@ def constraint_free_torque(
     dynamics: ConstrainedDynamics, u: np.ndarray, S: np.ndarray, rank_tolerance: float = RANK_TOLERANCE
 ) -> ConstraintFreeTorque:
     """tau_m = (P S^T)^+ u, and vdot from what the joints produce (see the module docstring)."""
-    PSt = dynamics.projection.P @ S.T
-    PSt_pinv, _ = pseudo_inverse(PSt, rank_tolerance)
-    tau_m = PSt_pinv @ u
+    P = dynamics.projection.P
+    PSt = P @ S.T
+    # (P S^T)^+ = (S P S^T)^+ S P (P symmetric, idempotent), and P u = u.
+    joint_block_pinv, _ = symmetric_pseudo_inverse(S @ PSt, rank_tolerance)
+    tau_m = joint_block_pinv @ (S @ (P @ u))
     u_eff = PSt @ tau_m
     return ConstraintFreeTorque(tau_m, u_eff, dynamics.A @ u_eff + dynamics.vdot_0)
 
 
+@functools.lru_cache(maxsize=64)
 def friction_pyramid_rows(num_contacts: int, mu_eff: float) -> np.ndarray:
-    """G (6 k, 3 k) of G lam <= g for each contact: -f_z, f_z, +-f_x - mu f_z, +-f_y - mu f_z."""
+    """G (6 k, 3 k) of G lam <= g for each contact: -f_z, f_z, +-f_x - mu f_z, +-f_y - mu f_z
+    (read-only; cached, it changes only with the friction and the number of contacts)."""
     local = np.array(
         [
             [0.0, 0.0, -1.0],
@@ -286,7 +310,9 @@ def friction_pyramid_rows(num_contacts: int, mu_eff: float) -> np.ndarray:
             [0.0, -1.0, -mu_eff],
         ]
     )
-    return np.kron(np.eye(num_contacts), local)
+    G = np.kron(np.eye(num_contacts), local)
+    G.flags.writeable = False
+    return G
 
 
 @dataclasses.dataclass
@@ -329,10 +355,14 @@ def solve_contact_forces(problem: ContactForceProblem) -> ContactForceSolution:
             raise QpInfeasible("no held contact can balance the trunk wrench (or the torques exceed their limits)")
         return ContactForceSolution(np.zeros(0), r_a.copy(), residual, time.perf_counter() - start)
     B = p.Jc[:, p.unactuated].T  # (6, 3k)
-    B_pinv, rank = pseudo_inverse(B, p.rank_tolerance)
-    lam_0 = B_pinv @ r_u
-    _, _, Vt = np.linalg.svd(B, full_matrices=True)
-    Z = Vt[rank:].T  # (3k, 3k - rank)
+    # One eigendecomposition of B^T B gives both the minimum-norm lam_0 and the null space Z.
+    w, V, info = lapack.dsyevd(B.T @ B)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"dsyevd failed (info {info})")
+    keep = w > p.rank_tolerance**2 * max(w[-1], 1e-300)
+    Vk = V[:, keep]
+    lam_0 = (Vk / w[keep]) @ (Vk.T @ (B.T @ r_u))
+    Z = V[:, ~keep]  # (3k, 3k - rank)
     k = n // 3
     G = friction_pyramid_rows(k, p.friction)
     g = np.zeros(6 * k)

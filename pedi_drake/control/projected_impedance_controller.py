@@ -371,6 +371,8 @@ class ProjectedImpedanceController(LeafSystem):
         command[36:48] = np.maximum(command[36:48], c.failure_kd)
         command = np.nan_to_num(command, nan=0.0, posinf=0.0, neginf=0.0)
         diag[self.diag["status"]] = status
+        if ramp is not None:
+            diag[self.diag["contact_ramp"]] = ramp  # the ramps advance through failures too
         diag[self.diag["consecutive_failures"]] += 1.0
         diag[self.diag["total_failures"]] += 1.0
         diag[self.diag["tick_time"]] = time.perf_counter() - start
