@@ -7,6 +7,7 @@ import pytest
 from pedi_drake import robot
 from pedi_drake.control import references
 from pedi_drake.control.config import ProjectedImpedanceConfig
+from pedi_drake.control.demos import demo_scenario, run_demo
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.exceptions import ScenarioError
@@ -129,3 +130,30 @@ def test_projected_impedance_is_selectable_in_the_scenario():
     )
     assert scenario.controller == "projected_impedance"
     assert scenario.projected_impedance.foot_stiffness == [800.0, 800.0, 500.0]
+
+
+@pytest.fixture(scope="module")
+def foot_push():
+    scenario = demo_scenario("push_foot")
+    scenario.controller = "projected_impedance"
+    return run_demo("push_foot", scenario), scenario
+
+
+def test_pushed_foot_yields_with_the_commanded_stiffness(foot_push):
+    result, scenario = foot_push
+    assert not result.fell and result.qp_failures == 0
+    commanded = scenario.projected_impedance.foot_stiffness[0]  # the push is along world x
+    assert result.foot_stiffness == pytest.approx(commanded, rel=0.10)
+
+
+def test_force_estimate_matches_the_force_applied_to_the_foot(foot_push):
+    result, _ = foot_push
+    assert result.force_estimate_rms["impedance"] < 2.0
+
+
+def test_three_leg_hold_holds_the_foot_and_the_trunk(foot_push):
+    result, _ = foot_push
+    assert max(result.foot_errors) < 0.005  # before the push
+    assert result.trunk_drift < 0.01
+    assert result.stance_slip < 0.002
+    assert result.max_torque_ratio <= 1.0

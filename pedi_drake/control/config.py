@@ -149,9 +149,12 @@ class ProjectedImpedanceConfig:
     force_estimate_filter_time: float = 0.02
 
     # Joint PD gains of go1.command around the integrated reference [N m/rad], [N m s/rad]. Zero
-    # stiffness by default: any joint stiffness would add to the commanded foot stiffness.
+    # by default: the torque alone is the law. A joint stiffness would add to the commanded foot
+    # stiffness, and so would a damping towards the integrated rate: under a steady external force
+    # the model keeps planning an acceleration it does not get, the integrated rate runs to its
+    # clip, and kd times that clip pushes back (about 1 N at the foot with kd = 0.3).
     joint_kp: float = 0.0
-    joint_kd: float = 0.3
+    joint_kd: float = 0.0
     # The integrated reference is kept within this distance of the measured joints [rad].
     max_reference_deviation: float = 0.05
     # ... and its rate within this distance of the measured rates [rad/s].

@@ -10,7 +10,12 @@ the simulated station, the scenario's estimator and the `WholeBodyController`:
 * "five_targets": as "three_leg_hold", then move the FR foot through 5 targets;
 * "prongs": lower the trunk onto both prongs, load them, unload and lift both front feet;
 * "push_no_prongs" / "push_prongs": on three legs at prong height (without / with the prongs
-  loaded), a horizontal force on the trunk ramps to `push_force` and holds for `push_duration`.
+  loaded), a horizontal force on the trunk ramps to `push_force` and holds for `push_duration`;
+* "push_foot": as "three_leg_hold", then a known force (`foot_push_force` along
+  `foot_push_direction`) on the lifted FR foot: the measured foot stiffness and the controller's
+  force estimate against the applied force.
+
+The controller is the scenario's: `whole_body` (the HQP) or `projected_impedance` (paper 002).
 
 `run_demo` simulates one and returns the logs needed by tests and the benchmark; the metrics
 (foot error, trunk drift, stance slip, torques) are computed from ground truth for evaluation
@@ -32,6 +37,7 @@ from pydrake.systems.primitives import VectorLogSink
 
 from pedi_drake import robot
 from pedi_drake.control import references
+from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.references import LEG_MODE_FOOT
 from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.whole_body_controller import WholeBodyController, diagnostics_layout
@@ -43,7 +49,7 @@ from pedi_drake.station.scenario import Scenario, load_scenario
 from pedi_drake.station.station import MakeStation
 from pedi_drake.trajectory import PiecewiseQuintic, QuinticSegment
 
-DEMOS = ("stand", "three_leg_hold", "five_targets", "prongs", "push_no_prongs", "push_prongs")
+DEMOS = ("stand", "three_leg_hold", "five_targets", "prongs", "push_no_prongs", "push_prongs", "push_foot")
 SCENARIO_FILE = Path(__file__).resolve().parents[2] / "scenarios" / "wbc_demos.yaml"
 
 
@@ -64,6 +70,9 @@ class DemoTiming:
     push_duration: float = 5.0  # time at full force
     push_force: float = 30.0  # [N]
     push_direction: tuple = (0.0, -1.0, 0.0)  # world, horizontal (towards the lifted FR side)
+    foot_push_force: float = 10.0  # push_foot: force on the FR foot centre [N]
+    foot_push_direction: tuple = (1.0, 0.0, 0.0)  # push_foot: its direction, world [-]
+    foot_push_duration: float = 2.0  # push_foot: time at full force [s]
 
 
 # Offsets of the five_targets demo from the first (15 cm below the shoulder) target, world [m].
@@ -85,6 +94,7 @@ class DemoPlan:
     hold_windows: list[tuple[float, float, dict[str, np.ndarray]]]  # (t0, t1, {leg: target})
     three_leg_start: float  # first instant on three legs (after the ramp) [s]
     push: tuple[float, float] | None = None  # (start, end) of the full push force [s]
+    push_body: str = robot.TRUNK_BODY_NAME  # the body the push acts on
 
 
 def _shoulder_W(X_WB: RigidTransform, leg: str) -> np.ndarray:
@@ -148,7 +158,7 @@ def plan_demo(name: str, scenario: Scenario, timing: DemoTiming | None = None) -
     switches.append(
         (t_unload, references.contact_set_vector(stance, n_prongs, prongs=name in ("prongs", "push_prongs")))
     )
-    t_ramped = t_unload + scenario.whole_body.contact_ramp_time
+    t_ramped = t_unload + controller_config(scenario).contact_ramp_time
     t_lift0 = t_unload + tm.lift_delay
     t_lift1 = t_lift0 + tm.lift_duration
     legs, targets = {}, {}
@@ -177,12 +187,16 @@ def plan_demo(name: str, scenario: Scenario, timing: DemoTiming | None = None) -
             windows.append((t - 0.05, t, {"FR": waypoints[k]}))
         legs["FR"] = PiecewiseQuintic.through(np.array(points), t_lift0, durations)
         end = t + 0.1
-    if name in ("push_no_prongs", "push_prongs"):
+    push_body = robot.TRUNK_BODY_NAME
+    if name in ("push_no_prongs", "push_prongs", "push_foot"):
+        duration = tm.foot_push_duration if name == "push_foot" else tm.push_duration
         t_push0 = t_lift1 + tm.push_start_after_lift + tm.push_ramp
-        push = (t_push0, t_push0 + tm.push_duration)
+        push = (t_push0, t_push0 + duration)
         end = push[1] + tm.push_ramp + 0.5
         windows = [(t_lift1 + 0.5, push[0] - tm.push_ramp, dict(targets))]
-    return DemoPlan(body, R0, legs, t_lift0 - 0.4, switches, end, windows, t_ramped, push)
+        if name == "push_foot":
+            push_body = "FR_foot"
+    return DemoPlan(body, R0, legs, t_lift0 - 0.4, switches, end, windows, t_ramped, push, push_body)
 
 
 def robot_default_prongs():
@@ -226,7 +240,8 @@ class DemoScript(LeafSystem):
 
 
 class TrunkPush(LeafSystem):
-    """A horizontal force on the trunk origin: ramps up, holds, ramps down (ExternallyAppliedSpatialForce list)."""
+    """A force on a body's origin (the trunk's, or a foot's centre): ramps up, holds, ramps down
+    (an ExternallyAppliedSpatialForce list)."""
 
     def __init__(self, trunk_body_index, force_W: np.ndarray, t_full: float, t_end: float, ramp: float) -> None:
         super().__init__()
@@ -256,8 +271,21 @@ class TrunkPush(LeafSystem):
 class DemoDiagram:
     diagram: Diagram
     plan: DemoPlan
-    controller: WholeBodyController
+    controller: WholeBodyController | ProjectedImpedanceController
     scenario: Scenario
+    timing: DemoTiming
+
+
+def controller_config(scenario: Scenario):
+    """The settings of the scenario's whole-body controller (either kind)."""
+    return scenario.projected_impedance if scenario.controller == "projected_impedance" else scenario.whole_body
+
+
+def make_controller(scenario: Scenario) -> WholeBodyController | ProjectedImpedanceController:
+    """The scenario's whole-body controller: the HQP, or paper 002's projected impedance."""
+    if scenario.controller == "projected_impedance":
+        return ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs)
+    return WholeBodyController(scenario.whole_body, scenario.robot.prongs)
 
 
 def demo_scenario(name: str, **whole_body_overrides) -> Scenario:
@@ -282,7 +310,7 @@ def build_demo(
         raise ConfigError("the demos need estimator: ground_truth until the Kalman estimator exists")
     estimator = builder.AddNamedSystem("estimator", GroundTruthEstimator(plant))
     builder.Connect(station.GetOutputPort("sim.plant_state"), estimator.GetInputPort("plant_state"))
-    controller = builder.AddNamedSystem("controller", WholeBodyController(scenario.whole_body, scenario.robot.prongs))
+    controller = builder.AddNamedSystem("controller", make_controller(scenario))
     script = builder.AddNamedSystem("script", DemoScript(plan, controller.num_contacts))
     builder.Connect(estimator.GetOutputPort("base_state"), controller.base_state_port)
     builder.Connect(station.GetOutputPort("go1.position_measured"), controller.position_port)
@@ -292,11 +320,14 @@ def build_demo(
     builder.Connect(script.contact_port, controller.contact_set_port)
     builder.Connect(controller.command_port, station.GetInputPort("go1.command"))
     if plan.push is not None:
-        trunk = plant.GetBodyByName(robot.TRUNK_BODY_NAME)
-        force = tm.push_force * np.asarray(tm.push_direction, float)
-        push = builder.AddNamedSystem("push", TrunkPush(trunk.index(), force, plan.push[0], plan.push[1], tm.push_ramp))
+        body = plant.GetBodyByName(plan.push_body)
+        if plan.push_body == robot.TRUNK_BODY_NAME:
+            force = tm.push_force * np.asarray(tm.push_direction, float)
+        else:
+            force = tm.foot_push_force * np.asarray(tm.foot_push_direction, float)
+        push = builder.AddNamedSystem("push", TrunkPush(body.index(), force, plan.push[0], plan.push[1], tm.push_ramp))
         builder.Connect(push.get_output_port(), station.GetInputPort("sim.applied_spatial_force"))
-    period = scenario.whole_body.period
+    period = controller_config(scenario).period
     for log_name, port in (
         ("log.plant_state", station.GetOutputPort("sim.plant_state")),
         ("log.diagnostics", controller.diagnostics_port),
@@ -304,7 +335,7 @@ def build_demo(
     ):
         logger = builder.AddNamedSystem(log_name, VectorLogSink(port.size(), period))
         builder.Connect(port, logger.get_input_port())
-    return DemoDiagram(builder.Build(), plan, controller, scenario)
+    return DemoDiagram(builder.Build(), plan, controller, scenario, tm)
 
 
 @dataclasses.dataclass
@@ -325,6 +356,10 @@ class DemoResult:
     tick_median_ms: float  # wall time of a controller tick, on three legs when the demo lifts a leg [ms]
     tick_p99_ms: float
     push_displacement: float = float("nan")  # max trunk displacement during the push [m]
+    # push_foot: applied force / steady foot displacement along the push [N/m].
+    foot_stiffness: float = float("nan")
+    # push_foot: RMS of |estimate - applied force| at the foot over the steady push, per estimate [N].
+    force_estimate_rms: dict = dataclasses.field(default_factory=dict)
     peak_knee_torque: float = float("nan")  # max |calf torque| of the stance legs during the push [N m]
     max_force_jump: float = float("nan")  # largest change of a contact force between ticks (t > 0.1 s) [N]
     prong_force: float = 0.0  # mean total prong normal force over the last 0.5 s [N]
@@ -429,7 +464,21 @@ def evaluate(name: str, demo: DemoDiagram, logs, wall: float) -> DemoResult:
     if controller.num_contacts > 4:
         last = times >= times[-1] - 0.5
         result.prong_force = float(np.mean(np.sum(forces[last][:, 14::3], axis=1)))
-    if plan.push is not None:
+    if name == "push_foot":
+        tm = demo.timing
+        direction = np.asarray(tm.foot_push_direction, float)
+        applied = tm.foot_push_force * direction
+        before = (times >= plan.push[0] - tm.push_ramp - 0.4) & (times < plan.push[0] - tm.push_ramp)
+        steady = (times >= plan.push[0] + 1.0) & (times <= plan.push[1])
+        fr = robot.LEG_NAMES.index("FR")
+        moved = float((foot_p[steady, fr].mean(axis=0) - foot_p[before, fr].mean(axis=0)) @ direction)
+        result.foot_stiffness = tm.foot_push_force / moved if moved > 0 else float("inf")
+        if "force_estimate" in controller.diag:
+            estimate = diag[:, controller.diag["force_estimate"]][:, 3 * fr : 3 * fr + 3]
+            window = (diag_times >= plan.push[0] + 1.0) & (diag_times <= plan.push[1])
+            error = np.linalg.norm(estimate[window] - applied, axis=1)
+            result.force_estimate_rms["impedance"] = float(np.sqrt(np.mean(error**2)))
+    elif plan.push is not None:
         mask = (times >= plan.push[0] - 0.5) & (times <= plan.push[1] + 0.5)
         before = trunk_p[times < plan.push[0] - 0.5][-1]
         result.push_displacement = float(np.max(np.linalg.norm(trunk_p[mask] - before, axis=1)))
