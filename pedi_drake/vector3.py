@@ -31,3 +31,14 @@ def rotation_matrix_wxyz(quaternion: np.ndarray) -> np.ndarray:
             [xz - wy, yz + wx, 1.0 - xx - yy],
         ]
     )
+
+
+def rotation_from_vector(r: np.ndarray) -> np.ndarray:
+    """The (3, 3) rotation of the rotation vector r (axis times angle [rad]), Rodrigues' formula."""
+    r = np.asarray(r, dtype=float)
+    angle = float(np.sqrt(r @ r))
+    if angle < 1e-12:
+        return np.eye(3)
+    k = r / angle
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)

@@ -70,6 +70,8 @@ class WholeBodyControllerConfig:
     trunk_orientation: PdGainsConfig = dataclasses.field(default_factory=lambda: PdGainsConfig(150.0, 25.0))
     # Pedipulation / swing foot position tracking gains (Eq. 1).
     foot_position: PdGainsConfig = dataclasses.field(default_factory=lambda: PdGainsConfig(400.0, 40.0))
+    # Calf roll and pitch tracking of the 5-D foot task (leg mode 3), in the foot's level.
+    foot_orientation: PdGainsConfig = dataclasses.field(default_factory=lambda: PdGainsConfig(200.0, 30.0))
     # Joint-space tracking gains of a leg driven by a joint reference (and of idle swing legs).
     leg_joints: PdGainsConfig = dataclasses.field(default_factory=lambda: PdGainsConfig(200.0, 30.0))
     # Whole-robot posture regularisation gains (towards `nominal_leg_posture`).
@@ -117,6 +119,9 @@ class ProjectedImpedanceConfig:
     trunk_position: PdGainsConfig = dataclasses.field(default_factory=lambda: PdGainsConfig(100.0, 20.0))
     # Trunk attitude tracking in the feet's null space [1/s^2], [1/s].
     trunk_orientation: PdGainsConfig = dataclasses.field(default_factory=lambda: PdGainsConfig(150.0, 25.0))
+    # Trunk position before its attitude (two levels): when the feet leave the trunk fewer than
+    # six free directions, it keeps to its path and yields attitude. False: one level of 6 rows.
+    torso_position_first: bool = True
     # Joint posture in the null space of the feet and the trunk [1/s^2], [1/s].
     posture: PdGainsConfig = dataclasses.field(default_factory=lambda: PdGainsConfig(20.0, 5.0))
     # Nominal (hip, thigh, calf) of every leg for the posture and idle legs [rad].

@@ -12,8 +12,11 @@ Tasks at one instant (world frame):
     turned into the world foot position it means at the trunk's reference pose, so the foot is
     held in the world and the trunk yields to it. A lifted leg without a reference is a joint
     impedance towards the nominal posture;
-    second priority: the trunk pose (6 rows), in the feet's dynamically consistent null space;
-    third priority: the joint posture, in the null space of both;
+    second priority: the trunk pose, in the feet's dynamically consistent null space: its position
+    first, then its attitude in the position's null space (`torso_position_first`; else the six
+    rows together). When the feet leave the trunk fewer than six directions (a 5-D foot task
+    on three stance legs leaves four), the trunk keeps its path and gives up attitude;
+    last priority: the joint posture, in the null space of all the above;
     constrained space: the contact-force QP (Eq. 7), tau = tau_m + tau_c (Eq. 8).
 The `safety_polygon` input is read for the capture-point diagnostic only: paper 002's law has
 no balance task, the mission keeps the centre of mass over the support.
@@ -49,6 +52,7 @@ from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, QpInfeasible
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.vector3 import rotation_from_vector
 
 # Force-estimate filter state: per leg, the last impedance error rate (3), the filtered error
 # acceleration (3), and whether the leg had a foot impedance at the last tick (1).
@@ -154,43 +158,66 @@ class ProjectedImpedanceController(LeafSystem):
         for i, (leg, ref) in enumerate(zip(robot.LEG_NAMES, legs, strict=True)):
             if held[i]:
                 continue
-            if ref.mode in (references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS):
-                if ref.mode == references.LEG_MODE_FOOT:
+            if ref.mode in (references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, references.LEG_MODE_FOOT_POSE):
+                if ref.mode == references.LEG_MODE_JOINTS:
+                    p_ref, v_ref, a_ref = joint_reference_in_world(leg, body, ref)
+                elif ref.mode == references.LEG_MODE_FOOT:
                     p_ref, v_ref, a_ref = ref.position, ref.velocity, ref.acceleration
                 else:
-                    p_ref, v_ref, a_ref = joint_reference_in_world(leg, body, ref)
+                    p_ref, v_ref, a_ref = ref.position, ref.velocity, np.zeros(3)
                 rows = slice(3 * i, 3 * i + 3)
                 J = s.J_contacts[rows]
-                impedance.append(
-                    pd.ImpedanceTask(
-                        f"foot_{leg}",
-                        J,
-                        s.Jdot_v_contacts[rows],
-                        s.p_contacts[i] - p_ref,
-                        J @ s.v - v_ref,
-                        a_ref,
-                        self.foot_stiffness,
-                        self.foot_damping,
-                    )
+                task = pd.ImpedanceTask(
+                    f"foot_{leg}",
+                    J,
+                    s.Jdot_v_contacts[rows],
+                    s.p_contacts[i] - p_ref,
+                    J @ s.v - v_ref,
+                    a_ref,
+                    self.foot_stiffness,
+                    self.foot_damping,
                 )
+                if ref.mode == references.LEG_MODE_FOOT_POSE:
+                    task = pd.stack_impedance_tasks([task, self._calf_task(s, i, leg, ref)], self.model.nv)
+                impedance.append(task)
                 foot_rows[i] = slice(row, row + 3)
-            else:
-                joints = np.arange(3 * i, 3 * i + 3)
-                J = self.S[joints]
-                impedance.append(
-                    pd.ImpedanceTask(
-                        f"idle_{leg}",
-                        J,
-                        np.zeros(3),
-                        s.q_joints[joints] - self.nominal_q[joints],
-                        s.v_joints[joints],
-                        np.zeros(3),
-                        np.full(3, c.idle_leg_stiffness),
-                        np.full(3, c.idle_leg_damping),
-                    )
+                row += task.J.shape[0]
+                continue
+            # A lifted leg without a reference: a joint impedance to the nominal posture.
+            joints = np.arange(3 * i, 3 * i + 3)
+            J = self.S[joints]
+            impedance.append(
+                pd.ImpedanceTask(
+                    f"idle_{leg}",
+                    J,
+                    np.zeros(3),
+                    s.q_joints[joints] - self.nominal_q[joints],
+                    s.v_joints[joints],
+                    np.zeros(3),
+                    np.full(3, c.idle_leg_stiffness),
+                    np.full(3, c.idle_leg_damping),
                 )
+            )
             row += 3
         return impedance, foot_rows
+
+    def _calf_task(self, s: RobotSnapshot, i: int, leg: str, ref: references.LegReference) -> pd.ImpedanceTask:
+        """The 2 orientation rows of the 5-D foot task: the calf's rotation about world x and y
+        (roll and pitch) towards the reference, the rotation about world z (yaw) left free."""
+        c = self.config
+        R_WC, J_w, bias_w = self.model.calf_orientation(i)
+        R_ref = rotation_from_vector(ref.acceleration)
+        error = -tasks.orientation_error_W(R_ref, R_WC)  # e = x - x_ref, as a rotation vector
+        return pd.ImpedanceTask(
+            f"calf_{leg}",
+            J_w[:2],
+            bias_w[:2],
+            error[:2],
+            (J_w @ s.v)[:2],
+            np.zeros(2),
+            np.full(2, c.foot_orientation_stiffness),
+            np.full(2, c.foot_orientation_damping),
+        )
 
     def _lower_tasks(self, s: RobotSnapshot, body: references.BodyReference) -> list[pd.AccelerationTask]:
         c = self.config
@@ -201,14 +228,20 @@ class ProjectedImpedanceController(LeafSystem):
             + c.trunk_orientation.kd * (body.w - w)
         )
         linear = body.a + c.trunk_position.kp * (body.p - s.p_WB) + c.trunk_position.kd * (body.v - v)
-        torso = pd.AccelerationTask("torso", s.J_trunk, s.Jdot_v_trunk, np.concatenate([angular, linear]))
+        if c.torso_position_first:
+            torso = [
+                pd.AccelerationTask("torso_position", s.J_trunk[3:], s.Jdot_v_trunk[3:], linear),
+                pd.AccelerationTask("torso_orientation", s.J_trunk[:3], s.Jdot_v_trunk[:3], angular),
+            ]
+        else:
+            torso = [pd.AccelerationTask("torso", s.J_trunk, s.Jdot_v_trunk, np.concatenate([angular, linear]))]
         posture = pd.AccelerationTask(
             "posture",
             self.S,
             np.zeros(12),
             c.posture.kp * (self.nominal_q - s.q_joints) - c.posture.kd * s.v_joints,
         )
-        return [torso, posture]
+        return [*torso, posture]
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
         start = time.perf_counter()

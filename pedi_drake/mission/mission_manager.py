@@ -204,7 +204,8 @@ class MissionManager(LeafSystem):
         entries = {}
         for leg, leg_traj in refs.legs.items():
             sample = leg_traj.trajectory.sample(t)
-            entries[leg] = (leg_traj.mode, sample.position, sample.velocity, sample.acceleration)
+            last = sample.acceleration if leg_traj.calf_rotation is None else leg_traj.calf_rotation
+            entries[leg] = (leg_traj.mode, sample.position, sample.velocity, last)
         press = refs.press
         if press is not None and press["frozen_at"] is None:
             s = press["speed"] * max(t - press["t0"], 0.0)

@@ -12,6 +12,7 @@ import numpy as np
 from pydrake.math import RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
+from pedi_drake.control.tasks import orientation_error_W
 from pedi_drake.exceptions import UnreachableTarget
 from pedi_drake.ik.fabrik import solve_leg_ik
 from pedi_drake.leg_kinematics import leg_geometry
@@ -19,6 +20,7 @@ from pedi_drake.mission import spec
 from pedi_drake.mission.progress import (
     FAILED,
     LEG_MODE_FOOT,
+    LEG_MODE_FOOT_POSE,
     LEG_MODE_JOINTS,
     RUNNING,
     SUCCEEDED,
@@ -27,7 +29,7 @@ from pedi_drake.mission.progress import (
 )
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment
+from pedi_drake.trajectory import CircularPath, PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment
 
 LYING_HEIGHT = 0.13  # [m] trunk height when lying down under control (legs folded, off the limits)
 CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
@@ -169,6 +171,59 @@ class BodyRotateRunner(PhaseRunner):
         error = view.X_WB.rotation().inverse().multiply(progress.memo["goal"])
         angle = abs(error.ToAngleAxis().angle())
         return SUCCEEDED if done and angle < phase.tolerance else RUNNING
+
+
+class BodyPathRunner(PhaseRunner):
+    """The trunk along a circle or through via poses, back to its start; orientation held."""
+
+    def start(self, phase, progress, view, env):
+        t = view.time
+        p_now, R_now = _body_sample(progress, t)
+        if phase.radius > 0.0:
+            path = CircularPath(p_now, phase.radius, t, phase.duration, phase.laps, phase.phase)
+        else:
+            points = [p_now] + [p_now + np.asarray(o, float) for o in phase.via_points] + [p_now]
+            n = len(points) - 1
+            path = PiecewiseQuintic.through(np.array(points), t, [phase.duration / n] * n)
+        refs = progress.references
+        refs.body_position = path
+        refs.body_orientation = QuinticOrientationSegment(R_now, R_now, t, 1e-3)
+        progress.memo.update(goal=p_now, squared_error=0.0, samples=0, max_error=0.0)
+
+    def step(self, phase, progress, view, env):
+        memo = progress.memo
+        error = float(np.linalg.norm(view.base.p_WB - progress.references.body_position.sample(view.time).position))
+        memo["squared_error"] += error**2
+        memo["samples"] += 1
+        memo["max_error"] = max(memo["max_error"], error)
+        # From the state estimate (what the mission sees); ground-truth figures come from the run's logs.
+        progress.records[-1].metrics.update(
+            tracking_rms_m=math.sqrt(memo["squared_error"] / memo["samples"]), tracking_max_m=memo["max_error"]
+        )
+        done = view.time >= progress.phase_start + phase.duration
+        if done and np.linalg.norm(view.base.p_WB - memo["goal"]) < phase.tolerance:
+            return SUCCEEDED
+        return RUNNING
+
+
+class HoldFootPoseRunner(PhaseRunner):
+    """The lifted foot held at its world position (and its calf's roll and pitch) from now on."""
+
+    def start(self, phase, progress, view, env):
+        if phase.leg not in progress.references.legs:
+            raise UnreachableTarget(f"{phase.name}: {phase.leg} is not in pedipulation mode")
+        p = view.foot_W(phase.leg)
+        hold = QuinticSegment(p, p, view.time, 1e-3)
+        if phase.orientation:
+            rotation = orientation_error_W(view.calf_rotation_W(phase.leg), np.eye(3))  # its rotation vector
+            leg_trajectory = LegTrajectory(LEG_MODE_FOOT_POSE, hold, calf_rotation=rotation)
+        else:
+            leg_trajectory = LegTrajectory(LEG_MODE_FOOT, hold)
+        progress.references.legs[phase.leg] = leg_trajectory
+        progress.records[-1].metrics.update(leg=phase.leg, p_WF=p.tolist())
+
+    def step(self, phase, progress, view, env):
+        return SUCCEEDED if view.time >= progress.phase_start + phase.duration else RUNNING
 
 
 def _on_prongs(refs) -> bool:
@@ -422,6 +477,8 @@ RUNNERS: dict[type, PhaseRunner] = {
     spec.LieDown: LieDownRunner(),
     spec.BodyMove: BodyMoveRunner(),
     spec.BodyRotate: BodyRotateRunner(),
+    spec.BodyPath: BodyPathRunner(),
+    spec.HoldFootPose: HoldFootPoseRunner(),
     spec.LegToPedipulation: LegToPedipulationRunner(),
     spec.LegToSupport: LegToSupportRunner(),
     spec.Reach: ReachRunner(),

@@ -12,7 +12,7 @@ from pydrake.math import RigidTransform
 
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BaseState
-from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
+from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B, joint_frames, leg_geometry
 
 
 @dataclasses.dataclass(frozen=True)
@@ -41,6 +41,11 @@ class RobotView:
     def foot_W(self, leg: str) -> np.ndarray:
         """Foot centre in the world [m]."""
         return self.X_WB @ self.foot_B(leg)
+
+    def calf_rotation_W(self, leg: str) -> np.ndarray:
+        """(3, 3) orientation of the calf of `leg` in the world, R_WC (estimate and joint angles)."""
+        _, rotations = joint_frames(leg_geometry(leg), self.leg_q(leg))
+        return self.X_WB.rotation().matrix() @ rotations[2]
 
     def feet_W(self) -> dict[str, np.ndarray]:
         return {leg: self.foot_W(leg) for leg in robot.LEG_NAMES}

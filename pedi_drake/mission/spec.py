@@ -78,6 +78,40 @@ class BodyRotate(PhaseBase):
 
 
 @dataclasses.dataclass
+class BodyPath(PhaseBase):
+    """Moves the trunk along a closed path at its current orientation and back to its start pose:
+    a circle of `radius` in the world x-y plane at constant height (`laps` times), or, with
+    `radius` 0, through the world-frame offsets `via_points` from the start (then back to it).
+    The circle starts at rest and ends at rest (one quintic time law over `duration`); the via
+    points get one rest-to-rest quintic each, `duration` split evenly over the segments."""
+
+    # Circle radius [m]; 0 follows `via_points` instead.
+    radius: float = 0.0
+    # Number of times round the circle [-].
+    laps: int = 1
+    # Angle of the start point seen from the circle's centre [rad] (0: the centre lies behind, -x).
+    phase: float = 0.0
+    # Offsets of the via poses from the start position, world frame [m].
+    via_points: list[list[float]] = dataclasses.field(default_factory=list)
+    # Time for the whole path [s].
+    duration: float = 10.0
+    # Success when, at the end, the trunk is within this distance of its start [m].
+    tolerance: float = 0.01
+
+
+@dataclasses.dataclass
+class HoldFootPose(PhaseBase):
+    """Holds the lifted foot of `leg` at its current world position and, with `orientation`, its
+    calf's roll and pitch (the 5-D foot task; yaw free) for whatever comes next."""
+
+    leg: str = "FL"
+    # Also hold the calf's roll and pitch (5-D), not just the foot position (3-D).
+    orientation: bool = True
+    # Time the phase lasts before the next starts [s].
+    duration: float = 0.5
+
+
+@dataclasses.dataclass
 class LegToPedipulation(PhaseBase):
     """Shifts the support polygon away from `leg`, removes its contact and lifts the foot to the
     working position `working_depth` below the shoulder (paper 000: 15 cm)."""
@@ -176,6 +210,8 @@ PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "lie_down": LieDown,
     "body_move": BodyMove,
     "body_rotate": BodyRotate,
+    "body_path": BodyPath,
+    "hold_foot_pose": HoldFootPose,
     "leg_to_pedipulation": LegToPedipulation,
     "leg_to_support": LegToSupport,
     "reach": Reach,
@@ -353,6 +389,13 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
             )
             for j, point in enumerate(companion.via_points):
                 need(len(point) == 3, f"{field}.via_points[{j}]", f"expected [x, y, z] in metres, got {point}")
+    if isinstance(phase, BodyPath):
+        need(math.isfinite(phase.radius) and phase.radius >= 0, "radius", f"must be >= 0 m, got {phase.radius}")
+        need(phase.laps >= 1, "laps", f"must be at least 1, got {phase.laps}")
+        need(phase.radius > 0 or phase.via_points, "via_points", "give a circle radius > 0 or at least one via point")
+        for k, point in enumerate(phase.via_points):
+            need(len(point) == 3, f"via_points[{k}]", f"expected [x, y, z] offsets in metres, got {point}")
+        need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
     if isinstance(phase, Press):
         norm = math.sqrt(sum(v * v for v in phase.direction)) if len(phase.direction) == 3 else 0.0
         need(norm > 0.5, "direction", f"expected a unit [x, y, z] vector, got {phase.direction}")

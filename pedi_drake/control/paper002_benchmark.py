@@ -1,0 +1,176 @@
+"""Paper 002's controller against the HQP: one comparison table from one run of each case.
+
+    python -m pedi_drake.control.paper002_benchmark [--out benchmarks/results/paper002.json]
+        [--missions torso_circle_foot_hold hit_target_front ...] [--skip-missions]
+
+Cases, each on both controllers (`whole_body`, the paper-000 HQP, and `projected_impedance`):
+
+* the scripted demos (ground-truth estimator, the controller alone): `three_leg_hold` for the
+  controller tick on three stance feet (median and p99 of the `tick_time` diagnostic), foot
+  error, trunk drift and stance slip; `push_foot` for the measured foot stiffness (a known force
+  on the lifted foot) and the Eq. 11 force estimate's error against that force;
+* the missions (Kalman estimate, as shipped): success, foot errors, trunk drift, tick; for
+  `torso_circle_foot_hold` (evaluation IV-A) the held foot's position and orientation errors and
+  the torso's circle tracking, with the plots of Figs. 3 to 5 in `--plots`.
+
+The figures come from simulation ground truth, for evaluation only.
+"""
+
+import argparse
+import json
+import platform
+from pathlib import Path
+
+import numpy as np
+
+from pedi_drake.control import paper002_evaluation as evaluation
+from pedi_drake.control.demos import demo_scenario, run_demo
+from pedi_drake.diagram import apply_mission
+from pedi_drake.mission.spec import load_mission
+from pedi_drake.run_logs import read_run_logs
+from pedi_drake.simulation_run import run
+from pedi_drake.station.scenario import Scenario, load_scenario
+from pedi_drake.station.station import MakeStation
+
+CONTROLLERS = ("whole_body", "projected_impedance")
+MISSIONS = ("torso_circle_foot_hold", "hit_target_front", "obstacle_sensing", "open_door", "prong_push_box")
+TICK_MEDIAN_FLOOR_MS = 0.5
+FOOT_STIFFNESS_TOLERANCE = 0.10
+FORCE_ESTIMATE_RMS_FLOOR_N = 2.0
+
+
+def demo_rows() -> list[dict]:
+    """three_leg_hold and push_foot on both controllers."""
+    rows = []
+    for name in ("three_leg_hold", "push_foot"):
+        for controller in CONTROLLERS:
+            scenario = demo_scenario(name)
+            scenario.controller = controller
+            r = run_demo(name, scenario)
+            row = {
+                "case": f"demo {name}",
+                "controller": controller,
+                "fell": r.fell,
+                "qp_failures": r.qp_failures,
+                "tick_median_ms": r.tick_median_ms,
+                "tick_p99_ms": r.tick_p99_ms,
+                "foot_error_max_m": max(r.foot_errors) if r.foot_errors else float("nan"),
+                "trunk_drift_m": r.trunk_drift,
+                "stance_slip_m": r.stance_slip,
+                "real_time_factor": r.real_time_factor,
+            }
+            if name == "push_foot":
+                row["foot_stiffness_n_per_m"] = r.foot_stiffness
+                if controller == "projected_impedance":
+                    row["commanded_stiffness_n_per_m"] = scenario.projected_impedance.foot_stiffness[0]
+                row["force_estimate_rms_n"] = r.force_estimate_rms.get("impedance", float("nan"))
+            rows.append(row)
+    return rows
+
+
+def _station_plant(scenario: Scenario):
+    """A plant with the state layout of the run's simulation (for reading its logged states)."""
+    return MakeStation(scenario).GetSubsystemByName("plant")
+
+
+def mission_row(mission: str, controller: str, out_dir: Path, plots: Path | None) -> dict:
+    """One mission on one controller (Kalman estimate, default scenario)."""
+    scenario = load_scenario(scenario_text=f"{{mission: {mission}, controller: {controller}}}")
+    spec = load_mission(mission)
+    scenario.simulation_duration = max(scenario.simulation_duration, spec.longest_duration())
+    result = run(scenario=scenario, name=mission, out_dir=out_dir, quiet=True, replay=False)
+    row = {
+        "case": f"mission {mission}",
+        "controller": controller,
+        "success": result["success"],
+        "reason": result["reason"],
+        "fell": result["fell"],
+        "foot_error_max_m": max((r["error"] for r in result["foot_errors_m"]), default=float("nan")),
+        "trunk_drift_m": result["max_base_drift_m"],
+        "tick_median_ms": result["controller_tick_ms"]["median"],
+        "tick_p99_ms": result["controller_tick_ms"]["p99"],
+        "real_time_factor": result["real_time_factor"],
+    }
+    circle = [p for p in result["phases"] if p["kind"] == "body_path" and p["status"] == "succeeded"]
+    if circle:
+        plant = _station_plant(apply_mission(scenario, spec))
+        hold = evaluation.evaluate_foot_hold(plant, read_run_logs(out_dir), circle[0]["t_start"], circle[0]["t_end"])
+        row.update(hold.summary())
+        if plots is not None:
+            evaluation.plot_foot_hold(hold, plots / controller, title=controller)
+    return row
+
+
+def floors(rows: list[dict]) -> dict:
+    """Which of the issue's floors each measured row meets (paper 002's controller)."""
+    checks = {}
+    for row in rows:
+        if row["controller"] != "projected_impedance":
+            continue
+        if row["case"] == "demo three_leg_hold":
+            checks["tick_median_below_0.5_ms"] = row["tick_median_ms"] < TICK_MEDIAN_FLOOR_MS
+        if row["case"] == "demo push_foot":
+            commanded = row["commanded_stiffness_n_per_m"]
+            checks["foot_stiffness_within_10_percent"] = (
+                abs(row["foot_stiffness_n_per_m"] - commanded) <= FOOT_STIFFNESS_TOLERANCE * commanded
+            )
+            checks["force_estimate_rms_below_2_n"] = row["force_estimate_rms_n"] < FORCE_ESTIMATE_RMS_FLOOR_N
+        if row["case"] == "mission torso_circle_foot_hold" and "torso_tracking_rms_m" in row:
+            checks["iva_foot_position_below_5_mm"] = row["foot_position_error_max_m"] < evaluation.FOOT_POSITION_FLOOR_M
+            checks["iva_foot_orientation_below_2_deg"] = row["foot_orientation_error_max_deg"] < 2.0
+            checks["iva_torso_rms_below_1_cm"] = row["torso_tracking_rms_m"] < evaluation.TORSO_TRACKING_RMS_FLOOR_M
+        if row["case"].startswith("mission"):
+            checks[f"{row['case']}_succeeds"] = bool(row["success"])
+    return checks
+
+
+def print_table(rows: list[dict]) -> None:
+    columns = [
+        ("case", "{}"),
+        ("controller", "{}"),
+        ("success", "{}"),
+        ("tick_median_ms", "{:.3f}"),
+        ("tick_p99_ms", "{:.3f}"),
+        ("foot_error_max_m", "{:.4f}"),
+        ("trunk_drift_m", "{:.4f}"),
+        ("foot_stiffness_n_per_m", "{:.0f}"),
+        ("force_estimate_rms_n", "{:.2f}"),
+        ("foot_position_error_max_m", "{:.4f}"),
+        ("foot_orientation_error_max_deg", "{:.2f}"),
+        ("torso_tracking_rms_m", "{:.4f}"),
+    ]
+    print(" | ".join(name for name, _ in columns))
+    for row in rows:
+        cells = []
+        for name, fmt in columns:
+            value = row.get(name, "")
+            if isinstance(value, float) and not np.isfinite(value):
+                value = "nan"
+            cells.append(fmt.format(value) if value not in ("", "nan") and not isinstance(value, bool) else str(value))
+        print(" | ".join(cells))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", default="benchmarks/results/paper002.json", help="JSON file of the rows.")
+    parser.add_argument("--runs", default="out/paper002_benchmark", help="Folder of the mission runs.")
+    parser.add_argument("--plots", default="out/paper002_benchmark/plots", help="Folder of the IV-A plots.")
+    parser.add_argument("--missions", nargs="*", default=list(MISSIONS), help="Missions to run on both controllers.")
+    args = parser.parse_args()
+    rows = demo_rows()
+    for mission in args.missions:
+        for controller in CONTROLLERS:
+            rows.append(mission_row(mission, controller, Path(args.runs) / controller / mission, Path(args.plots)))
+    print_table(rows)
+    checks = floors(rows)
+    for name, ok in checks.items():
+        print(f"{'ok  ' if ok else 'MISS'} {name}")
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    report = {"machine": platform.processor() or platform.machine(), "rows": rows, "floors": checks}
+    out.write_text(json.dumps(report, indent=2, default=float))
+    print(f"written {out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,122 @@
+"""Paper 002's evaluation IV-A judged from a finished run: the lifted foot's pose against the pose
+it held when the torso started to move, and the torso's circle tracking (Figs. 3 to 5).
+
+Everything here reads simulation ground truth (the logged plant state) and is for evaluation
+only; the controllers read the state estimate and go1.* signals.
+"""
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from pedi_drake import robot
+from pedi_drake.control.tasks import orientation_error_W
+from pedi_drake.run_logs import SignalLog
+
+# Floors of the paper-002 issue for IV-A.
+FOOT_POSITION_FLOOR_M = 0.005
+FOOT_ORIENTATION_FLOOR_RAD = np.radians(2.0)
+TORSO_TRACKING_RMS_FLOOR_M = 0.01
+
+
+@dataclasses.dataclass
+class FootHoldEvaluation:
+    """IV-A figures over the torso-motion phase (ground truth)."""
+
+    times: np.ndarray  # (N,) [s]
+    trunk: np.ndarray  # (N, 3) trunk origin [m]
+    trunk_reference: np.ndarray  # (N, 3) its reference [m]
+    foot: np.ndarray  # (N, 3) held foot centre [m]
+    foot_error: np.ndarray  # (N, 3) foot minus its pose at the phase start [m]
+    orientation_error: np.ndarray  # (N, 3) calf rotation from its start, world x (roll), y (pitch), z (yaw) [rad]
+
+    @property
+    def foot_position_error_max_m(self) -> float:
+        return float(np.max(np.linalg.norm(self.foot_error, axis=1)))
+
+    @property
+    def foot_orientation_error_max_rad(self) -> float:
+        """Largest roll or pitch error (the yaw is not held)."""
+        return float(np.max(np.abs(self.orientation_error[:, :2])))
+
+    @property
+    def foot_yaw_error_max_rad(self) -> float:
+        return float(np.max(np.abs(self.orientation_error[:, 2])))
+
+    @property
+    def torso_tracking_rms_m(self) -> float:
+        return float(np.sqrt(np.mean(np.sum((self.trunk - self.trunk_reference) ** 2, axis=1))))
+
+    def summary(self) -> dict:
+        return {
+            "foot_position_error_max_m": self.foot_position_error_max_m,
+            "foot_orientation_error_max_deg": float(np.degrees(self.foot_orientation_error_max_rad)),
+            "foot_yaw_error_max_deg": float(np.degrees(self.foot_yaw_error_max_rad)),
+            "torso_tracking_rms_m": self.torso_tracking_rms_m,
+        }
+
+
+def evaluate_foot_hold(
+    plant, logs: dict[str, SignalLog], t_start: float, t_end: float, leg: str = "FL"
+) -> FootHoldEvaluation:
+    """IV-A figures of `leg` between t_start and t_end [s] from a run's logs (`plant`: the
+    simulation's plant, for its state layout)."""
+    states = logs["sim.plant_state"]
+    body = logs["mission.body_reference"]
+    context = plant.CreateDefaultContext()
+    foot_body = plant.GetBodyByName(f"{leg}_foot")
+    calf_body = plant.GetBodyByName(f"{leg}_calf")
+    trunk_body = plant.GetBodyByName(robot.TRUNK_BODY_NAME)
+    keep = (states.times >= t_start) & (states.times <= t_end)
+    times = states.times[keep]
+    nq = plant.num_positions()
+    trunk, foot, rotations = [], [], []
+    for x in states.data[:, keep].T:
+        plant.SetPositions(context, x[:nq])
+        trunk.append(plant.EvalBodyPoseInWorld(context, trunk_body).translation())
+        foot.append(plant.EvalBodyPoseInWorld(context, foot_body).translation())
+        rotations.append(plant.EvalBodyPoseInWorld(context, calf_body).rotation().matrix())
+    trunk, foot = np.array(trunk), np.array(foot)
+    index = np.clip(np.searchsorted(body.times, times), 0, len(body.times) - 1)
+    reference = body.data[0:3, index].T
+    R0 = rotations[0]
+    # The calf's rotation since the start, as a world rotation vector: x roll, y pitch, z yaw.
+    orientation = np.array([orientation_error_W(R, R0) for R in rotations])
+    return FootHoldEvaluation(times, trunk, reference, foot, foot - foot[0], orientation)
+
+
+def plot_foot_hold(evaluation: FootHoldEvaluation, out_dir: Path, title: str = "") -> list[Path]:
+    """Figs. 3 to 5 of paper 002: positions, foot position error, foot orientation error (PNG)."""
+    import matplotlib.pyplot as plt
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    e = evaluation
+    paths = []
+    fig, ax = plt.subplots(figsize=(5, 5))
+    ax.plot(e.trunk_reference[:, 0], e.trunk_reference[:, 1], "k--", label="torso reference")
+    ax.plot(e.trunk[:, 0], e.trunk[:, 1], label="torso")
+    ax.plot(e.foot[:, 0], e.foot[:, 1], "o", markersize=2, label="held foot")
+    ax.set(xlabel="x [m]", ylabel="y [m]", title=f"{title} positions (Fig. 3)", aspect="equal")
+    ax.legend()
+    paths.append(out_dir / "iva_positions.png")
+    fig.savefig(paths[-1], dpi=100)
+    plt.close(fig)
+    t = e.times - e.times[0]
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    for k, axis in enumerate("xyz"):
+        ax.plot(t, 1e3 * e.foot_error[:, k], label=axis)
+    ax.set(xlabel="t [s]", ylabel="foot position error [mm]", title=f"{title} foot position error (Fig. 4)")
+    ax.legend()
+    paths.append(out_dir / "iva_foot_position_error.png")
+    fig.savefig(paths[-1], dpi=100)
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    for k, axis in enumerate(("roll", "pitch", "yaw (free)")):
+        ax.plot(t, np.degrees(e.orientation_error[:, k]), label=axis)
+    ax.set(xlabel="t [s]", ylabel="calf orientation error [deg]", title=f"{title} foot orientation error (Fig. 5)")
+    ax.legend()
+    paths.append(out_dir / "iva_foot_orientation_error.png")
+    fig.savefig(paths[-1], dpi=100)
+    plt.close(fig)
+    return paths
