@@ -12,7 +12,7 @@ Examples:
     python run_sim.py --scenario_text "{sensor_noise: {enabled: true}, random_seed: 3}"
     python run_sim.py --hardware --mission hit_target_front   # over LCM: a Go1, or the simulator
         # bridge started first in another terminal:
-        #   python -m pedi_drake.station.go1_sim_bridge --mission hit_target_front
+        #   python -m pedi_drake.apps.sim_bridge --mission hit_target_front
 """
 
 import argparse
@@ -23,8 +23,8 @@ from pydrake.geometry import Meshcat
 
 from pedi_drake.exceptions import ConfigError, LcmTimeout
 from pedi_drake.mission.spec import load_mission
-from pedi_drake.simulation_run import run
-from pedi_drake.station.scenario import MISSION_CONTROLLERS, default_scenario_file, load_scenario
+from pedi_drake.run import run
+from pedi_drake.scenario import MISSION_CONTROLLERS, default_scenario_file, load_scenario
 
 
 def main() -> int:

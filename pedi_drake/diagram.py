@@ -19,9 +19,9 @@ from pedi_drake.exceptions import ScenarioError
 from pedi_drake.log_hold import LogHold
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
-from pedi_drake.station.scenario import MISSION_CONTROLLERS, Scenario
-from pedi_drake.station.station import MakeStation
-from pedi_drake.station.wall_clock import WallClock
+from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
+from pedi_drake.station_interface import MakeStation
+from pedi_drake.wall_clock import WallClock
 
 # Signals logged by every run (name -> exported port of the diagram).
 LOGGED_SIGNALS = (

@@ -8,17 +8,16 @@ from hypothesis.extra import numpy as hnp
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
-from pedi_drake.station.go1_driver_config import Go1SafetyConfig
-from pedi_drake.station.go1_safety import (
+from pedi_drake.go1_command import pack_command, pd_torque, split_command
+from pedi_drake.go1_driver.config import Go1SafetyConfig
+from pedi_drake.go1_driver.safety import (
     INTERVENTION_INDEX,
     INTERVENTIONS,
     Go1SafetyFilter,
     SafetyLimits,
     bound_command,
     damping_command,
-    pd_torque,
 )
-from pedi_drake.station.motor_model import pack_command, split_command
 
 CONFIG = Go1SafetyConfig()
 LIMITS = SafetyLimits.from_config(CONFIG)
@@ -240,7 +239,7 @@ def test_damping_torque_within_limits_at_high_joint_rates():
 
 
 def test_driver_report_names_the_latch_and_counts_every_intervention():
-    from pedi_drake.station.go1_safety import INTERVENTION_INDEX, INTERVENTIONS, driver_report
+    from pedi_drake.go1_driver.safety import INTERVENTION_INDEX, INTERVENTIONS, driver_report
 
     status = np.zeros(1 + len(INTERVENTIONS))
     status[0] = 1 + INTERVENTION_INDEX["status_timeout"]

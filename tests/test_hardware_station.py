@@ -11,17 +11,17 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 from pedi_drake import robot
+from pedi_drake.apps.sim_bridge import MakeSimBridgeDiagram
 from pedi_drake.control.stand_controller import StandController
 from pedi_drake.exceptions import LcmTimeout
-from pedi_drake.station import go1_lcm_constants as c
-from pedi_drake.station.go1_driver_config import Go1DriverConfig, Go1SafetyConfig
-from pedi_drake.station.go1_safety import INTERVENTION_INDEX, INTERVENTIONS
-from pedi_drake.station.go1_sim_bridge import MakeSimBridgeDiagram
-from pedi_drake.station.hardware_station import MakeHardwareStation
-from pedi_drake.station.lcmtypes import leg_control_data_lcmt, pd_tau_targets_lcmt, rc_command_lcmt
-from pedi_drake.station.motor_model import pack_command, split_command
-from pedi_drake.station.scenario import Scenario, load_scenario
-from pedi_drake.station.station import STATION_PORTS
+from pedi_drake.go1_command import pack_command, split_command
+from pedi_drake.go1_driver import constants as c
+from pedi_drake.go1_driver.config import Go1DriverConfig, Go1SafetyConfig
+from pedi_drake.go1_driver.hardware_station import MakeHardwareStation
+from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, pd_tau_targets_lcmt, rc_command_lcmt
+from pedi_drake.go1_driver.safety import INTERVENTION_INDEX, INTERVENTIONS
+from pedi_drake.scenario import Scenario, load_scenario
+from pedi_drake.station_interface import STATION_PORTS
 
 # Lock-step runs are faster than real time but not paced: generous watchdogs keep them
 # deterministic on a loaded machine; the watchdogs themselves are tested on the wire.
@@ -44,7 +44,7 @@ class LockStep:
         self.wire = _wire_log(self.lcm)
         self.bridge = MakeSimBridgeDiagram(scenario, self.lcm)
         builder = DiagramBuilder()
-        station = builder.AddNamedSystem("station", MakeHardwareStation(scenario, lcm=self.lcm, config=config))
+        station = builder.AddNamedSystem("station", MakeHardwareStation(config, self.lcm))
         source = builder.AddNamedSystem("controller", command_source)
         if source.HasInputPort("position_measured"):
             builder.Connect(station.GetOutputPort("go1.position_measured"), source.GetInputPort("position_measured"))
@@ -87,7 +87,7 @@ def scenario() -> Scenario:
 
 
 def test_station_exports_exactly_the_station_ports(scenario):
-    station = MakeHardwareStation(scenario, lcm=DrakeLcm("memq://"))
+    station = MakeHardwareStation(scenario.go1_driver, DrakeLcm("memq://"))
     inputs = {station.get_input_port(i).get_name(): station.get_input_port(i) for i in range(station.num_input_ports())}
     outputs = {
         station.get_output_port(i).get_name(): station.get_output_port(i) for i in range(station.num_output_ports())
@@ -122,7 +122,7 @@ def test_round_trip_stands_the_robot_up(scenario):
 
 def test_waits_for_first_status_and_names_channel_and_url(scenario):
     config = dataclasses.replace(LOCKSTEP_CONFIG, first_status_timeout=0.2)
-    station = MakeHardwareStation(scenario, lcm=DrakeLcm("memq://"), config=config)
+    station = MakeHardwareStation(config, DrakeLcm("memq://"))
     simulator = Simulator(station)
     station.GetInputPort("go1.command").FixValue(simulator.get_mutable_context(), np.zeros(60))
     start = time.monotonic()

@@ -5,7 +5,8 @@ import json
 import numpy as np
 import pytest
 
-from pedi_drake.ik import benchmark, leg_ik_solutions
+from pedi_drake.benchmarks import ik as benchmark
+from pedi_drake.ik import leg_ik_solutions
 
 
 def test_benchmark_writes_consistent_json(tmp_path, capsys):

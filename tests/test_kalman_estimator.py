@@ -8,7 +8,6 @@ from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.estimation.accuracy import estimate_errors
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.estimation.kalman_estimator import (
     GRAVITY_W,
@@ -18,11 +17,12 @@ from pedi_drake.estimation.kalman_estimator import (
     imu_offset_B,
 )
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
+from pedi_drake.evaluation.estimator_accuracy import estimate_errors
+from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.ik.analytic import solve_leg_ik_analytic
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
-from pedi_drake.run_logs import SignalLog
-from pedi_drake.station.scenario import load_scenario
+from pedi_drake.scenario import load_scenario
 
 DT = 0.002
 

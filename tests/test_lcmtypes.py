@@ -7,8 +7,8 @@ import sys
 import numpy as np
 import pytest
 
-from pedi_drake.station import go1_lcm_constants as c
-from pedi_drake.station.lcmtypes import (
+from pedi_drake.go1_driver import constants as c
+from pedi_drake.go1_driver.lcmtypes import (
     leg_control_data_lcmt,
     pd_tau_targets_lcmt,
     rc_command_lcmt,

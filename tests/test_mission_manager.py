@@ -7,11 +7,11 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake.diagram import MakePedipulationDiagram
+from pedi_drake.evaluation.mission_results import estimated_foot_errors
 from pedi_drake.mission.phases import ReachRunner
 from pedi_drake.mission.progress import FAILED, SUCCEEDED, MissionProgress, PhaseRecord
-from pedi_drake.mission.results import estimated_foot_errors
 from pedi_drake.mission.spec import CompanionReach, Reach
-from pedi_drake.station.scenario import load_scenario
+from pedi_drake.scenario import load_scenario
 
 QUICK_START = """
   - {kind: stand_up, height: 0.28, duration: 1.5, timeout: 3.0}

@@ -1,13 +1,13 @@
 """Every shipped mission, end to end in simulation (default scenario, seed 0), against the floors
 of the missions issue: success, reach errors, trunk drift, no fall, and each mission's own check.
 
-The mission benchmark (python -m pedi_drake.mission.benchmark) runs the same with sensor noise
+The mission benchmark (python -m pedi_drake.benchmarks.missions) runs the same with sensor noise
 over more seeds.
 """
 
 import pytest
 
-from pedi_drake.mission.benchmark import EXPECTED_OBSTACLE_CLASS, run_one
+from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS, run_one
 from pedi_drake.mission.spec import shipped_missions
 
 MAX_FOOT_ERROR = 0.010  # [m] every reach phase

@@ -5,13 +5,13 @@ import json
 
 import pytest
 
-from pedi_drake.control import paper002_evaluation as evaluation
 from pedi_drake.diagram import apply_mission
+from pedi_drake.evaluation import paper002 as evaluation
+from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.mission.spec import load_mission
-from pedi_drake.run_logs import read_run_logs
-from pedi_drake.simulation_run import run
-from pedi_drake.station.scenario import load_scenario
-from pedi_drake.station.station import MakeStation
+from pedi_drake.run import run
+from pedi_drake.scenario import load_scenario
+from pedi_drake.station_interface import MakeStation
 
 # One lap of the shipped IV-A circle, from standing (no stand-up, no put-down: a shorter run).
 IV_A = """

@@ -9,8 +9,8 @@ from pedi_drake.control import projected_dynamics as pd
 from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.exceptions import QpInfeasible
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.scenario import RobotConfig
 from pedi_drake.station.initial_state import initial_trunk_pose
-from pedi_drake.station.scenario import RobotConfig
 
 
 def _rows(contacts) -> np.ndarray:

@@ -5,14 +5,14 @@ import numpy as np
 import pytest
 
 from pedi_drake import robot
+from pedi_drake.benchmarks.demos import demo_scenario, run_demo
 from pedi_drake.control import references
 from pedi_drake.control.config import ProjectedImpedanceConfig
-from pedi_drake.control.demos import demo_scenario, run_demo
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.exceptions import ScenarioError
+from pedi_drake.scenario import RobotConfig, load_scenario
 from pedi_drake.station.initial_state import initial_trunk_pose
-from pedi_drake.station.scenario import RobotConfig, load_scenario
 
 
 def standing_controller(config: ProjectedImpedanceConfig | None = None):

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from pedi_drake.exceptions import ScenarioError
-from pedi_drake.station.scenario import default_scenario_file, load_scenario
+from pedi_drake.scenario import default_scenario_file, load_scenario
 
 
 def _write(tmp_path: Path, body: str) -> Path:

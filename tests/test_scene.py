@@ -7,9 +7,9 @@ from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
-from pedi_drake.station.motor_model import pack_command
-from pedi_drake.station.scenario import Scenario, SceneObject
-from pedi_drake.station.station import MakeStation
+from pedi_drake.go1_command import pack_command
+from pedi_drake.scenario import Scenario, SceneObject
+from pedi_drake.station_interface import MakeStation
 
 
 def _simulate(obj: SceneObject, body_name: str, force_W, duration: float, p_BoBq_B=(0.0, 0.0, 0.0)):

@@ -17,12 +17,12 @@ from pydrake.systems.framework import DiagramBuilder
 
 import pedi_drake
 from pedi_drake.control.stand_controller import StandController
-from pedi_drake.station import go1_lcm_constants as c
-from pedi_drake.station.go1_driver_config import Go1DriverConfig, Go1SafetyConfig
-from pedi_drake.station.go1_log import read_go1_log
-from pedi_drake.station.go1_safety import INTERVENTIONS
-from pedi_drake.station.hardware_station import MakeHardwareStation
-from pedi_drake.station.scenario import load_scenario
+from pedi_drake.go1_driver import constants as c
+from pedi_drake.go1_driver.config import Go1DriverConfig, Go1SafetyConfig
+from pedi_drake.go1_driver.hardware_station import MakeHardwareStation, go1_lcm
+from pedi_drake.go1_driver.log import read_go1_log
+from pedi_drake.go1_driver.safety import INTERVENTIONS
+from pedi_drake.scenario import load_scenario
 from pedi_drake.viz.log_plots import plot_go1_log
 
 REPO = Path(pedi_drake.__file__).resolve().parents[1]
@@ -108,12 +108,12 @@ def wire(tmp_path):
     _ensure_multicast()
     processes: list[subprocess.Popen] = []
     log_path = tmp_path / "wire.lcmlog"
-    record = ["-m", "pedi_drake.station.go1_log", "record", "--out", str(log_path), "--lcm_url", URL]
+    record = ["-m", "pedi_drake.apps.go1_log", "record", "--out", str(log_path), "--lcm_url", URL]
     recorder = _start(record, "recording")
     processes.append(recorder)
 
     def start_bridge() -> subprocess.Popen:
-        bridge = _start(["-m", "pedi_drake.station.go1_sim_bridge", "--lcm_url", URL], "running")
+        bridge = _start(["-m", "pedi_drake.apps.sim_bridge", "--lcm_url", URL], "running")
         processes.append(bridge)
         return bridge
 
@@ -128,7 +128,7 @@ def _driver(config: Go1DriverConfig | None = None):
     config = config if config is not None else Go1DriverConfig()
     scenario = load_scenario(scenario_text=f"{{lcm_buses: {{go1: {{lcm_url: '{URL}'}}}}}}")
     builder = DiagramBuilder()
-    station = builder.AddNamedSystem("station", MakeHardwareStation(scenario, config=config))
+    station = builder.AddNamedSystem("station", MakeHardwareStation(config, go1_lcm(scenario.lcm_buses)))
     controller = builder.AddNamedSystem("controller", StandController(scenario.stand))
     builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
     builder.Connect(controller.GetOutputPort("command"), station.GetInputPort("go1.command"))
@@ -210,11 +210,11 @@ import sys
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pedi_drake.control.stand_controller import StandController
-from pedi_drake.station.hardware_station import MakeHardwareStation
-from pedi_drake.station.scenario import load_scenario
+from pedi_drake.go1_driver.hardware_station import MakeHardwareStation, go1_lcm
+from pedi_drake.scenario import load_scenario
 scenario = load_scenario(scenario_text="{lcm_buses: {go1: {lcm_url: '%s'}}}")
 builder = DiagramBuilder()
-station = builder.AddSystem(MakeHardwareStation(scenario))
+station = builder.AddSystem(MakeHardwareStation(scenario.go1_driver, go1_lcm(scenario.lcm_buses)))
 controller = builder.AddSystem(StandController(scenario.stand))
 builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
 builder.Connect(controller.GetOutputPort("command"), station.GetInputPort("go1.command"))

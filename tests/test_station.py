@@ -2,13 +2,17 @@
 
 import numpy as np
 import pytest
+from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.station.motor_model import Go1MotorModel, motor_torque, pack_command
-from pedi_drake.station.scenario import Scenario, load_scenario
-from pedi_drake.station.station import STATION_PORTS, MakeStation
+from pedi_drake.go1_command import pack_command
+from pedi_drake.go1_driver.config import Go1DriverConfig
+from pedi_drake.go1_driver.hardware_station import MakeHardwareStation
+from pedi_drake.scenario import Scenario, load_scenario
+from pedi_drake.station.motor_model import Go1MotorModel, motor_torque
+from pedi_drake.station_interface import STATION_PORTS, MakeStation
 
 STAND_HOLD_START = 2.0  # [s] the stand blend (1.5 s) is over and the trunk has settled.
 STAND_END = 5.0  # [s] 3 s of holding.
@@ -30,16 +34,8 @@ def test_station_exports_exactly_the_documented_go1_ports():
     assert _go1_ports(station) == STATION_PORTS
 
 
-def test_hardware_station_exports_the_same_ports_or_names_the_missing_driver():
-    try:
-        from pydrake.lcm import DrakeLcm
-
-        from pedi_drake.station.hardware_station import MakeHardwareStation
-    except ImportError:
-        with pytest.raises(NotImplementedError, match="issue 7"):
-            MakeStation(Scenario(), hardware=True)
-        return
-    station = MakeHardwareStation(Scenario(), lcm=DrakeLcm("memq://"))
+def test_hardware_station_exports_the_same_ports():
+    station = MakeHardwareStation(Go1DriverConfig(), DrakeLcm("memq://"))
     assert _go1_ports(station) == STATION_PORTS
 
 

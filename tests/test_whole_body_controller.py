@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from pedi_drake import robot
+from pedi_drake.benchmarks.demos import DemoTiming, demo_scenario, run_demo
 from pedi_drake.control import references, tasks
 from pedi_drake.control.config import WholeBodyControllerConfig
-from pedi_drake.control.demos import DemoTiming, demo_scenario, run_demo
 from pedi_drake.control.whole_body_controller import (
     STATUS_BAD_INPUT,
     STATUS_CONTACTS_RELAXED,
@@ -17,8 +17,8 @@ from pedi_drake.control.whole_body_controller import (
     WholeBodyController,
 )
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.scenario import RobotConfig
 from pedi_drake.station.initial_state import initial_trunk_pose
-from pedi_drake.station.scenario import RobotConfig
 
 
 def standing_controller(config: WholeBodyControllerConfig | None = None):

@@ -217,3 +217,18 @@ class ProjectedImpedanceConfig:
             gains = getattr(self, name)
             need(gains.kp >= 0 and gains.kd >= 0, name, "kp and kd must be >= 0")
         return problems
+
+
+@dataclasses.dataclass
+class StandControllerConfig:
+    """The joint-space PD that takes the Go1 from its initial pose to standing and holds it."""
+
+    # Target joint pose, (hip, thigh, calf) applied to all legs [rad].
+    target_leg_pose: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.9, -1.8])
+    # Duration of the quintic blend from the measured pose to the target [s].
+    duration: float = 1.5
+    # Motor PD gains [N m/rad], [N m s/rad].
+    kp: float = 60.0
+    kd: float = 2.0
+    # Control period [s].
+    period: float = 0.002

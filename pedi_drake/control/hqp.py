@@ -15,7 +15,7 @@ al. 2014):
 
 Every level QP is dense and small (about 20 to 40 variables for the Go1), so it goes to DAQP,
 a dense active-set solver called directly (about 0.05 to 0.2 ms a solve); see
-`pedi_drake.control.benchmark` for the measured comparison with MathematicalProgram + OSQP.
+`pedi_drake.benchmarks.control` for the measured comparison with MathematicalProgram + OSQP.
 Levels without inequalities are plain least squares.
 """
 

@@ -7,9 +7,9 @@ station: it reads only `go1.position_measured` and writes `go1.command`.
 import numpy as np
 from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
 
+from pedi_drake.control.config import StandControllerConfig
 from pedi_drake.control.static_feedforward import standing_feedforward_torque
-from pedi_drake.station.motor_model import COMMAND_SIZE, pack_command
-from pedi_drake.station.scenario import StandControllerConfig
+from pedi_drake.go1_command import COMMAND_SIZE, pack_command
 
 
 def min_jerk(s: float) -> tuple[float, float, float]:

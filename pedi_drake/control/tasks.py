@@ -25,6 +25,7 @@ import numpy as np
 
 from pedi_drake.control.hqp import EqualityTask, InequalityTask
 from pedi_drake.control.robot_model import RobotSnapshot
+from pedi_drake.friction import friction_pyramid_edges
 
 GRAVITY = 9.81  # [m/s^2]
 
@@ -129,7 +130,7 @@ class ContactForceLimits:
 
     f_min: float = 5.0  # [N]
     f_max: float = 250.0  # [N]
-    inscribed: bool = True  # use mu / sqrt(2): the pyramid inside the cone, conservative
+    inscribed: bool = True  # the pyramid inside the Coulomb cone (pedi_drake.friction)
     # G by (nc, size, mu): built once, as only the bounds change from tick to tick.
     _matrices: dict = dataclasses.field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -147,17 +148,8 @@ class ContactForceLimits:
         """G (6 nc, size), read-only: it changes only with the friction coefficient."""
         if len(self._matrices) > 16:
             self._matrices.clear()  # a friction that keeps changing: do not grow without bound
-        mu_eff = mu / np.sqrt(2.0) if self.inscribed else mu
-        local = np.array(
-            [
-                [0.0, 0.0, -1.0],
-                [0.0, 0.0, 1.0],
-                [1.0, 0.0, -mu_eff],
-                [-1.0, 0.0, -mu_eff],
-                [0.0, 1.0, -mu_eff],
-                [0.0, -1.0, -mu_eff],
-            ]
-        )
+        # Rows: -f_z <= -r f_min, f_z <= r f_max, then the pyramid's four faces.
+        local = np.vstack([[[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]], friction_pyramid_edges(mu, inscribed=self.inscribed)])
         G = np.zeros((6 * layout.nc, layout.size))
         for i in range(layout.nc):
             G[6 * i : 6 * i + 6, layout.force(i)] = local

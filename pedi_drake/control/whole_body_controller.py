@@ -40,9 +40,9 @@ from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, QpInfeasible
+from pedi_drake.go1_command import COMMAND_SIZE
 from pedi_drake.prongs import ProngDesign
 
-COMMAND_SIZE = 60
 STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0
 # Solved with sliding contacts' tangential no-motion below the force limits (see StackBuilder.levels).
 STATUS_CONTACTS_RELAXED = 3.0

@@ -61,7 +61,7 @@ DEFAULT_MAX_ITERATIONS = 50
 # converges linearly (x0.05-0.2 per sweep at the knee), so stopping at the first iterate under a
 # 1 mm tolerance left a mean error near 0.28 mm. Repeating the sweep, until its rotations fall
 # under the skip threshold, costs ~2 us a sweep and brings the mean near 0.1 mm and the mean
-# iteration count at 1 cm from 1.4 to 1.0 (python -m pedi_drake.ik.benchmark).
+# iteration count at 1 cm from 1.4 to 1.0 (python -m pedi_drake.benchmarks.ik).
 _COMPENSATION_SWEEPS = 8
 
 

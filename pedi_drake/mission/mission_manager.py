@@ -9,8 +9,6 @@ A failed phase (IK unreachable, timeout, fall) fails the mission with a reason; 
 places any lifted leg back on the ground ("recovering") and holds the robot standing.
 """
 
-import math
-
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.systems.framework import BasicVector, LeafSystem
@@ -19,6 +17,7 @@ from pedi_drake import robot
 from pedi_drake.control import references as controller_refs
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE, BaseState
 from pedi_drake.exceptions import PediError
+from pedi_drake.fall import trunk_has_fallen
 from pedi_drake.mission import spec
 from pedi_drake.mission.phases import RUNNERS, MissionEnvironment, ReachRunner, kind_name
 from pedi_drake.mission.progress import (
@@ -36,8 +35,6 @@ from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.prongs import ProngDesign
 
 MISSION_STATUS_SIZE = 4  # [phase index, status code, pedipulation active, number of phases]
-FALL_HEIGHT = 0.07  # [m] trunk below this: the robot fell (or lies flat on its belly)
-FALL_TILT = math.radians(50.0)  # [rad]
 
 
 class MissionManager(LeafSystem):
@@ -154,12 +151,16 @@ class MissionManager(LeafSystem):
         state.get_mutable_abstract_state(self._progress).set_value(progress)
 
     def _fell(self, view: RobotView, progress: MissionProgress) -> bool:
-        R = view.X_WB.rotation().matrix()
-        tilted = R[2, 2] < math.cos(FALL_TILT)
         standing_started = any(r.kind == "stand_up" and r.status == SUCCEEDED for r in progress.records)
         on_prongs = bool(np.any(progress.references.contacts[4:] > 0.5))
-        low = standing_started and view.base.p_WB[2] < FALL_HEIGHT and not on_prongs
-        return tilted or low
+        return bool(
+            trunk_has_fallen(
+                view.base.quaternion_wxyz,
+                view.base.p_WB[2],
+                has_stood=standing_started,
+                resting_on_prongs=on_prongs,
+            )
+        )
 
     def _finish_phase(self, progress: MissionProgress, phases, outcome: str, view: RobotView) -> None:
         record = progress.records[-1]

@@ -3,7 +3,7 @@
 A mission file is YAML:
 
     description: Touch the cardboard cat standing in front of the robot with FR.
-    scene:                       # scene objects (pedi_drake.station.scenario.SceneObject)
+    scene:                       # scene objects (pedi_drake.scenario.SceneObject)
       - {kind: target_panel, position: [0.46, -0.13, 0.0], yaw: 3.14159}
     robot: {prongs: null}        # optional: the robot variant the mission needs
     phases:
@@ -25,7 +25,7 @@ from pydrake.common.yaml import yaml_load
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.robot import LEG_NAMES
-from pedi_drake.station.scenario import RobotConfig, SceneObject
+from pedi_drake.scenario import RobotConfig, SceneObject
 
 FRAMES = ("world", "trunk")
 

@@ -11,7 +11,7 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from pedi_drake import robot
 from pedi_drake.ik.analytic import solve_leg_ik_analytic
 from pedi_drake.leg_kinematics import foot_position_B
-from pedi_drake.station.scenario import RobotConfig
+from pedi_drake.scenario import RobotConfig
 
 GROUND_CLEARANCE = 0.0005  # [m] feet start this far above the ground, so nothing starts in penetration.
 

@@ -13,25 +13,7 @@ from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, Leaf
 from pydrake.systems.primitives import Multiplexer, SparseMatrixGain, SymbolicVectorSystem
 
 from pedi_drake import robot
-
-COMMAND_SIZE = 60  # q_des[12], qd_des[12], kp[12], kd[12], tau_ff[12]
-
-
-def split_command(command: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(q_des, qd_des, kp, kd, tau_ff), each (12,) in Unitree order, from a 60-vector command."""
-    c = np.asarray(command, dtype=float)
-    return c[0:12], c[12:24], c[24:36], c[36:48], c[48:60]
-
-
-def pack_command(q_des, qd_des, kp, kd, tau_ff) -> np.ndarray:
-    """The 60-vector `go1.command` from its five Unitree-ordered parts."""
-    return np.concatenate([np.broadcast_to(np.asarray(x, float), (12,)) for x in (q_des, qd_des, kp, kd, tau_ff)])
-
-
-def damping_command(kd: float = 2.0) -> np.ndarray:
-    """A safe command: no position gain, joint damping only, no feed-forward."""
-    return pack_command(np.zeros(12), np.zeros(12), np.zeros(12), np.full(12, kd), np.zeros(12))
-
+from pedi_drake.go1_command import COMMAND_SIZE, pd_torque
 
 # Command entries are clipped to this magnitude before the motor law, so that no product or sum of
 # them can overflow to inf (or inf - inf to NaN) [rad, rad/s, N m/rad, N m s/rad, N m].
@@ -59,8 +41,7 @@ def motor_torque(command: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarr
     Non-finite commands produce zero torque on that motor (see `guarded_command`). The same law
     as `Go1MotorModel`, on plain arrays.
     """
-    q_des, qd_des, kp, kd, tau_ff = split_command(guarded_command(command))
-    tau = tau_ff + kp * (q_des - q) + kd * (qd_des - qd)
+    tau = pd_torque(guarded_command(command), q, qd)
     return np.minimum(np.maximum(tau, -robot.EFFORT_LIMIT), robot.EFFORT_LIMIT)
 
 

@@ -8,7 +8,7 @@ from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex, PrismaticSpring
 
 from pedi_drake import robot
-from pedi_drake.station.scenario import SceneObject
+from pedi_drake.scenario import SceneObject
 
 # Model file and the body welded to the world (None: the object is free) for each kind.
 SCENE_MODELS = {

@@ -11,7 +11,7 @@ from pydrake.multibody.plant import ContactResults, MultibodyPlant
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from pedi_drake import robot
-from pedi_drake.station.scenario import SensorNoiseConfig
+from pedi_drake.scenario import SensorNoiseConfig
 from pedi_drake.vector3 import cross3, rotation_matrix_wxyz
 
 IMU_SIZE = 10  # quaternion w, x, y, z; gyro (3); accelerometer (3)

@@ -9,9 +9,9 @@ from pydrake.multibody.plant import AddMultibodyPlant
 from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from pedi_drake import robot
+from pedi_drake.scenario import Scenario
 from pedi_drake.station.initial_state import initial_trunk_pose, set_default_go1_state
 from pedi_drake.station.motor_model import Go1MotorModel
-from pedi_drake.station.scenario import Scenario
 from pedi_drake.station.scene import add_ground, add_scene_object
 from pedi_drake.station.sensors import Go1SensorModel
 

@@ -18,7 +18,6 @@ kept too: W y = b - J_e^T F with y = [tau; lambda], W = [B  J_c^T], and G_y y <=
 """
 
 import dataclasses
-import math
 
 import numpy as np
 from pydrake.multibody.plant import MultibodyPlant
@@ -26,6 +25,7 @@ from pydrake.multibody.tree import JacobianWrtVariable
 
 from pedi_drake import robot
 from pedi_drake.exceptions import SufError
+from pedi_drake.friction import friction_pyramid_rows
 
 # Contact names: the feet by leg name, the prong tips as "prong0", "prong1", ...
 PRONG_PREFIX = "prong"
@@ -68,32 +68,6 @@ class RejectableForceProblem:
     @property
     def num_x(self) -> int:
         return 3 + 3 * self.num_contacts
-
-    def is_rejectable(self, F: np.ndarray, tol: float = 1e-7) -> bool:
-        """Whether the force F [N] at the end-effector is rejectable (a feasibility LP)."""
-        from pedi_drake.suf.ray_program import RfpLinearProgram
-
-        return RfpLinearProgram(self).feasible(np.asarray(F, dtype=float), tol)
-
-
-def friction_pyramid_rows(mu: float) -> np.ndarray:
-    """(5, 3): rows r with r . lambda <= 0 for the 4-edge pyramid of a flat-ground contact (Eqs. 2-4).
-
-    Paper 003's pyramid is the one inscribed in the Coulomb cone: |lambda_x|, |lambda_y| <=
-    (sqrt(2)/2) mu lambda_z, so that every force it admits is inside the cone of radius mu (the
-    circumscribed |lambda_x| <= mu lambda_z admits tangential forces up to sqrt(2) mu lambda_z
-    along the diagonals, which the contact cannot hold).
-    """
-    m = 0.5 * math.sqrt(2.0) * mu
-    return np.array(
-        [
-            [0.0, 0.0, -1.0],  # unilateral: lambda_z >= 0
-            [1.0, 0.0, -m],
-            [-1.0, 0.0, -m],
-            [0.0, 1.0, -m],
-            [0.0, -1.0, -m],
-        ]
-    )
 
 
 def build_problem(

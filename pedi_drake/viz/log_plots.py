@@ -1,4 +1,4 @@
-"""Plots of a Go1 LCM log (see pedi_drake.station.go1_log), the same figures run_sim writes.
+"""Plots of a Go1 LCM log (see pedi_drake.go1_driver.log), the same figures run_sim writes.
 
 Joint targets (pd_plustau_targets) against measured angles (leg_control_data), the measured
 angles interpolated onto the command times; foot sensor values (state_estimator_data).
@@ -8,8 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pedi_drake.station import go1_lcm_constants as c
-from pedi_drake.station.go1_log import Go1Log
+from pedi_drake.go1_driver import constants as c
+from pedi_drake.go1_driver.log import Go1Log
 from pedi_drake.viz.plots import plot_foot_forces, plot_joint_tracking
 
 

@@ -2,12 +2,12 @@
 
 Channels, message types and their reference fingerprints/sizes, the bridge rate, and the
 conversion between the station's 60-vector `go1.command` and the wire order of
-`pd_tau_targets_lcmt`. Facts from ../shared/reference/go1.md section 2.
+`pd_tau_targets_lcmt`. The conventions are written down in this package's README.md.
 """
 
 import numpy as np
 
-from pedi_drake.station.lcmtypes import (
+from pedi_drake.go1_driver.lcmtypes import (
     leg_control_data_lcmt,
     pd_tau_targets_lcmt,
     rc_command_lcmt,
@@ -23,8 +23,10 @@ RC_COMMAND_CHANNEL = "rc_command"
 # The bridge ticks at 500 Hz: it publishes every state channel and applies the last command.
 BRIDGE_PERIOD = 0.002  # [s]
 
-# Name of the LCM bus in Scenario.lcm_buses that carries the Go1 traffic.
+# Name of the LCM bus in Scenario.lcm_buses that carries the Go1 traffic, and its default URL
+# (ttl=0: the traffic stays on this host; a real Go1 needs ttl=255).
 GO1_BUS_NAME = "go1"
+DEFAULT_GO1_LCM_URL = "udpm://239.255.76.67:7667?ttl=0"
 
 # Message type by channel.
 # Status channels in the order of the driver's `driver.message_counts` output ([received, dropped] each).

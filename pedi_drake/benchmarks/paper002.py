@@ -1,7 +1,7 @@
 """Paper 002's controller against the HQP: one comparison table from one run of each case.
 
-    python -m pedi_drake.control.paper002_benchmark [--out benchmarks/results/paper002.json]
-        [--missions torso_circle_foot_hold hit_target_front ...] [--skip-missions]
+    python -m pedi_drake.benchmarks.paper002 [--out benchmarks/results/paper002.json]
+        [--missions torso_circle_foot_hold hit_target_front ...]
 
 Cases, each on both controllers (`whole_body`, the paper-000 HQP, and `projected_impedance`):
 
@@ -23,14 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
-from pedi_drake.control import paper002_evaluation as evaluation
-from pedi_drake.control.demos import demo_scenario, run_demo
+from pedi_drake.benchmarks.demos import demo_scenario, run_demo
 from pedi_drake.diagram import apply_mission
+from pedi_drake.evaluation import paper002 as evaluation
+from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.mission.spec import load_mission
-from pedi_drake.run_logs import read_run_logs
-from pedi_drake.simulation_run import run
-from pedi_drake.station.scenario import Scenario, load_scenario
-from pedi_drake.station.station import MakeStation
+from pedi_drake.run import run
+from pedi_drake.scenario import Scenario, load_scenario
+from pedi_drake.station_interface import MakeStation
 
 CONTROLLERS = ("whole_body", "projected_impedance")
 MISSIONS = ("torso_circle_foot_hold", "hit_target_front", "obstacle_sensing", "open_door", "prong_push_box")

@@ -1,4 +1,4 @@
-"""MakeHardwareStation: the Go1 LCM driver behind the station ports of DESIGN.md section 2.
+"""MakeHardwareStation: the Go1 LCM driver behind the station ports (`pedi_drake.station_interface`).
 
     go1.command (60) -> Go1SafetyFilter -> Go1CommandSender -> pd_plustau_targets
     leg_control_data      -> go1.position_measured, go1.velocity_measured, go1.torque_estimated
@@ -13,56 +13,37 @@ all on the scenario's LCM bus "go1" through one LcmInterfaceSystem. Driver-only 
 Run the diagram in real time (Simulator target_realtime_rate = 1): the watchdogs use the wall clock.
 """
 
-from pydrake.geometry import Meshcat
-from pydrake.lcm import DrakeLcm, DrakeLcmInterface
+from pydrake.lcm import DrakeLcm, DrakeLcmInterface, DrakeLcmParams
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.lcm import LcmInterfaceSystem
 from pydrake.systems.primitives import Multiplexer
 
 from pedi_drake.exceptions import ScenarioError
-from pedi_drake.station import go1_lcm_constants as c
-from pedi_drake.station.go1_command_sender import Go1CommandSender
-from pedi_drake.station.go1_driver_config import Go1DriverConfig
-from pedi_drake.station.go1_safety import Go1SafetyFilter
-from pedi_drake.station.go1_status_receiver import (
+from pedi_drake.go1_driver import constants as c
+from pedi_drake.go1_driver.command_sender import Go1CommandSender
+from pedi_drake.go1_driver.config import Go1DriverConfig
+from pedi_drake.go1_driver.safety import Go1SafetyFilter
+from pedi_drake.go1_driver.status_receiver import (
     MakeLegControlReceiver,
     MakeRcCommandReceiver,
     MakeStateEstimatorReceiver,
 )
-from pedi_drake.station.scenario import Scenario
 
 
-def go1_lcm_for(scenario: Scenario) -> DrakeLcm:
-    """A DrakeLcm on the scenario's bus "go1" (default udpm://239.255.76.67:7667?ttl=0)."""
-    if c.GO1_BUS_NAME not in scenario.lcm_buses:
+def go1_lcm(lcm_buses: dict[str, DrakeLcmParams]) -> DrakeLcm:
+    """A DrakeLcm on the bus "go1" of `lcm_buses` (a Scenario's; default udpm://239.255.76.67:7667?ttl=0)."""
+    if c.GO1_BUS_NAME not in lcm_buses:
         raise ScenarioError(f"lcm_buses: no bus named {c.GO1_BUS_NAME!r}, which the Go1 driver uses")
-    return DrakeLcm(scenario.lcm_buses[c.GO1_BUS_NAME])
+    return DrakeLcm(lcm_buses[c.GO1_BUS_NAME])
 
 
-def driver_config_for(scenario: Scenario) -> Go1DriverConfig:
-    """The scenario's `hardware` settings, or the defaults while Scenario has no such field."""
-    config = getattr(scenario, "hardware", None)
-    return config if isinstance(config, Go1DriverConfig) else Go1DriverConfig()
+def MakeHardwareStation(config: Go1DriverConfig, lcm: DrakeLcmInterface) -> Diagram:
+    """The Go1 LCM driver with settings `config` on `lcm` (ports as MakeStation's; see the module docstring).
 
-
-def MakeHardwareStation(
-    scenario: Scenario,
-    meshcat: Meshcat | None = None,
-    *,
-    lcm: DrakeLcmInterface | None = None,
-    config: Go1DriverConfig | None = None,
-) -> Diagram:
-    """The Go1 LCM driver for `scenario` (ports as MakeStation's; see the module docstring).
-
-    `lcm`: share a DrakeLcm (e.g. "memq://" for in-process tests); by default one is made on the
-    scenario's bus "go1". `config`: driver settings (default: the scenario's, else defaults).
-    `meshcat` is accepted for a uniform signature; the driver draws nothing.
+    `lcm`: the bus to the robot (`go1_lcm(scenario.lcm_buses)`, or "memq://" for in-process tests).
     Initialising the diagram waits up to config.first_status_timeout [s] for leg_control_data and
     state_estimator_data and raises LcmTimeout naming channel and URL when they do not come.
     """
-    del meshcat
-    config = config if config is not None else driver_config_for(scenario)
-    lcm = lcm if lcm is not None else go1_lcm_for(scenario)
     period = config.safety.period
     builder = DiagramBuilder()
     builder.AddNamedSystem("lcm", LcmInterfaceSystem(lcm))

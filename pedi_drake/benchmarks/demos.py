@@ -43,10 +43,11 @@ from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.whole_body_controller import WholeBodyController, diagnostics_layout
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
 from pedi_drake.exceptions import ConfigError
+from pedi_drake.fall import fell_during
 from pedi_drake.leg_kinematics import foot_position_B, leg_geometry
+from pedi_drake.scenario import Scenario, load_scenario
 from pedi_drake.station.initial_state import initial_trunk_pose
-from pedi_drake.station.scenario import Scenario, load_scenario
-from pedi_drake.station.station import MakeStation
+from pedi_drake.station_interface import MakeStation
 from pedi_drake.trajectory import PiecewiseQuintic, QuinticSegment
 
 DEMOS = ("stand", "three_leg_hold", "five_targets", "prongs", "push_no_prongs", "push_prongs", "push_foot")
@@ -346,7 +347,7 @@ class DemoResult:
     sim_time: float  # [s]
     wall_time: float  # [s]
     real_time_factor: float
-    fell: bool  # trunk below 0.08 m, or tilted over 0.5 rad
+    fell: bool  # the fall rule of pedi_drake.fall held at some sample
     foot_errors: list[float]  # per hold window: max foot-to-target distance over the window [m]
     trunk_drift: float  # max |p_WB - p_ref| on three legs, before any push [m]
     stance_slip: float  # max horizontal foot-centre displacement of a stance foot on three legs [m]
@@ -401,15 +402,14 @@ def evaluate(name: str, demo: DemoDiagram, logs, wall: float) -> DemoResult:
     trunk = plant.GetBodyByName(robot.TRUNK_BODY_NAME)
     foot_p = np.zeros((len(times), 4, 3))
     trunk_p = np.zeros((len(times), 3))
-    tilt = np.zeros(len(times))
     for k, x in enumerate(states):
         plant.SetPositions(plant_context, x[:nq])
         for i, foot in enumerate(feet):
             foot_p[k, i] = plant.EvalBodyPoseInWorld(plant_context, foot).translation()
         X = plant.EvalBodyPoseInWorld(plant_context, trunk)
         trunk_p[k] = X.translation()
-        tilt[k] = np.arccos(np.clip(X.rotation().matrix()[2, 2], -1, 1))
-    fell = bool(np.min(trunk_p[:, 2]) < 0.08 or np.max(tilt) > 0.5)
+    q0 = robot.Go1PlantMap.from_plant(plant).base_q_start
+    fell = fell_during(states[:, q0 : q0 + 4].T, states[:, q0 + 6], has_prongs=demo.scenario.robot.prongs is not None)
     foot_errors = []
     for t0, t1, targets in plan.hold_windows:
         mask = (times >= t0) & (times <= t1)

@@ -3,7 +3,7 @@
 import numpy as np
 
 from pedi_drake import robot
-from pedi_drake.run_logs import SignalLog
+from pedi_drake.evaluation.run_logs import SignalLog
 
 
 def estimate_errors(
@@ -33,8 +33,8 @@ def estimate_errors(
 def run_estimate_errors(out_dir, scenario) -> dict:
     """`estimate_errors` of the run `run()` wrote to `out_dir` for `scenario` (a simulated run)."""
     from pedi_drake.diagram import apply_mission
+    from pedi_drake.evaluation.run_logs import read_run_logs
     from pedi_drake.mission.spec import load_mission
-    from pedi_drake.run_logs import read_run_logs
     from pedi_drake.station.sim_station import MakeSimulationStation
 
     if scenario.mission:

@@ -1,17 +1,12 @@
-"""Record and read Go1 LCM traffic in the lcm-logger file format, and plot a log.
-
-    python -m pedi_drake.station.go1_log record --out run.lcmlog [--lcm_url URL] [--duration S]
-    python -m pedi_drake.station.go1_log plot run.lcmlog --out DIR
+"""Record and read Go1 LCM traffic in the lcm-logger file format (the program: `pedi_drake.apps.go1_log`).
 
 Logs are standard LCM event logs (lcm.EventLog), so `lcm-logger`, `lcm-logplayer` and
 `lcm-spy` read the files written here, and `read_go1_log` reads files `lcm-logger` wrote.
 Event times are the wall clock at receipt [us], as lcm-logger records them.
 """
 
-import argparse
 import dataclasses
 import math
-import sys
 import threading
 import time
 from pathlib import Path
@@ -19,8 +14,7 @@ from pathlib import Path
 import lcm
 import numpy as np
 
-from pedi_drake.station import go1_lcm_constants as c
-from pedi_drake.station.scenario import DEFAULT_GO1_LCM_URL
+from pedi_drake.go1_driver import constants as c
 
 
 def record_log(
@@ -131,35 +125,3 @@ def read_go1_log(path: str | Path) -> Go1Log:
         log.close()
     channels = {name: ChannelLog(np.array(times[name]), messages[name]) for name in messages}
     return Go1Log(channels=channels, malformed=malformed, other_events=other)
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    commands = parser.add_subparsers(dest="command", required=True)
-    record = commands.add_parser("record", help="record LCM traffic to an lcm-logger file")
-    record.add_argument("--out", required=True)
-    record.add_argument("--lcm_url", default=DEFAULT_GO1_LCM_URL)
-    record.add_argument("--duration", type=float, default=math.inf, help="seconds (default: until Ctrl-C)")
-    record.add_argument("--channels", default=".*", help="channel regex")
-    plot = commands.add_parser("plot", help="plot joint targets vs measured from a log")
-    plot.add_argument("log")
-    plot.add_argument("--out", required=True, help="output folder for the PNG files")
-    args = parser.parse_args(argv)
-    if args.command == "record":
-        ready = threading.Event()
-        threading.Thread(target=lambda: ready.wait() and print("recording", flush=True), daemon=True).start()
-        try:
-            count = record_log(args.lcm_url, args.out, duration=args.duration, channels=args.channels, ready=ready)
-        except KeyboardInterrupt:
-            return 0
-        print(f"recorded {count} events to {args.out}")
-        return 0
-    from pedi_drake.viz.log_plots import plot_go1_log
-
-    for path in plot_go1_log(read_go1_log(args.log), Path(args.out)):
-        print(path)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

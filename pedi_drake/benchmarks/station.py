@@ -1,6 +1,6 @@
 """Simulation speed of the station: real-time factor of the standing scenario, without visualisation.
 
-    python -m pedi_drake.station.benchmark [--runs 5] [--duration 4] [--out benchmarks/results/station.json]
+    python -m pedi_drake.benchmarks.station [--runs 5] [--duration 4] [--out benchmarks/results/station.json]
 
 Cases, each run `--runs` times (median reported):
   stand_pd            stand controller (joint PD at 1 kHz) + estimator + loggers, plain Go1
@@ -19,9 +19,9 @@ from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.station.motor_model import pack_command
-from pedi_drake.station.scenario import load_scenario
-from pedi_drake.station.station import MakeStation
+from pedi_drake.go1_command import pack_command
+from pedi_drake.scenario import load_scenario
+from pedi_drake.station_interface import MakeStation
 
 
 def _time(simulator: Simulator, duration: float) -> float:

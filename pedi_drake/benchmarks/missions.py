@@ -1,6 +1,6 @@
 """Every shipped mission in simulation: seed 0 without noise, and more seeds with sensor noise.
 
-    python -m pedi_drake.mission.benchmark [--missions a,b] [--noise-seeds 1,2,3,4,5] [--jobs 2]
+    python -m pedi_drake.benchmarks.missions [--missions a,b] [--noise-seeds 1,2,3,4,5] [--jobs 2]
                                            [--out benchmarks/results/missions.json]
 
 Prints one row per mission (successes, foot errors, trunk drift, real-time factor without any
@@ -24,9 +24,9 @@ EXPECTED_OBSTACLE_CLASS = {"press_a": "rigid", "press_b": "soft"}
 
 def run_one(mission: str, seed: int, noise: bool) -> dict:
     """One run of `mission`; returns its result dictionary (result.json)."""
-    from pedi_drake.estimation.accuracy import run_estimate_errors
-    from pedi_drake.simulation_run import run
-    from pedi_drake.station.scenario import load_scenario
+    from pedi_drake.evaluation.estimator_accuracy import run_estimate_errors
+    from pedi_drake.run import run
+    from pedi_drake.scenario import load_scenario
 
     text = (
         f"{{mission: {mission}, controller: whole_body, random_seed: {seed}, simulation_duration: 60.0, "

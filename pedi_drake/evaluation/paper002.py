@@ -12,7 +12,7 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.control.tasks import orientation_error_W
-from pedi_drake.run_logs import SignalLog
+from pedi_drake.evaluation.run_logs import SignalLog
 
 # Floors of the paper-002 issue for IV-A.
 FOOT_POSITION_FLOOR_M = 0.005

@@ -1,12 +1,12 @@
 """Settings of the Go1 LCM driver: safety bounds, watchdogs, soft start, and the simulator bridge.
 
-Meant to become the Scenario field `hardware: Go1DriverConfig`, so one YAML file tunes both the
-driver (controller side) and `go1_sim_bridge` (robot side).
+The Scenario field `go1_driver: Go1DriverConfig`: one YAML file tunes both the driver (controller
+side) and the simulator bridge (robot side, `python -m pedi_drake.apps.sim_bridge`).
 """
 
 import dataclasses
 
-from pedi_drake.station.go1_lcm_constants import BRIDGE_PERIOD, RC_ESTOP_FIELDS
+from pedi_drake.go1_driver.constants import BRIDGE_PERIOD, RC_ESTOP_FIELDS
 
 
 @dataclasses.dataclass
@@ -24,7 +24,7 @@ class Go1SafetyConfig:
     # Largest rate of change of a published position target [rad/s].
     max_target_rate: float = 8.0
     # Switch to damping when no status message arrived for this long [s]. 40 ms of silence plus
-    # one 2 ms tick keeps "damping on the wire within 50 ms of the last status" (issue 7 floor).
+    # one 2 ms tick puts damping on the wire within 50 ms of the last status message.
     status_timeout: float = 0.04
     # Switch to damping when the driver's own loop has not published for this long [s]: the
     # controller stopped producing (a hang); the robot-side bridge would hold the last command.
@@ -37,7 +37,7 @@ class Go1SafetyConfig:
 
 @dataclasses.dataclass
 class Go1BridgeConfig:
-    """Imperfections of the robot-side simulator bridge (go1_sim_bridge)."""
+    """Imperfections of the robot-side simulator bridge (`pedi_drake.apps.sim_bridge`)."""
 
     # Extra delay of every published status message [s] (0: none).
     latency: float = 0.0

@@ -1,8 +1,8 @@
 """Whole-body controller benchmark: tick time, closed-loop speed, three-leg hold and push floors.
 
-    python -m pedi_drake.control.benchmark [--repeats 3] [--out benchmarks/results/control.json]
+    python -m pedi_drake.benchmarks.control [--repeats 3] [--out benchmarks/results/control.json]
 
-Runs the scripted demonstrations of `pedi_drake.control.demos` in simulation (500 Hz control,
+Runs the scripted demonstrations of `pedi_drake.benchmarks.demos` in simulation (500 Hz control,
 1 ms plant) and prints one table:
 
 * controller tick (state in, command out, hierarchical QP solved) on three legs with the
@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pedi_drake.control.demos import DemoResult, demo_scenario, run_demo
+from pedi_drake.benchmarks.demos import DemoResult, demo_scenario, run_demo
 
 # Floors of the whole-body controller issue.
 TICK_MEDIAN_FLOOR_MS = 1.0

@@ -1,6 +1,6 @@
 """Paper 003's Table I for the Go1: time and accuracy of the five SUF methods, two scenarios.
 
-    python -m pedi_drake.suf.benchmark [--configs 100] [--timed 10] [--seed 0]
+    python -m pedi_drake.benchmarks.suf [--configs 100] [--timed 10] [--seed 0]
                                        [--out benchmarks/results/suf.json]
 
 Scenarios (random valid stances, seeded): teleoperation (FL, RR, RL stance, the FR foot is the

@@ -1,10 +1,10 @@
 """Software in the loop over real UDP: a mission through the Go1 LCM driver against the simulator
 bridge in a second process, judged against the bridge's ground truth.
 
-    python -m pedi_drake.station.sil [--mission hit_target_front] [--scenario_text YAML]
+    python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_text YAML]
                                      [--lcm_url URL] [--out out/sil_<mission>]
 
-Starts `python -m pedi_drake.station.go1_sim_bridge --mission M --truth_log ...` (the robot side,
+Starts `python -m pedi_drake.apps.sim_bridge --mission M --truth_log ...` (the robot side,
 real time, 500 Hz), then runs the mission here exactly as `run_sim.py --hardware` does (driver,
 state estimator, controller, mission manager; no ground truth on this side), stops the bridge
 and compares: each reach phase's target with where the bridge's simulated foot really was at the
@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake import robot
-from pedi_drake.run_logs import read_run_logs
-from pedi_drake.simulation_run import run
-from pedi_drake.station.scenario import apply_scenario_text, load_scenario
+from pedi_drake.evaluation.run_logs import read_run_logs
+from pedi_drake.run import run
+from pedi_drake.scenario import apply_scenario_text, load_scenario
 
 GROUP = "239.255.76.67"
 BRIDGE_START_TIMEOUT = 60.0  # [s] for the bridge to build its diagram and start publishing
@@ -80,7 +80,7 @@ def run_sil(
     truth_path = out_dir / "bridge_truth.npz"
     text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
     bridge = subprocess.Popen(
-        [sys.executable, "-m", "pedi_drake.station.go1_sim_bridge", "--mission", mission, "--lcm_url", url]
+        [sys.executable, "-m", "pedi_drake.apps.sim_bridge", "--mission", mission, "--lcm_url", url]
         + ["--scenario_text", text, "--truth_log", str(truth_path), "--realtime_rate", str(realtime_rate)],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,

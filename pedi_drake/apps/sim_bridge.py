@@ -1,6 +1,6 @@
 """The robot's side of the Go1 LCM protocol, around the simulated Go1: a stand-in for the real bridge.
 
-    python -m pedi_drake.station.go1_sim_bridge [--scenario_file F] [--scenario_name N]
+    python -m pedi_drake.apps.sim_bridge [--scenario_file F] [--scenario_name N]
         [--scenario_text YAML] [--mission NAME] [--duration S] [--lcm_url URL] [--latency S]
         [--drop_probability P] [--truth_log FILE]
 
@@ -15,7 +15,7 @@ e.g. `python run_sim.py --hardware --mission hit_target_front` in a second termi
 
 `--mission` adds the mission's scene objects and robot variant, as run_sim does. `--truth_log`
 writes the simulated ground truth on exit (wall-clock time [s], trunk pose, foot positions in
-world), which no controller sees: `pedi_drake.station.sil` uses it to judge a run over the wire.
+world), which no controller sees: `pedi_drake.apps.sil` uses it to judge a run over the wire.
 """
 
 import argparse
@@ -34,16 +34,19 @@ from pydrake.systems.framework import BasicVector, DiagramBuilder, DiscreteValue
 from pydrake.systems.lcm import LcmInterfaceSystem
 from pydrake.systems.primitives import VectorLogSink
 
+from pedi_drake import robot
+from pedi_drake.diagram import apply_mission
 from pedi_drake.exceptions import ConfigError
-from pedi_drake.station import go1_lcm_constants as c
-from pedi_drake.station.go1_driver_config import Go1BridgeConfig
-from pedi_drake.station.go1_status_receiver import Go1LcmReceiver
-from pedi_drake.station.hardware_station import driver_config_for, go1_lcm_for
-from pedi_drake.station.lcmtypes import leg_control_data_lcmt, state_estimator_lcmt
-from pedi_drake.station.motor_model import COMMAND_SIZE, pack_command
-from pedi_drake.station.scenario import Scenario, load_scenario
-from pedi_drake.station.station import MakeStation
-from pedi_drake.station.wall_clock import WallClock
+from pedi_drake.go1_command import COMMAND_SIZE, pack_command
+from pedi_drake.go1_driver import constants as c
+from pedi_drake.go1_driver.config import Go1BridgeConfig
+from pedi_drake.go1_driver.hardware_station import go1_lcm
+from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimator_lcmt
+from pedi_drake.go1_driver.status_receiver import Go1LcmReceiver
+from pedi_drake.mission.spec import load_mission
+from pedi_drake.scenario import Scenario, load_scenario
+from pedi_drake.station_interface import MakeStation
+from pedi_drake.wall_clock import WallClock
 
 # Period of the ground-truth log [s].
 TRUTH_LOG_PERIOD = 0.01
@@ -173,7 +176,7 @@ def status_messages(sample: np.ndarray, tick: int) -> tuple[leg_control_data_lcm
 
 def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1BridgeConfig | None = None):
     """The simulated station ("station") wired to the robot side of the protocol on `lcm`."""
-    config = config if config is not None else driver_config_for(scenario).bridge
+    config = config if config is not None else scenario.go1_driver.bridge
     builder = DiagramBuilder()
     builder.AddNamedSystem("lcm", LcmInterfaceSystem(lcm))
     station = builder.AddNamedSystem("station", MakeStation(scenario, hardware=False))
@@ -213,8 +216,6 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
 def write_truth_log(diagram, context, path: Path) -> Path:
     """Writes the bridge's ground truth to `path` (npz): wall_time (N,) [s], p_WB (N, 3) [m],
     quaternion_WB (N, 4) (w, x, y, z), p_WF (N, 4, 3) foot centres FR, FL, RR, RL [m]."""
-    from pedi_drake import robot
-
     plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     states = diagram.GetSubsystemByName("log.plant_state").FindLog(context).data()
     wall = diagram.GetSubsystemByName("log.wall_clock").FindLog(context).data()[0]
@@ -239,9 +240,6 @@ def bridge_scenario(scenario: Scenario, mission: str | None) -> Scenario:
     """`scenario` with the mission's scene objects and robot variant, as the controller side has them."""
     if not mission:
         return scenario
-    from pedi_drake.diagram import apply_mission
-    from pedi_drake.mission.spec import load_mission
-
     return apply_mission(scenario, load_mission(mission))
 
 
@@ -266,12 +264,12 @@ def main(argv: list[str] | None = None) -> int:
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    config = driver_config_for(scenario).bridge
+    config = scenario.go1_driver.bridge
     if args.latency is not None:
         config.latency = args.latency
     if args.drop_probability is not None:
         config.drop_probability = args.drop_probability
-    lcm = DrakeLcm(args.lcm_url) if args.lcm_url else go1_lcm_for(scenario)
+    lcm = DrakeLcm(args.lcm_url) if args.lcm_url else go1_lcm(scenario.lcm_buses)
     diagram = MakeSimBridgeDiagram(scenario, lcm, config)
     simulator = Simulator(diagram)
     simulator.set_target_realtime_rate(args.realtime_rate)

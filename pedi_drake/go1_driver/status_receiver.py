@@ -24,7 +24,7 @@ from pydrake.lcm import DrakeLcmInterface
 from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
 
 from pedi_drake.exceptions import LcmTimeout
-from pedi_drake.station import go1_lcm_constants as c
+from pedi_drake.go1_driver import constants as c
 
 _log = logging.getLogger(__name__)
 
@@ -148,7 +148,7 @@ class Go1LcmReceiver(LeafSystem):
                     raise LcmTimeout(
                         f"no valid message on LCM channel {self._channel!r} at {self._lcm.get_lcm_url()} "
                         f"within {self._wait_timeout:g} s: is the Go1 bridge (or "
-                        "`python -m pedi_drake.station.go1_sim_bridge`) running on that URL?"
+                        "`python -m pedi_drake.apps.sim_bridge`) running on that URL?"
                     )
                 self._lcm.HandleSubscriptions(max(1, min(50, int(remaining * 1000))))
         self._latch(context, discrete_state)

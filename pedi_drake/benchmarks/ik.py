@@ -11,7 +11,7 @@ Workspace: for each leg, joint angles sampled uniformly within the limits, mappe
 forward kinematics to targets (reachable by construction), solved by FABRIK at 1 mm from both
 starts.
 
-    python -m pedi_drake.ik.benchmark [--targets 200] [--seed 0] [--workspace-samples 2500]
+    python -m pedi_drake.benchmarks.ik [--targets 200] [--seed 0] [--workspace-samples 2500]
                                       [--no-snopt] [--out benchmarks/results/ik.json]
 """
 

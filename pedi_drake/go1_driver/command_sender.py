@@ -12,8 +12,8 @@ import numpy as np
 from pydrake.lcm import DrakeLcmInterface
 from pydrake.systems.framework import EventStatus, LeafSystem
 
-from pedi_drake.station import go1_lcm_constants as c
-from pedi_drake.station.motor_model import COMMAND_SIZE
+from pedi_drake.go1_command import COMMAND_SIZE
+from pedi_drake.go1_driver import constants as c
 
 _log = logging.getLogger(__name__)
 

@@ -15,9 +15,11 @@ from pydrake.lcm import DrakeLcmParams
 from pydrake.multibody.plant import MultibodyPlantConfig
 
 from pedi_drake.config_validation import check_against_schema
-from pedi_drake.control.config import ProjectedImpedanceConfig, WholeBodyControllerConfig
+from pedi_drake.control.config import ProjectedImpedanceConfig, StandControllerConfig, WholeBodyControllerConfig
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.exceptions import ProngDesignError, ScenarioError
+from pedi_drake.go1_driver.config import Go1DriverConfig
+from pedi_drake.go1_driver.constants import DEFAULT_GO1_LCM_URL, GO1_BUS_NAME
 from pedi_drake.prongs import ProngDesign
 
 SCENE_OBJECT_KINDS = ("door", "box", "target_panel", "back_object", "fixed_obstacle", "soft_obstacle")
@@ -26,7 +28,6 @@ ESTIMATORS = ("ground_truth", "kalman")
 CONTROLLERS = ("stand_pd", "whole_body", "projected_impedance")
 # The controllers that run missions (the same ports; see pedi_drake.control).
 MISSION_CONTROLLERS = ("whole_body", "projected_impedance")
-DEFAULT_GO1_LCM_URL = "udpm://239.255.76.67:7667?ttl=0"
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
@@ -89,21 +90,6 @@ class SensorNoiseConfig:
 
 
 @dataclasses.dataclass
-class StandControllerConfig:
-    """The joint-space PD that takes the Go1 from its initial pose to standing and holds it."""
-
-    # Target joint pose, (hip, thigh, calf) applied to all legs [rad].
-    target_leg_pose: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.9, -1.8])
-    # Duration of the quintic blend from the measured pose to the target [s].
-    duration: float = 1.5
-    # Motor PD gains [N m/rad], [N m s/rad].
-    kp: float = 60.0
-    kd: float = 2.0
-    # Control period [s].
-    period: float = 0.002
-
-
-@dataclasses.dataclass
 class Scenario:
     """Everything a run needs; one file drives both simulation and hardware."""
 
@@ -137,10 +123,13 @@ class Scenario:
     estimator: str = "kalman"
     # Settings of the Kalman estimator.
     kalman: KalmanEstimatorConfig = dataclasses.field(default_factory=KalmanEstimatorConfig)
-    # LCM buses by name; the hardware station uses the bus "go1".
+    # LCM buses by name; the Go1 driver and the simulator bridge use the bus "go1".
     lcm_buses: dict[str, DrakeLcmParams] = dataclasses.field(
-        default_factory=lambda: {"go1": DrakeLcmParams(lcm_url=DEFAULT_GO1_LCM_URL)}
+        default_factory=lambda: {GO1_BUS_NAME: DrakeLcmParams(lcm_url=DEFAULT_GO1_LCM_URL)}
     )
+    # The Go1 LCM driver (controller side: safety bounds, watchdogs, soft start) and the
+    # simulator bridge (robot side: latency, drops).
+    go1_driver: Go1DriverConfig = dataclasses.field(default_factory=Go1DriverConfig)
     # Meshcat publish period for the live view and the HTML replay [s].
     visualization_period: float = 1.0 / 32.0
 

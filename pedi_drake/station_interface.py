@@ -3,7 +3,8 @@
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram
 
-from pedi_drake.station.scenario import Scenario
+from pedi_drake.go1_driver.hardware_station import MakeHardwareStation, go1_lcm
+from pedi_drake.scenario import Scenario
 from pedi_drake.station.sim_station import MakeSimulationStation
 
 STATION_PORTS = {
@@ -24,12 +25,6 @@ def MakeStation(scenario: Scenario, meshcat: Meshcat | None = None, *, hardware:
     `sim.*` ports for logging and tests.
     """
     if hardware:
-        try:
-            from pedi_drake.station.hardware_station import MakeHardwareStation
-        except ImportError as error:
-            raise NotImplementedError(
-                "hardware=True needs the Go1 LCM driver (issue 7: pedi_drake/station/hardware_station.py), "
-                f"which is not available: {error}"
-            ) from None
-        return MakeHardwareStation(scenario, meshcat)
+        # The driver draws nothing: `meshcat` is for the simulation's visualiser.
+        return MakeHardwareStation(scenario.go1_driver, go1_lcm(scenario.lcm_buses))
     return MakeSimulationStation(scenario, meshcat)

@@ -24,9 +24,9 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
 
 from pedi_drake import robot
-from pedi_drake.station.go1_driver_config import Go1SafetyConfig
-from pedi_drake.station.go1_lcm_constants import STATUS_CHANNELS
-from pedi_drake.station.motor_model import COMMAND_SIZE, pack_command, split_command
+from pedi_drake.go1_command import COMMAND_SIZE, pack_command, split_command
+from pedi_drake.go1_driver.config import Go1SafetyConfig
+from pedi_drake.go1_driver.constants import STATUS_CHANNELS
 
 _log = logging.getLogger(__name__)
 
@@ -104,12 +104,6 @@ def driver_report(status: np.ndarray, message_counts: np.ndarray | None = None) 
             for channel, (received, dropped) in zip(channels, counts, strict=True)
         }
     return report
-
-
-def pd_torque(command: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
-    """tau_ff + kp (q_des - q) + kd (qd_des - qd) [N m], before the motors' own saturation."""
-    q_des, qd_des, kp, kd, tau_ff = split_command(command)
-    return tau_ff + kp * (q_des - q) + kd * (qd_des - qd)
 
 
 def damping_command(q_hold: np.ndarray, qd: np.ndarray, limits: SafetyLimits, kd: float) -> np.ndarray:

@@ -2,7 +2,7 @@
 
 `run(scenario=..., name=..., out_dir=...)` is what run_sim.py, the mission benchmark, the tests
 and the notebooks call. It writes result.json (DESIGN.md section 5), replay.html, PNG plots and the logged signals
-(logs.npz, read back with `pedi_drake.run_logs.read_run_logs`).
+(logs.npz, read back with `pedi_drake.evaluation.run_logs.read_run_logs`).
 """
 
 import time
@@ -15,12 +15,13 @@ from pydrake.systems.framework import EventStatus
 
 from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.mission import results as mission_results
+from pedi_drake.evaluation import mission_results
+from pedi_drake.evaluation.result_file import write_result
+from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
+from pedi_drake.fall import fell_during
+from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
-from pedi_drake.results import trunk_fell, trunk_pose_fell, write_result
-from pedi_drake.run_logs import SignalLog, write_run_logs
-from pedi_drake.station.go1_safety import driver_report
-from pedi_drake.station.scenario import Scenario
+from pedi_drake.scenario import Scenario
 from pedi_drake.viz import plots
 
 SETTLE_AFTER_MISSION = 0.5  # [s] simulated after the mission ends, then the run stops
@@ -104,13 +105,14 @@ def run(
         plant = plant_map = None
         t_state, states = logs["base_state"].sample_times(), None
         p_WB = base[4:7]
-        fell = trunk_pose_fell(base[0:4], base[6], has_prongs=has_prongs)
+        fell = fell_during(base[0:4], base[6], has_prongs=has_prongs)
     else:
         plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
         plant_map = robot.Go1PlantMap.from_plant(plant)
         t_state, states = logs["sim.plant_state"].sample_times(), logs["sim.plant_state"].data()
         p_WB = states[plant_map.base_q_start + 4 : plant_map.base_q_start + 7]
-        fell = trunk_fell(states, plant_map, has_prongs=has_prongs)
+        q0 = plant_map.base_q_start
+        fell = fell_during(states[q0 : q0 + 4], states[q0 + 6], has_prongs=has_prongs)
     sim_time = float(context.get_time())
     result = {
         "mission": built.mission.name if built.mission else None,

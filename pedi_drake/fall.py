@@ -1,0 +1,46 @@
+"""When the Go1 has fallen: one rule for the mission manager (online, on the state estimate),
+the run's judge (after the run, on ground truth in simulation) and the benchmarks.
+
+The trunk has fallen when it tilts past FALL_TILT (the angle between its z axis and world z),
+or, once the robot has stood, when the trunk origin drops below FALL_HEIGHT while the trunk is
+not meant to rest on prongs (a Go1 with prongs may lean its trunk on them by design).
+"""
+
+import math
+
+import numpy as np
+
+FALL_HEIGHT = 0.07  # [m] trunk origin below this: the trunk is on the ground
+FALL_TILT = math.radians(50.0)  # [rad] trunk z axis this far from world z: toppled
+# A trunk origin above this height has stood up; a run starts lying (trunk at about 0.1 m) [m].
+STOOD_HEIGHT = FALL_HEIGHT + 0.05
+
+
+def cos_tilt(quaternion_wxyz: np.ndarray) -> np.ndarray:
+    """cos of the angle between the trunk's z axis and world z, from quaternions (4,) or (4, N)."""
+    w, x, y, z = quaternion_wxyz
+    return 1.0 - 2.0 * (x * x + y * y) / np.maximum(w * w + x * x + y * y + z * z, 1e-12)
+
+
+def trunk_has_fallen(quaternion_wxyz, height, *, has_stood, resting_on_prongs) -> np.ndarray | bool:
+    """The fall rule for one sample or, with arrays (4, N), (N,) and (N,) flags, for each sample.
+
+    quaternion_wxyz: trunk orientation in world; height: trunk origin z [m]; has_stood: the robot
+    has stood up before this sample; resting_on_prongs: the trunk may touch the ground by design.
+    """
+    tilted = cos_tilt(np.asarray(quaternion_wxyz, dtype=float)) < math.cos(FALL_TILT)
+    dropped = np.logical_and(
+        np.logical_and(has_stood, np.asarray(height) < FALL_HEIGHT), np.logical_not(resting_on_prongs)
+    )
+    return np.logical_or(tilted, dropped)
+
+
+def fell_during(quaternion_wxyz: np.ndarray, height: np.ndarray, *, has_prongs: bool) -> bool:
+    """Whether the fall rule held at any sample of a logged run: quaternions (4, N), heights (N,) [m].
+
+    The robot has stood from the first sample above STOOD_HEIGHT on; with prongs the trunk may rest
+    on them throughout.
+    """
+    height = np.asarray(height, dtype=float)
+    has_stood = np.maximum.accumulate(height > STOOD_HEIGHT) if height.size else height.astype(bool)
+    return bool(np.any(trunk_has_fallen(quaternion_wxyz, height, has_stood=has_stood, resting_on_prongs=has_prongs)))

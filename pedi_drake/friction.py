@@ -1,0 +1,31 @@
+"""The 4-edge friction pyramid of a point contact on flat ground, for every user of it.
+
+A contact force lambda (world frame, z up) is admissible when lambda_z >= 0 and
+
+    |lambda_x| <= m lambda_z,   |lambda_y| <= m lambda_z,   m = mu / sqrt(2) (inscribed) or mu.
+
+The inscribed pyramid (the default everywhere) lies inside the Coulomb cone of radius mu: every
+force it admits the contact can hold. The circumscribed one (m = mu) admits tangential forces up
+to sqrt(2) mu lambda_z along the diagonals, which the contact cannot hold. Prong tips and feet
+use the same pyramid; the SUF analysis of prong designs uses it too.
+"""
+
+import math
+
+import numpy as np
+
+
+def pyramid_slope(mu: float, *, inscribed: bool = True) -> float:
+    """m of |lambda_x|, |lambda_y| <= m lambda_z for friction coefficient `mu` [-]."""
+    return mu / math.sqrt(2.0) if inscribed else mu
+
+
+def friction_pyramid_edges(mu: float, *, inscribed: bool = True) -> np.ndarray:
+    """(4, 3): rows r with r . lambda <= 0, the pyramid's four faces (no unilateral row)."""
+    m = pyramid_slope(mu, inscribed=inscribed)
+    return np.array([[1.0, 0.0, -m], [-1.0, 0.0, -m], [0.0, 1.0, -m], [0.0, -1.0, -m]])
+
+
+def friction_pyramid_rows(mu: float, *, inscribed: bool = True) -> np.ndarray:
+    """(5, 3): rows r with r . lambda <= 0: lambda_z >= 0 then the four faces."""
+    return np.vstack([[0.0, 0.0, -1.0], friction_pyramid_edges(mu, inscribed=inscribed)])
