@@ -6,9 +6,10 @@ run_sim.py, the tests, the benchmarks and the notebooks all build their diagrams
 
 import dataclasses
 
+import numpy as np
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import VectorLogSink
+from pydrake.systems.primitives import MatrixGain, VectorLogSink
 
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.stand_controller import StandController
@@ -33,9 +34,9 @@ LOGGED_SIGNALS = (
     "go1.imu",
     "base_state",
 )
-SIM_LOGGED_SIGNALS = ("sim.plant_state",)
+SIM_LOGGED_SIGNALS = ("sim.plant_state", "sim.foot_contact_forces")
 # Simulated sensor signals that are costly to compute: logged through a sample-and-hold.
-SAMPLED_SENSOR_SIGNALS = ("go1.imu", "go1.foot_contact", "go1.torque_estimated")
+SAMPLED_SENSOR_SIGNALS = ("go1.imu", "go1.foot_contact", "go1.torque_estimated", "sim.foot_contact_forces")
 
 
 @dataclasses.dataclass
@@ -99,10 +100,29 @@ def MakePedipulationDiagram(
         builder.Connect(station.GetOutputPort("go1.velocity_measured"), controller.velocity_port)
         extra_logs["controller.diagnostics"] = controller.diagnostics_port
         if mission is not None:
+            force_estimate = mission.force_estimate or scenario.force_estimate
+            if force_estimate == "impedance" and scenario.controller != "projected_impedance":
+                raise ScenarioError(
+                    f"mission: {scenario.mission!r} uses force_estimate: impedance, which needs "
+                    "controller: projected_impedance"
+                )
             manager = builder.AddNamedSystem(
                 "mission",
-                MissionManager(mission, prongs=scenario.robot.prongs, friction=scenario.ground_friction),
+                MissionManager(
+                    mission,
+                    prongs=scenario.robot.prongs,
+                    friction=scenario.ground_friction,
+                    force_estimate=force_estimate,
+                ),
             )
+            if isinstance(system, ProjectedImpedanceController):
+                # The Eq. 11 estimate, out of the controller's diagnostics.
+                where = system.diag["force_estimate"]
+                select = np.zeros((12, controller.diagnostics_port.size()))
+                select[np.arange(12), np.arange(where.start, where.stop)] = 1.0
+                estimate = builder.AddNamedSystem("foot_force_estimate", MatrixGain(select))
+                builder.Connect(controller.diagnostics_port, estimate.get_input_port())
+                builder.Connect(estimate.get_output_port(), manager.GetInputPort("foot_force_estimate"))
             builder.Connect(base_state, manager.GetInputPort("base_state"))
             for name in ("position_measured", "velocity_measured", "torque_estimated", "foot_contact"):
                 builder.Connect(station.GetOutputPort(f"go1.{name}"), manager.GetInputPort(name))

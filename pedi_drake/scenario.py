@@ -15,7 +15,12 @@ from pydrake.lcm import DrakeLcmParams
 from pydrake.multibody.plant import MultibodyPlantConfig
 
 from pedi_drake.config_validation import check_against_schema
-from pedi_drake.control.config import ProjectedImpedanceConfig, StandControllerConfig, WholeBodyControllerConfig
+from pedi_drake.control.config import (
+    FORCE_ESTIMATES,
+    ProjectedImpedanceConfig,
+    StandControllerConfig,
+    WholeBodyControllerConfig,
+)
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.exceptions import ProngDesignError, ScenarioError
 from pedi_drake.go1_driver.config import Go1DriverConfig
@@ -116,6 +121,10 @@ class Scenario:
     whole_body: WholeBodyControllerConfig = dataclasses.field(default_factory=WholeBodyControllerConfig)
     # Settings of paper 002's projected-impedance controller.
     projected_impedance: ProjectedImpedanceConfig = dataclasses.field(default_factory=ProjectedImpedanceConfig)
+    # The foot force estimate of press phases (a mission file may set its own): "joint_torque"
+    # (quasi-static, from the estimated joint torques; any controller) or "impedance" (Eq. 11 of
+    # paper 002, from the foot's impedance error; controller: projected_impedance only).
+    force_estimate: str = "joint_torque"
     # The mission to run (a name in missions/ or a YAML path); empty for none.
     mission: str = ""
     # Floating-base estimate used by controllers: "kalman" (IMU + leg kinematics, simulation and
@@ -176,6 +185,16 @@ class Scenario:
                 raise ScenarioError(f"{where}: {error}") from None
         for problem in self.kalman.validate(where="kalman"):
             raise ScenarioError(f"{where}: {problem}")
+        need(
+            self.force_estimate in FORCE_ESTIMATES,
+            "force_estimate",
+            f"must be one of {FORCE_ESTIMATES}, got {self.force_estimate!r}",
+        )
+        need(
+            self.force_estimate != "impedance" or self.controller == "projected_impedance",
+            "force_estimate",
+            "'impedance' needs controller: projected_impedance (its Eq. 11 estimate)",
+        )
         for problem in self.projected_impedance.validate(where="projected_impedance"):
             raise ScenarioError(f"{where}: {problem}")
         for number_field in ("simulation_duration", "visualization_period", "ground_friction"):

@@ -11,7 +11,11 @@ Cases, each on both controllers (`whole_body`, the paper-000 HQP, and `projected
   on the lifted foot) and the Eq. 11 force estimate's error against that force;
 * the missions (Kalman estimate, as shipped): success, foot errors, trunk drift, tick; for
   `torso_circle_foot_hold` (evaluation IV-A) the held foot's position and orientation errors and
-  the torso's circle tracking, with the plots of Figs. 3 to 5 in `--plots`.
+  the torso's circle tracking, with the plots of Figs. 3 to 5 in `--plots`;
+* obstacle_sensing on paper 002's controller over `--obstacle-seeds` (seed 0 without sensor
+  noise, the others with), the presses stopped by the impedance estimate: the RMS error of both
+  foot force estimates against the simulated contact force at the foot during the presses, and
+  each estimate's rigid/soft call.
 
 The figures come from simulation ground truth, for evaluation only.
 """
@@ -24,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake.benchmarks.demos import demo_scenario, run_demo
+from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import paper002 as evaluation
 from pedi_drake.evaluation.run_logs import read_run_logs
@@ -101,6 +106,37 @@ def mission_row(mission: str, controller: str, out_dir: Path, plots: Path | None
     return row
 
 
+def obstacle_row(seed: int, out_dir: Path) -> dict:
+    """obstacle_sensing on paper 002's controller, presses stopped by the impedance estimate
+    (seed 0 without sensor noise, others with): both estimates against the true contact force,
+    and each estimate's rigid/soft call."""
+    noise = "true" if seed else "false"
+    scenario = load_scenario(
+        scenario_text=f"{{mission: obstacle_sensing, controller: projected_impedance, force_estimate: impedance, "
+        f"random_seed: {seed}, sensor_noise: {{enabled: {noise}}}}}"
+    )
+    spec = load_mission("obstacle_sensing")
+    scenario.simulation_duration = max(scenario.simulation_duration, spec.longest_duration())
+    result = run(scenario=scenario, name="obstacle_sensing", out_dir=out_dir, quiet=True, replay=False)
+    errors = evaluation.press_force_errors(read_run_logs(out_dir), result["phases"])
+    calls = {source: {} for source in ("impedance", "joint_torque")}
+    for press in result["presses"]:
+        for source, figures in press.get("by_estimate", {}).items():
+            calls[source][press["phase"]] = figures["classified_as"]
+    return {
+        "case": f"obstacle_sensing seed {seed}",
+        "controller": "projected_impedance",
+        "success": result["success"],
+        "sensor_noise": bool(seed),
+        "force_estimate_rms_impedance_n": errors["rms_n"].get("impedance", float("nan")),
+        "force_estimate_rms_joint_torque_n": errors["rms_n"]["joint_torque"],
+        "true_force_max_n": errors["true_force_max_n"],
+        "classified_right_impedance": calls["impedance"] == EXPECTED_OBSTACLE_CLASS,
+        "classified_right_joint_torque": calls["joint_torque"] == EXPECTED_OBSTACLE_CLASS,
+        "tick_median_ms": result["controller_tick_ms"]["median"],
+    }
+
+
 def floors(rows: list[dict]) -> dict:
     """Which of the issue's floors each measured row meets (paper 002's controller)."""
     checks = {}
@@ -121,6 +157,20 @@ def floors(rows: list[dict]) -> dict:
             checks["iva_torso_rms_below_1_cm"] = row["torso_tracking_rms_m"] < evaluation.TORSO_TRACKING_RMS_FLOOR_M
         if row["case"].startswith("mission"):
             checks[f"{row['case']}_succeeds"] = bool(row["success"])
+    obstacle = [row for row in rows if row["case"].startswith("obstacle_sensing seed")]
+    if obstacle:
+        no_noise = [row for row in obstacle if not row["sensor_noise"]]
+        for row in no_noise:
+            checks["force_estimate_rms_below_2_n_in_presses"] = row["force_estimate_rms_impedance_n"] < 2.0
+            checks["impedance_estimate_beats_joint_torque"] = (
+                row["force_estimate_rms_impedance_n"] < row["force_estimate_rms_joint_torque_n"]
+            )
+        checks["obstacles_classified_right_all_seeds_impedance"] = all(
+            r["classified_right_impedance"] for r in obstacle
+        )
+        checks["obstacles_classified_right_all_seeds_joint_torque"] = all(
+            r["classified_right_joint_torque"] for r in obstacle
+        )
     return checks
 
 
@@ -138,6 +188,10 @@ def print_table(rows: list[dict]) -> None:
         ("foot_position_error_max_m", "{:.4f}"),
         ("foot_orientation_error_max_deg", "{:.2f}"),
         ("torso_tracking_rms_m", "{:.4f}"),
+        ("force_estimate_rms_impedance_n", "{:.2f}"),
+        ("force_estimate_rms_joint_torque_n", "{:.2f}"),
+        ("classified_right_impedance", "{}"),
+        ("classified_right_joint_torque", "{}"),
     ]
     print(" | ".join(name for name, _ in columns))
     for row in rows:
@@ -156,11 +210,19 @@ def main() -> None:
     parser.add_argument("--runs", default="out/paper002_benchmark", help="Folder of the mission runs.")
     parser.add_argument("--plots", default="out/paper002_benchmark/plots", help="Folder of the IV-A plots.")
     parser.add_argument("--missions", nargs="*", default=list(MISSIONS), help="Missions to run on both controllers.")
+    parser.add_argument(
+        "--obstacle-seeds",
+        default="0,1,2,3,4,5",
+        help="obstacle_sensing seeds on paper 002's controller (0 without sensor noise, others with; '' for none)",
+    )
+    parser.add_argument("--skip-demos", action="store_true", help="Leave out the scripted demos.")
     args = parser.parse_args()
-    rows = demo_rows()
+    rows = [] if args.skip_demos else demo_rows()
     for mission in args.missions:
         for controller in CONTROLLERS:
             rows.append(mission_row(mission, controller, Path(args.runs) / controller / mission, Path(args.plots)))
+    for seed in [int(s) for s in args.obstacle_seeds.split(",") if s]:
+        rows.append(obstacle_row(seed, Path(args.runs) / "obstacle_seeds" / str(seed)))
     print_table(rows)
     checks = floors(rows)
     for name, ok in checks.items():

@@ -1,8 +1,9 @@
-"""Paper 002's evaluation IV-A judged from a finished run: the lifted foot's pose against the pose
-it held when the torso started to move, and the torso's circle tracking (Figs. 3 to 5).
+"""Paper 002's evaluations judged from a finished run: IV-A (the lifted foot's pose against the
+pose it held when the torso started to move, and the torso's circle tracking, Figs. 3 to 5) and
+the foot force estimates against the simulated contact force during press phases.
 
-Everything here reads simulation ground truth (the logged plant state) and is for evaluation
-only; the controllers read the state estimate and go1.* signals.
+Everything here reads simulation ground truth (the logged plant state and foot contact forces)
+and is for evaluation only; the controllers read the state estimate and go1.* signals.
 """
 
 import dataclasses
@@ -11,8 +12,11 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake import robot
+from pedi_drake.control.projected_impedance_controller import projected_diagnostics_layout
 from pedi_drake.control.tasks import orientation_error_W
+from pedi_drake.estimation.base_state import BaseState
 from pedi_drake.evaluation.run_logs import SignalLog
+from pedi_drake.mission.robot_view import RobotView
 
 # Floors of the paper-002 issue for IV-A.
 FOOT_POSITION_FLOOR_M = 0.005
@@ -120,3 +124,59 @@ def plot_foot_hold(evaluation: FootHoldEvaluation, out_dir: Path, title: str = "
     fig.savefig(paths[-1], dpi=100)
     plt.close(fig)
     return paths
+
+
+def press_force_errors(logs: dict[str, SignalLog], phases: list[dict], leg: str = "FR") -> dict:
+    """The foot force estimates against the simulated contact force on the foot during every
+    press phase: RMS of |estimate - true| [N] per estimate ("joint_torque" always, "impedance"
+    when the controller's diagnostics carry it), over all press samples pooled.
+
+    The joint-torque estimate is recomputed from the logged go1.* signals and the state estimate
+    exactly as the mission computes it (RobotView.foot_external_force_W); the impedance estimate
+    is the controller's `force_estimate` diagnostic. Neither has its press-start bias removed.
+    """
+    true = logs["sim.foot_contact_forces"]
+    k = robot.LEG_NAMES.index(leg)
+    windows = [(p["t_start"], p["t_end"]) for p in phases if p["kind"] == "press" and p["t_end"] is not None]
+    keep = np.zeros(len(true.times), dtype=bool)
+    for t0, t1 in windows:
+        keep |= (true.times >= t0) & (true.times <= t1)
+    times = true.times[keep]
+    F_true = true.data[3 * k : 3 * k + 3, keep].T
+
+    def at(log: SignalLog) -> np.ndarray:
+        return np.clip(np.searchsorted(log.times, times), 0, len(log.times) - 1)
+
+    base, q, tau = logs["base_state"], logs["go1.position_measured"], logs["go1.torque_estimated"]
+    ib, iq, it = at(base), at(q), at(tau)
+    joint = []
+    for a, b, c in zip(ib, iq, it, strict=True):
+        view = RobotView(
+            time=0.0,
+            base=BaseState.from_vector(base.data[:, a]),
+            q=q.data[:, b],
+            qd=np.zeros(12),
+            tau=tau.data[:, c],
+            foot_force=np.zeros(4),
+        )
+        joint.append(view.foot_external_force_W(leg))
+    estimates = {"joint_torque": np.array(joint).reshape(-1, 3)}
+    diagnostics = logs.get("controller.diagnostics")
+    if diagnostics is not None:
+        num_contacts = _num_contacts_of(diagnostics.data.shape[0])
+        if num_contacts is not None:
+            where = projected_diagnostics_layout(num_contacts)["force_estimate"]
+            estimates["impedance"] = diagnostics.data[where, :][3 * k : 3 * k + 3, at(diagnostics)].T
+    rms = {
+        source: float(np.sqrt(np.mean(np.sum((F - F_true) ** 2, axis=1)))) if len(times) else float("nan")
+        for source, F in estimates.items()
+    }
+    return {"samples": int(len(times)), "rms_n": rms, "true_force_max_n": float(np.max(np.linalg.norm(F_true, axis=1)))}
+
+
+def _num_contacts_of(diagnostics_size: int) -> int | None:
+    """The contact count whose projected-impedance diagnostics have this size (None: another controller)."""
+    for num_contacts in range(4, 12):
+        if projected_diagnostics_layout(num_contacts)["constraint_rank"].stop == diagnostics_size:
+            return num_contacts
+    return None

@@ -47,10 +47,11 @@ class MissionManager(LeafSystem):
         prongs: ProngDesign | None = None,
         friction: float = 0.8,
         period: float = 0.01,
+        force_estimate: str = "joint_torque",
     ):
         super().__init__()
         self._mission = mission
-        self._env = MissionEnvironment(prongs)
+        self._env = MissionEnvironment(prongs, force_estimate)
         self._friction = friction
         num_contacts = 4 + self._env.num_prongs
         self._base_state = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
@@ -58,6 +59,9 @@ class MissionManager(LeafSystem):
         self._velocity = self.DeclareVectorInputPort("velocity_measured", 12)
         self._torque = self.DeclareVectorInputPort("torque_estimated", 12)
         self._foot_contact = self.DeclareVectorInputPort("foot_contact", 4)
+        # Eq. 11 of paper 002 per foot, world [N] (the projected-impedance controller's
+        # `force_estimate` diagnostic); unconnected: only the joint-torque estimate exists.
+        self._impedance_force = self.DeclareVectorInputPort("foot_force_estimate", 12)
         self._progress = self.DeclareAbstractState(AbstractValue.Make(MissionProgress()))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
@@ -105,6 +109,11 @@ class MissionManager(LeafSystem):
             qd=np.asarray(self._velocity.Eval(context)),
             tau=np.asarray(self._torque.Eval(context)),
             foot_force=np.asarray(self._foot_contact.Eval(context)),
+            impedance_forces=(
+                np.asarray(self._impedance_force.Eval(context)).reshape(4, 3)
+                if self._impedance_force.HasValue(context)
+                else None
+            ),
         )
 
     def _initialize(self, context, state) -> None:

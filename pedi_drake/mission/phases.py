@@ -41,9 +41,11 @@ CONTACT_RAMP_WAIT = 0.3  # [s] wait for the controller to ramp a contact's force
 class MissionEnvironment:
     """Constant facts a phase needs: the robot variant and the controller's contact layout."""
 
-    def __init__(self, prongs: ProngDesign | None):
+    def __init__(self, prongs: ProngDesign | None, force_estimate: str = "joint_torque"):
         self.prongs = prongs
         self.num_prongs = 0 if prongs is None else prongs.num_prongs
+        # The foot force estimate press phases stop on: "joint_torque" or "impedance".
+        self.force_estimate = force_estimate
 
 
 def _fail(progress: MissionProgress, reason: str) -> str:
@@ -344,11 +346,19 @@ class ReachRunner(PhaseRunner):
 
 
 class PressRunner(PhaseRunner):
-    """Drives the foot along `direction` until the estimated force or the displacement is reached."""
+    """Drives the foot along `direction` until the estimated force or the displacement is reached.
+
+    The force is the mission's estimate (`MissionEnvironment.force_estimate`); every available
+    estimate is recorded beside it, each with its own bias and stiffness."""
 
     def start(self, phase, progress, view, env):
         if phase.leg not in progress.references.legs:
             raise UnreachableTarget(f"{phase.name}: {phase.leg} is not in pedipulation mode")
+        estimates = view.foot_force_estimates_W(phase.leg)
+        if env.force_estimate not in estimates:
+            raise UnreachableTarget(
+                f"{phase.name}: the {env.force_estimate} force estimate is not available from this controller"
+            )
         direction = np.asarray(phase.direction, float)
         direction /= np.linalg.norm(direction)
         start = view.foot_W(phase.leg)
@@ -357,19 +367,35 @@ class PressRunner(PhaseRunner):
         progress.references.press = dict(
             leg=phase.leg, start=start, direction=direction, speed=phase.speed, t0=view.time, frozen_at=None
         )
-        # The force estimate has a bias from model errors; measure it before touching anything.
-        progress.memo.update(start=start, force_bias=float(-view.foot_external_force_W(phase.leg) @ direction))
+        # Each estimate has a bias from model errors; measure it before touching anything.
+        biases = {source: float(-force @ direction) for source, force in estimates.items()}
+        progress.memo.update(start=start, force_bias=biases)
 
     def step(self, phase, progress, view, env):
         memo, press = progress.memo, progress.references.press
         direction = press["direction"]
-        force = float(-view.foot_external_force_W(phase.leg) @ direction) - memo["force_bias"]
+        estimates = view.foot_force_estimates_W(phase.leg)
+        forces = {
+            source: float(-force @ direction) - memo["force_bias"][source]
+            for source, force in estimates.items()
+            if source in memo["force_bias"]
+        }
+        force = forces[env.force_estimate]
         displacement = float((view.foot_W(phase.leg) - memo["start"]) @ direction)
         metrics = progress.records[-1].metrics
-        metrics.update(leg=phase.leg, force_n=force, displacement_m=displacement)
+        metrics.update(
+            leg=phase.leg,
+            force_n=force,
+            displacement_m=displacement,
+            force_estimate=env.force_estimate,
+            forces_n=forces,
+        )
         if force >= phase.force or displacement >= phase.max_displacement:
             press["frozen_at"] = view.time
             metrics["stiffness_n_per_m"] = force / max(displacement, 1e-4)
+            metrics["stiffness_by_estimate"] = {
+                source: value / max(displacement, 1e-4) for source, value in forces.items()
+            }
             metrics["stopped_by"] = "force" if force >= phase.force else "displacement"
             # Hold the foot where it is, in joint space, for whatever comes next.
             hold = PiecewiseQuintic.through(np.array([view.leg_q(phase.leg)] * 2), view.time, [1e-3])

@@ -23,6 +23,7 @@ from pathlib import Path
 from pydrake.common.yaml import yaml_load
 
 from pedi_drake.config_validation import check_against_schema
+from pedi_drake.control.config import FORCE_ESTIMATES
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.robot import LEG_NAMES
 from pedi_drake.scenario import RobotConfig, SceneObject
@@ -232,6 +233,7 @@ class MissionSpec:
     scene: list[SceneObject]
     robot: RobotConfig | None
     source: str  # the file it came from
+    force_estimate: str = ""  # "joint_torque" or "impedance"; empty: the scenario's
 
     def longest_duration(self) -> float:
         """Simulated time [s] the mission can take at most: every phase running to its timeout,
@@ -246,6 +248,8 @@ class _MissionFile:
     description: str = ""
     scene: list[SceneObject] = dataclasses.field(default_factory=list)
     robot: RobotConfig | None = None
+    # The foot force estimate press phases use: "joint_torque" or "impedance"; empty: the scenario's.
+    force_estimate: str = ""
     phases: list[dict] = dataclasses.field(default_factory=list)
 
 
@@ -316,6 +320,10 @@ def load_mission(name_or_path: str) -> MissionSpec:
         raise MissionFileError(f"{where}: expected a mapping with 'phases'")
     top = {key: value for key, value in raw.items() if key != "phases"}
     header = _object(top, _MissionFile, "", where)
+    if header.force_estimate not in ("", *FORCE_ESTIMATES):
+        raise MissionFileError(
+            f"{where}: force_estimate: must be one of {FORCE_ESTIMATES} (or absent), got {header.force_estimate!r}"
+        )
     raw_phases = raw.get("phases")
     if not isinstance(raw_phases, list) or not raw_phases:
         raise MissionFileError(f"{where}: phases: expected a non-empty list of phases")
@@ -345,6 +353,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
         scene=header.scene,
         robot=header.robot,
         source=where,
+        force_estimate=header.force_estimate,
     )
 
 
