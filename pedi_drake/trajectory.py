@@ -234,3 +234,30 @@ class CircularPath:
         velocity = r * rate * np.array([-si, c, 0.0])
         acceleration = r * rate_dot * np.array([-si, c, 0.0]) - r * rate**2 * np.array([c, si, 0.0])
         return TrajectorySample(position, velocity, acceleration)
+
+
+@dataclasses.dataclass(frozen=True)
+class PivotedPosition:
+    """The position of a point rigidly attached to a body that turns about a fixed `pivot` along
+    `orientation` (a QuinticOrientationSegment from R0): p(t) = c + R(t) R0^T (p0 - c).
+
+    Velocity w x r and acceleration alpha x r + w x (w x r), with r = p - c; so a trunk reference
+    made of this and `orientation` turns the trunk about the pivot (a loaded prong tip, say)."""
+
+    orientation: "QuinticOrientationSegment"
+    pivot: np.ndarray  # c [m]
+    start: np.ndarray  # p0 [m]
+
+    def __deepcopy__(self, memo) -> "PivotedPosition":
+        return self  # immutable
+
+    @property
+    def t_end(self) -> float:
+        return self.orientation.t_end
+
+    def sample(self, t: float) -> TrajectorySample:
+        o = self.orientation.sample(t)
+        lever_0 = self.orientation.start.inverse().multiply(np.asarray(self.start, float) - self.pivot)
+        r = o.rotation.multiply(lever_0)
+        w, alpha = o.angular_velocity, o.angular_acceleration
+        return TrajectorySample(self.pivot + r, np.cross(w, r), np.cross(alpha, r) + np.cross(w, np.cross(w, r)))

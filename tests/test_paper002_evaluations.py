@@ -1,14 +1,17 @@
 """Paper 002's evaluations as short simulations on its controller, judged on ground truth:
-IV-A (the lifted foot holds a 5-D world pose while the torso circles)."""
+IV-A (the lifted foot holds a 5-D world pose while the torso circles) and IV-B (the trunk turns
+about one prong while the lifted front feet hold their positions)."""
 
 import json
 
+import numpy as np
 import pytest
 
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import paper002 as evaluation
 from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.mission.spec import load_mission
+from pedi_drake.prongs import ProngDesign
 from pedi_drake.run import run
 from pedi_drake.scenario import load_scenario
 from pedi_drake.station_interface import MakeStation
@@ -72,3 +75,69 @@ def test_iv_a_plots_figs_3_to_5(iv_a, tmp_path):
         "iva_foot_orientation_error.png",
     ]
     assert all(p.stat().st_size > 1000 for p in paths)
+
+
+# IV-B from standing: lean on the front prong alone, lift both front feet, hold them, turn the
+# trunk about the prong's tip by 6 degrees each way in pitch, roll and yaw (the shipped mission,
+# prong_pivot_rotations, without standing up and putting the feet back).
+IV_B = """
+robot:
+  prongs: {}
+phases:
+  - {kind: body_rotate, name: nose_down, rpy: [0.0, 0.14, 0.0], duration: 1.0, timeout: 3.0}
+  - {kind: lean_on_prongs, prongs: [prong_0], duration: 2.0, timeout: 4.0}
+  - {kind: leg_to_pedipulation, leg: FR, working_depth: 0.10, timeout: 4.0}
+  - {kind: leg_to_pedipulation, leg: FL, working_depth: 0.10, timeout: 4.0}
+  - {kind: hold_foot_pose, name: hold_FR, leg: FR, orientation: false, duration: 0.2, timeout: 2.0}
+  - {kind: hold_foot_pose, name: hold_FL, leg: FL, orientation: false, duration: 0.2, timeout: 2.0}
+  - {kind: body_rotate, name: pitch_up, pivot: prong_0, rpy: [0.0, 0.2447, 0.0], duration: 1.5, timeout: 3.0}
+  - {kind: body_rotate, name: pitch_down, pivot: prong_0, rpy: [0.0, 0.0353, 0.0], duration: 2.0, timeout: 3.5}
+  - {kind: body_rotate, name: roll_left, pivot: prong_0, rpy: [0.1047, 0.14, 0.0], duration: 1.5, timeout: 3.0}
+  - {kind: body_rotate, name: roll_right, pivot: prong_0, rpy: [-0.1047, 0.14, 0.0], duration: 2.0, timeout: 3.5}
+  - {kind: body_rotate, name: yaw_left, pivot: prong_0, rpy: [0.0, 0.14, 0.1047], duration: 1.5, timeout: 3.0}
+  - {kind: body_rotate, name: yaw_right, pivot: prong_0, rpy: [0.0, 0.14, -0.2094], duration: 2.0, timeout: 3.5}
+"""
+ROTATION_FLOOR = np.radians(5.0)
+FRONT_FEET_FLOOR_M = 0.005
+
+
+@pytest.fixture(scope="module")
+def iv_b(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("iv_b")
+    mission = folder / "iv_b.yaml"
+    mission.write_text(IV_B)
+    scenario = load_scenario(
+        scenario_text=f"{{mission: {mission}, controller: projected_impedance, robot: {{initial_pose: standing}}, "
+        "simulation_duration: 30.0}"
+    )
+    result = run(scenario=scenario, name="iv_b", out_dir=folder, quiet=True, replay=False)
+    turns = [p for p in result["phases"] if p["name"] in ("pitch_up", "yaw_right")]
+    assert len(turns) == 2 and all(p["t_end"] is not None for p in turns), result["reason"]
+    plant = MakeStation(apply_mission(scenario, load_mission(str(mission)))).GetSubsystemByName("plant")
+    pivot = evaluation.evaluate_pivot_rotations(
+        plant,
+        read_run_logs(folder),
+        turns[0]["t_start"],
+        turns[1]["t_end"],
+        "prong_0",
+        [0.0, 0.0, -ProngDesign().length],
+    )
+    return result, pivot
+
+
+def test_iv_b_mission_succeeds_on_one_prong_without_falling(iv_b):
+    result, _ = iv_b
+    assert result["success"], result["reason"]
+    assert not result["fell"]
+
+
+def test_iv_b_trunk_turns_5_deg_each_way_about_the_prong(iv_b):
+    _, pivot = iv_b
+    for axis, (most_negative, most_positive) in pivot.rotation_reached_rad.items():
+        assert most_positive >= ROTATION_FLOOR, axis
+        assert most_negative <= -ROTATION_FLOOR, axis
+
+
+def test_iv_b_front_feet_hold_within_5_mm(iv_b):
+    _, pivot = iv_b
+    assert pivot.front_feet_drift_max_m < FRONT_FEET_FLOOR_M

@@ -12,6 +12,8 @@ Cases, each on both controllers (`whole_body`, the paper-000 HQP, and `projected
 * the missions (Kalman estimate, as shipped): success, foot errors, trunk drift, tick; for
   `torso_circle_foot_hold` (evaluation IV-A) the held foot's position and orientation errors and
   the torso's circle tracking, with the plots of Figs. 3 to 5 in `--plots`;
+* `prong_pivot_rotations` (evaluation IV-B): the trunk's rotation about the prong reached in
+  roll, pitch and yaw, the lifted front feet's drift and the prong tip's slip;
 * obstacle_sensing on paper 002's controller over `--obstacle-seeds` (seed 0 without sensor
   noise, the others with), the presses stopped by the impedance estimate: the RMS error of both
   foot force estimates against the simulated contact force at the foot during the presses, and
@@ -38,7 +40,14 @@ from pedi_drake.scenario import Scenario, load_scenario
 from pedi_drake.station_interface import MakeStation
 
 CONTROLLERS = ("whole_body", "projected_impedance")
-MISSIONS = ("torso_circle_foot_hold", "hit_target_front", "obstacle_sensing", "open_door", "prong_push_box")
+MISSIONS = (
+    "torso_circle_foot_hold",
+    "prong_pivot_rotations",
+    "hit_target_front",
+    "obstacle_sensing",
+    "open_door",
+    "prong_push_box",
+)
 TICK_MEDIAN_FLOOR_MS = 0.5
 FOOT_STIFFNESS_TOLERANCE = 0.10
 FORCE_ESTIMATE_RMS_FLOOR_N = 2.0
@@ -96,6 +105,14 @@ def mission_row(mission: str, controller: str, out_dir: Path, plots: Path | None
         "tick_p99_ms": result["controller_tick_ms"]["p99"],
         "real_time_factor": result["real_time_factor"],
     }
+    turns = [p for p in result["phases"] if p["kind"] == "body_rotate" and p["name"] in ("pitch_up", "yaw_back")]
+    if len(turns) == 2 and all(p["status"] == "succeeded" for p in turns):
+        plant = _station_plant(apply_mission(scenario, spec))
+        tip = [0.0, 0.0, -apply_mission(scenario, spec).robot.prongs.length]
+        pivot = evaluation.evaluate_pivot_rotations(
+            plant, read_run_logs(out_dir), turns[0]["t_start"], turns[1]["t_end"], "prong_0", tip
+        )
+        row.update(pivot.summary())
     circle = [p for p in result["phases"] if p["kind"] == "body_path" and p["status"] == "succeeded"]
     if circle:
         plant = _station_plant(apply_mission(scenario, spec))
@@ -155,6 +172,11 @@ def floors(rows: list[dict]) -> dict:
             checks["iva_foot_position_below_5_mm"] = row["foot_position_error_max_m"] < evaluation.FOOT_POSITION_FLOOR_M
             checks["iva_foot_orientation_below_2_deg"] = row["foot_orientation_error_max_deg"] < 2.0
             checks["iva_torso_rms_below_1_cm"] = row["torso_tracking_rms_m"] < evaluation.TORSO_TRACKING_RMS_FLOOR_M
+        if row["case"] == "mission prong_pivot_rotations" and "rotation_reached_deg" in row:
+            checks["ivb_rotations_reach_5_deg_each_way"] = all(
+                lo <= -5.0 and hi >= 5.0 for lo, hi in row["rotation_reached_deg"].values()
+            )
+            checks["ivb_front_feet_within_5_mm"] = row["front_feet_drift_max_m"] < 0.005
         if row["case"].startswith("mission"):
             checks[f"{row['case']}_succeeds"] = bool(row["success"])
     obstacle = [row for row in rows if row["case"].startswith("obstacle_sensing seed")]
@@ -188,6 +210,7 @@ def print_table(rows: list[dict]) -> None:
         ("foot_position_error_max_m", "{:.4f}"),
         ("foot_orientation_error_max_deg", "{:.2f}"),
         ("torso_tracking_rms_m", "{:.4f}"),
+        ("front_feet_drift_max_m", "{:.4f}"),
         ("force_estimate_rms_impedance_n", "{:.2f}"),
         ("force_estimate_rms_joint_torque_n", "{:.2f}"),
         ("classified_right_impedance", "{}"),

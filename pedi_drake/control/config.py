@@ -121,6 +121,7 @@ class ProjectedImpedanceConfig:
     trunk_orientation: PdGainsConfig = dataclasses.field(default_factory=lambda: PdGainsConfig(150.0, 25.0))
     # Trunk position before its attitude (two levels): when the feet leave the trunk fewer than
     # six free directions, it keeps to its path and yields attitude. False: one level of 6 rows.
+    # On loaded prongs the attitude always comes first (a prong tip pins the position).
     torso_position_first: bool = True
     # Joint posture in the null space of the feet and the trunk [1/s^2], [1/s].
     posture: PdGainsConfig = dataclasses.field(default_factory=lambda: PdGainsConfig(20.0, 5.0))

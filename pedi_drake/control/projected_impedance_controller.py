@@ -7,15 +7,19 @@ ports of `WholeBodyController`, so missions, the estimator and the LCM driver us
 
 Tasks at one instant (world frame):
     constraint Jacobian: the feet and prong tips in the contact set, or still ramping out;
-    first priority (impedance, Eq. 10): every lifted leg with a reference. A foot reference
-    (leg mode 1) is used as is; a joint reference (mode 2, what the mission's IK produces) is
-    turned into the world foot position it means at the trunk's reference pose, so the foot is
-    held in the world and the trunk yields to it. A lifted leg without a reference is a joint
-    impedance towards the nominal posture;
+    first priority (impedance, Eq. 10): every lifted leg with a reference. A world foot
+    reference (leg mode 1, or mode 3 with the calf's roll and pitch: the 5-D task) is used as is:
+    the foot is held in the world and the trunk yields to it. A joint reference (mode 2, the
+    mission's IK answer in the trunk frame) is turned into the foot position it means on the
+    trunk as estimated now, so it moves with the trunk (a trunk tracking error, such as the
+    deliberate one of a trunk pressed onto its prongs, does not become a foot error). A lifted
+    leg without a reference is a joint impedance towards the nominal posture;
     second priority: the trunk pose, in the feet's dynamically consistent null space: its position
     first, then its attitude in the position's null space (`torso_position_first`; else the six
     rows together). When the feet leave the trunk fewer than six directions (a 5-D foot task
-    on three stance legs leaves four), the trunk keeps its path and gives up attitude;
+    on three stance legs leaves four), the trunk keeps its path and gives up attitude. On loaded
+    prongs the order turns round: a prong tip pins the trunk's position, and its attitude (the
+    turn about the tip) is what is left to control;
     last priority: the joint posture, in the null space of all the above;
     constrained space: the contact-force QP (Eq. 7), tau = tau_m + tau_c (Eq. 8).
 The `safety_polygon` input is read for the capture-point diagnostic only: paper 002's law has
@@ -52,7 +56,7 @@ from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, QpInfeasible
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.vector3 import rotation_from_vector
+from pedi_drake.vector3 import cross3, rotation_from_vector
 
 # Force-estimate filter state: per leg, the last impedance error rate (3), the filtered error
 # acceleration (3), and whether the leg had a foot impedance at the last tick (1).
@@ -81,20 +85,23 @@ def _skew(w: np.ndarray) -> np.ndarray:
 
 
 def joint_reference_in_world(
-    leg: str, body: references.BodyReference, leg_ref: references.LegReference
+    leg: str, s: RobotSnapshot, leg_ref: references.LegReference
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(p, v, a) of the foot a joint reference means at the trunk's reference pose [m, m/s, m/s^2].
+    """(p, v, a) of the foot a joint reference means on the trunk as it is [m, m/s, m/s^2].
 
-    p = p_WB + R p_BF(q), v = v_WB + w x R p_BF + R J(q) qd, a = a_WB + R J(q) qdd (the terms
-    quadratic in the rates are left out: they are small at reference speeds and only feed forward).
+    p = p_WB + R p_BF(q), v = v_WB + w x R p_BF + R J(q) qd, a = a_WB + R J(q) qdd with the
+    estimated trunk pose and velocity (the terms quadratic in the rates, and the trunk's
+    acceleration, are left out: they only feed forward). A joint reference is the mission's IK
+    answer in the trunk frame, so it moves with the trunk: the foot error is the leg's own.
     """
     p_B = foot_position_B(leg, leg_ref.position)
     J_B = foot_jacobian_B(leg, leg_ref.position)
-    r_W = body.R @ p_B
-    p = body.p + r_W
-    v = body.v + np.cross(body.w, r_W) + body.R @ (J_B @ leg_ref.velocity)
-    a = body.a + body.R @ (J_B @ leg_ref.acceleration)
-    return p, v, a
+    r_W = s.R_WB @ p_B
+    w, v = s.V_trunk[:3], s.V_trunk[3:]
+    p = s.p_WB + r_W
+    velocity = v + cross3(w, r_W) + s.R_WB @ (J_B @ leg_ref.velocity)
+    a = s.R_WB @ (J_B @ leg_ref.acceleration)
+    return p, velocity, a
 
 
 class ProjectedImpedanceController(LeafSystem):
@@ -150,7 +157,7 @@ class ProjectedImpedanceController(LeafSystem):
         return np.asarray(port.Eval(context), float) if port.HasValue(context) else default
 
     def _impedance_tasks(
-        self, s: RobotSnapshot, body: references.BodyReference, legs: list[references.LegReference], held: np.ndarray
+        self, s: RobotSnapshot, legs: list[references.LegReference], held: np.ndarray
     ) -> tuple[list[pd.ImpedanceTask], dict[int, slice]]:
         """The first-priority tasks and, per leg with a foot impedance, its rows in the stack."""
         c = self.config
@@ -160,7 +167,7 @@ class ProjectedImpedanceController(LeafSystem):
                 continue
             if ref.mode in (references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, references.LEG_MODE_FOOT_POSE):
                 if ref.mode == references.LEG_MODE_JOINTS:
-                    p_ref, v_ref, a_ref = joint_reference_in_world(leg, body, ref)
+                    p_ref, v_ref, a_ref = joint_reference_in_world(leg, s, ref)
                 elif ref.mode == references.LEG_MODE_FOOT:
                     p_ref, v_ref, a_ref = ref.position, ref.velocity, ref.acceleration
                 else:
@@ -219,7 +226,9 @@ class ProjectedImpedanceController(LeafSystem):
             np.full(2, c.foot_orientation_damping),
         )
 
-    def _lower_tasks(self, s: RobotSnapshot, body: references.BodyReference) -> list[pd.AccelerationTask]:
+    def _lower_tasks(
+        self, s: RobotSnapshot, body: references.BodyReference, on_prongs: bool
+    ) -> list[pd.AccelerationTask]:
         c = self.config
         w, v = s.V_trunk[:3], s.V_trunk[3:]
         angular = (
@@ -228,13 +237,20 @@ class ProjectedImpedanceController(LeafSystem):
             + c.trunk_orientation.kd * (body.w - w)
         )
         linear = body.a + c.trunk_position.kp * (body.p - s.p_WB) + c.trunk_position.kd * (body.v - v)
-        if c.torso_position_first:
+        if c.torso_position_first and not on_prongs:
             torso = [
                 pd.AccelerationTask("torso_position", s.J_trunk[3:], s.Jdot_v_trunk[3:], linear),
                 pd.AccelerationTask("torso_orientation", s.J_trunk[:3], s.Jdot_v_trunk[:3], angular),
             ]
         else:
             torso = [pd.AccelerationTask("torso", s.J_trunk, s.Jdot_v_trunk, np.concatenate([angular, linear]))]
+        if on_prongs:
+            # A loaded prong pins the trunk: its attitude is what is left to control, so it
+            # comes first; its position (nearly fixed by the tip) takes what remains.
+            torso = [
+                pd.AccelerationTask("torso_orientation", s.J_trunk[:3], s.Jdot_v_trunk[:3], angular),
+                pd.AccelerationTask("torso_position", s.J_trunk[3:], s.Jdot_v_trunk[3:], linear),
+            ]
         posture = pd.AccelerationTask(
             "posture",
             self.S,
@@ -288,9 +304,10 @@ class ProjectedImpedanceController(LeafSystem):
             dynamics = pd.constrained_dynamics(
                 s.M, s.h, Jc, s.Jdot_v_contacts[rows], s.v, c.contact_damping, c.rank_tolerance
             )
-            impedance, foot_rows = self._impedance_tasks(s, body, legs, held)
+            impedance, foot_rows = self._impedance_tasks(s, legs, held)
             stacked = pd.stack_impedance_tasks(impedance, self.model.nv)
-            law = pd.prioritized_force(dynamics, s.v, stacked, self._lower_tasks(s, body), c.rank_tolerance)
+            lower = self._lower_tasks(s, body, bool(held[4:].any()))
+            law = pd.prioritized_force(dynamics, s.v, stacked, lower, c.rank_tolerance)
             free = pd.constraint_free_torque(dynamics, law.u, self.S, c.rank_tolerance)
             share = self.total_weight / max(float(ramp[held_idx].sum()), 1e-6)
             force_share = np.zeros(3 * len(held_idx))

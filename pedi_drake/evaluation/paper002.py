@@ -180,3 +180,61 @@ def _num_contacts_of(diagnostics_size: int) -> int | None:
         if projected_diagnostics_layout(num_contacts)["constraint_rank"].stop == diagnostics_size:
             return num_contacts
     return None
+
+
+@dataclasses.dataclass
+class PivotEvaluation:
+    """IV-B figures over the rotations about a prong (ground truth)."""
+
+    rotation_reached_rad: dict  # {"roll" | "pitch" | "yaw": (most negative, most positive)} from the start attitude
+    front_feet_drift_max_m: float  # largest displacement of FR or FL from where they were held
+    pivot_slip_max_m: float  # largest horizontal displacement of the pivot prong's tip
+
+    def summary(self) -> dict:
+        return {
+            "rotation_reached_deg": {
+                axis: [float(np.degrees(lo)), float(np.degrees(hi))]
+                for axis, (lo, hi) in self.rotation_reached_rad.items()
+            },
+            "front_feet_drift_max_m": self.front_feet_drift_max_m,
+            "pivot_slip_max_m": self.pivot_slip_max_m,
+        }
+
+
+def evaluate_pivot_rotations(
+    plant, logs: dict[str, SignalLog], t_start: float, t_end: float, pivot: str, tip_offset: np.ndarray
+) -> PivotEvaluation:
+    """IV-B figures between t_start and t_end [s] (the rotation phases about prong `pivot`).
+
+    The rotation is the trunk's attitude relative to the start (see the comment below);
+    `tip_offset` is the tip's centre in the prong body's frame [m] (0, 0, -length)."""
+    states = logs["sim.plant_state"]
+    keep = (states.times >= t_start) & (states.times <= t_end)
+    context = plant.CreateDefaultContext()
+    trunk_body = plant.GetBodyByName(robot.TRUNK_BODY_NAME)
+    feet = [plant.GetBodyByName(f"{leg}_foot") for leg in ("FR", "FL")]
+    prong = plant.GetBodyByName(pivot)
+    nq = plant.num_positions()
+    rotations, foot_positions, tips = [], [], []
+    for x in states.data[:, keep].T:
+        plant.SetPositions(context, x[:nq])
+        rotations.append(plant.EvalBodyPoseInWorld(context, trunk_body).rotation().matrix())
+        foot_positions.append([plant.EvalBodyPoseInWorld(context, foot).translation() for foot in feet])
+        tips.append(plant.EvalBodyPoseInWorld(context, prong) @ np.asarray(tip_offset, float))
+    R0 = rotations[0]
+    # Each sample's rotation from the start attitude (world rotation vector), its angle credited
+    # to the axis it is mostly about, with its sign: rotations about axes tilted by the trunk's
+    # start pitch still count in full.
+    relative = np.array([orientation_error_W(R, R0) for R in rotations])
+    angle = np.linalg.norm(relative, axis=1)
+    dominant = np.argmax(np.abs(relative), axis=1)
+    signed = angle * np.sign(relative[np.arange(len(relative)), dominant])
+    reached = {}
+    for k, axis in enumerate(("roll", "pitch", "yaw")):
+        mine = signed[dominant == k]
+        reached[axis] = (float(min(mine.min(), 0.0)), float(max(mine.max(), 0.0))) if len(mine) else (0.0, 0.0)
+    foot_positions = np.array(foot_positions)
+    drift = float(np.max(np.linalg.norm(foot_positions - foot_positions[0], axis=2)))
+    tips = np.array(tips)
+    slip = float(np.max(np.linalg.norm(tips[:, :2] - tips[0, :2], axis=1)))
+    return PivotEvaluation(reached, drift, slip)

@@ -29,7 +29,13 @@ from pedi_drake.mission.progress import (
 )
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.trajectory import CircularPath, PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment
+from pedi_drake.trajectory import (
+    CircularPath,
+    PiecewiseQuintic,
+    PivotedPosition,
+    QuinticOrientationSegment,
+    QuinticSegment,
+)
 
 LYING_HEIGHT = 0.13  # [m] trunk height when lying down under control (legs folded, off the limits)
 CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
@@ -166,6 +172,12 @@ class BodyRotateRunner(PhaseRunner):
         roll, pitch, yaw = phase.rpy
         goal = RotationMatrix(RollPitchYaw(roll, pitch, yaw0 + yaw))
         _move_body(progress, view.time, None, goal, phase.duration)
+        if phase.pivot:
+            k = _loaded_prong(phase.name, phase.pivot, progress, env)
+            refs = progress.references
+            p_now, _ = _body_sample(progress, view.time)
+            tip_W = view.X_WB @ env.prongs.tip_positions_B()[k]
+            refs.body_position = PivotedPosition(refs.body_orientation, tip_W, p_now)
         progress.memo["goal"] = goal
 
     def step(self, phase, progress, view, env):
@@ -454,22 +466,55 @@ class LegToSupportRunner(PhaseRunner):
         return RUNNING
 
 
+def _loaded_prong(what: str, name: str, progress: MissionProgress, env: MissionEnvironment) -> int:
+    """The index of prong `name`, which must exist and be loaded."""
+    if env.prongs is None or spec.prong_index(name) >= env.num_prongs:
+        raise UnreachableTarget(f"{what}: the robot has no {name} ({env.num_prongs} prongs)")
+    k = spec.prong_index(name)
+    if progress.references.contacts[4 + k] < 0.5:
+        raise UnreachableTarget(f"{what}: {name} is not loaded (lean on it first)")
+    return k
+
+
+def _lean_prongs(phase, env: MissionEnvironment) -> list[int]:
+    """Indices of the prongs a lean_on_prongs phase loads."""
+    names = phase.prongs or list(robot.prong_body_names(env.prongs))
+    for name in names:
+        if spec.prong_index(name) >= env.num_prongs:
+            raise UnreachableTarget(f"{phase.name}: the robot has no {name} ({env.num_prongs} prongs)")
+    return [spec.prong_index(name) for name in names]
+
+
 class LeanOnProngsRunner(PhaseRunner):
+    """Lowers the trunk at its attitude until the named prong tips touch, then loads them."""
+
     def start(self, phase, progress, view, env):
         if env.prongs is None:
             raise UnreachableTarget(f"{phase.name}: the robot has no prongs (set robot.prongs)")
-        p_now, _ = _body_sample(progress, view.time)
+        lean = _lean_prongs(phase, env)
+        p_now, R_now = _body_sample(progress, view.time)
+        # Trunk height at which each tip's sphere touches flat ground at the reference attitude.
+        drop = (R_now.matrix() @ env.prongs.tip_positions_B().T)[2]
+        touch = env.prongs.tip_radius - drop
         goal = p_now.copy()
-        # 5 mm below first touch so the tips carry load.
-        goal[2] = env.prongs.ground_contact_height() - 0.005
+        # 5 mm below the touch of the highest named tip, so that every named tip carries load.
+        goal[2] = float(np.min(touch[lean])) - 0.005
+        others = [k for k in range(env.num_prongs) if k not in lean]
+        if others and float(np.max(touch[others])) > goal[2] - 0.005:
+            raise UnreachableTarget(
+                f"{phase.name}: prongs {[f'prong_{k}' for k in others]} would touch the ground too "
+                "(tilt the trunk first, or lean on them as well)"
+            )
         _move_body(progress, view.time, goal, None, phase.duration)
-        progress.memo.update(goal=goal, loaded=False)
+        progress.memo.update(goal=goal, loaded=False, lean=lean)
 
     def step(self, phase, progress, view, env):
         t, memo = view.time, progress.memo
         if not memo["loaded"] and t >= progress.phase_start + phase.duration:
-            if view.base.p_WB[2] < env.prongs.ground_contact_height() + 0.01:
-                progress.references.contacts[4:] = 1.0
+            tips_z = np.array([(view.X_WB @ tip)[2] for tip in env.prongs.tip_positions_B()])
+            if np.all(tips_z[memo["lean"]] < env.prongs.tip_radius + 0.01):
+                for k in memo["lean"]:
+                    progress.references.contacts[4 + k] = 1.0
                 memo.update(loaded=True, t_loaded=t + CONTACT_RAMP_WAIT)
         if memo["loaded"] and t >= memo["t_loaded"]:
             return SUCCEEDED

@@ -11,7 +11,13 @@ import dataclasses
 import numpy as np
 from pydrake.math import RotationMatrix
 
-from pedi_drake.trajectory import CircularPath, PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment
+from pedi_drake.trajectory import (
+    CircularPath,
+    PiecewiseQuintic,
+    PivotedPosition,
+    QuinticOrientationSegment,
+    QuinticSegment,
+)
 
 RUNNING, SUCCEEDED, FAILED, RECOVERING = "running", "succeeded", "failed", "recovering"
 STATUS_CODES = {RUNNING: 0, SUCCEEDED: 1, FAILED: 2, RECOVERING: 3}
@@ -33,7 +39,7 @@ class LegTrajectory:
 class References:
     """What the controller is asked to do, as trajectories sampled at output time."""
 
-    body_position: QuinticSegment | PiecewiseQuintic | CircularPath  # p_WB [m]
+    body_position: QuinticSegment | PiecewiseQuintic | CircularPath | PivotedPosition  # p_WB [m]
     body_orientation: QuinticOrientationSegment  # R_WB
     legs: dict[str, LegTrajectory]  # pedipulation legs only
     contacts: np.ndarray  # (4 + number of prongs,) 1 = loaded contact

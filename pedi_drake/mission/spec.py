@@ -70,12 +70,16 @@ class BodyMove(PhaseBase):
 
 @dataclasses.dataclass
 class BodyRotate(PhaseBase):
-    """Rotates the trunk to roll, pitch, yaw [rad] relative to its heading at the phase start."""
+    """Rotates the trunk to roll, pitch, yaw [rad] relative to its heading at the phase start,
+    about its own origin or, with `pivot`, about the tip of a loaded prong (the trunk origin then
+    moves on the sphere about the tip)."""
 
     rpy: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
     duration: float = 1.0
     # Success when the orientation error is below this angle [rad].
     tolerance: float = 0.02
+    # A loaded prong ("prong_0", ...) to turn about; empty: the trunk origin.
+    pivot: str = ""
 
 
 @dataclasses.dataclass
@@ -186,9 +190,13 @@ class Press(PhaseBase):
 
 @dataclasses.dataclass
 class LeanOnProngs(PhaseBase):
-    """Lowers the trunk until the prongs touch and carry load, then adds them as contacts."""
+    """Lowers the trunk (at its current attitude) until the prongs touch and carry load, then adds
+    them as contacts. `prongs` names the prongs to lean on ("prong_0", ...); empty: every prong.
+    A prong that is not named must stay clear of the ground at that height (tilt the trunk first)."""
 
     duration: float = 2.0
+    # The prongs to load, by name; empty: all of them.
+    prongs: list[str] = dataclasses.field(default_factory=list)
 
 
 @dataclasses.dataclass
@@ -398,6 +406,11 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
             )
             for j, point in enumerate(companion.via_points):
                 need(len(point) == 3, f"{field}.via_points[{j}]", f"expected [x, y, z] in metres, got {point}")
+    for k, name in enumerate(getattr(phase, "prongs", None) or []):
+        need(_is_prong_name(name), f"prongs[{k}]", f"expected a prong name like 'prong_0', got {name!r}")
+    pivot = getattr(phase, "pivot", "")
+    if pivot:
+        need(_is_prong_name(pivot), "pivot", f"expected a prong name like 'prong_0' (or empty), got {pivot!r}")
     if isinstance(phase, BodyPath):
         need(math.isfinite(phase.radius) and phase.radius >= 0, "radius", f"must be >= 0 m, got {phase.radius}")
         need(phase.laps >= 1, "laps", f"must be at least 1, got {phase.laps}")
@@ -412,3 +425,13 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         value = getattr(phase, field, None)
         if value is not None:
             need(len(value) == 3, field, f"expected 3 numbers, got {value}")
+
+
+def _is_prong_name(name) -> bool:
+    """Whether `name` has the form of a prong body's name, "prong_<index>"."""
+    return isinstance(name, str) and name.startswith("prong_") and name[len("prong_") :].isdigit()
+
+
+def prong_index(name: str) -> int:
+    """The index of prong `name` ("prong_3" -> 3) in the contact set, after the four feet."""
+    return int(name[len("prong_") :])
