@@ -1,6 +1,6 @@
 """Runs a pedi_drake mission (or scenario) in simulation, headless by default, and writes its results.
 
-Writes to --out (default out/<mission or scenario>/): result.json (DESIGN.md section 5),
+Writes to --out (default out/<mission or scenario>/): result.json (docs/results.md),
 replay.html (a self-contained Meshcat replay: open it in a browser) and PNG plots. Exit code 0
 on success, 1 on failure (the reason is printed), 2 on bad input.
 

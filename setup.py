@@ -19,5 +19,7 @@ setup(
         "pedi_drake.models": ["*.xml", "**/*.urdf", "**/*.sdf", "**/*.obj", "**/*.py"],
         "pedi_drake.scenarios": ["*.yaml"],
         "pedi_drake.missions": ["*.yaml"],
+        "pedi_drake.go1_driver": ["README.md"],
+        "pedi_drake.go1_driver.lcmtypes": ["*.lcm", "*.sh"],
     },
 )

@@ -11,6 +11,7 @@ import functools
 import numpy as np
 
 from pedi_drake import robot
+from pedi_drake.vector3 import axis_angle_matrix
 
 
 @dataclasses.dataclass(frozen=True)
@@ -28,14 +29,6 @@ class LegGeometry:
 
     def joint_offsets(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         return self.p_BH, self.p_HT, self.p_TC, self.p_CF
-
-
-def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rodrigues rotation matrix about the unit `axis` by `angle` [rad]."""
-    x, y, z = axis
-    c, s = np.cos(angle), np.sin(angle)
-    K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
 
 
 @functools.lru_cache(maxsize=4)
@@ -79,7 +72,7 @@ def joint_frames(geometry: LegGeometry, q_leg: np.ndarray) -> tuple[list[np.ndar
     for offset_next, axis, angle in zip(
         (geometry.p_HT, geometry.p_TC, geometry.p_CF), geometry.axes, q_leg, strict=True
     ):
-        R = R @ _axis_rotation(axis, float(angle))
+        R = R @ axis_angle_matrix(float(angle) * np.asarray(axis))
         rotations.append(R.copy())
         p = p + R @ offset_next
         positions.append(p.copy())

@@ -7,7 +7,6 @@ else.
 
 import dataclasses
 import functools
-from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import AddContactMaterial, Cylinder, ProximityProperties, Sphere
@@ -18,6 +17,7 @@ from pydrake.multibody.tree import ModelInstanceIndex, SpatialInertia, UnitInert
 
 from pedi_drake.exceptions import PediError
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.resources import models_dir
 
 LEG_NAMES = ("FR", "FL", "RR", "RL")
 JOINT_KINDS = ("hip", "thigh", "calf")
@@ -32,7 +32,7 @@ GO1_URL = "package://pedi_drake/go1/go1.urdf"
 NUM_JOINTS = 12
 FOOT_RADIUS = 0.02  # [m]
 FOOT_FRICTION = 0.8  # [-] Coulomb friction of the foot spheres (rubber on floor).
-TOTAL_MASS = 13.099448  # [kg] without prongs, rotors included.
+TOTAL_MASS = 13.100448  # [kg] without prongs, rotors and IMU included.
 
 # URDF limits in Unitree motor order.
 Q_LOWER = np.tile([-0.863, -0.686, -2.818], 4)  # [rad]
@@ -62,18 +62,6 @@ def leg_slice(leg: str) -> slice:
 def trunk_height_for(thigh: float, calf: float, foot_radius: float = FOOT_RADIUS) -> float:
     """Trunk height above flat ground with the feet under the hips [m] (thigh, calf in [rad])."""
     return 0.213 * (np.cos(thigh) + np.cos(thigh + calf)) + foot_radius
-
-
-def models_dir() -> Path:
-    """The folder holding package.xml of the `pedi_drake` model package.
-
-    In a source checkout this is <repo>/models; in an installed wheel, pedi_drake/models.
-    """
-    here = Path(__file__).resolve().parent
-    for candidate in (here.parent / "models", here / "models"):
-        if (candidate / "package.xml").exists():
-            return candidate
-    raise PediError(f"pedi_drake models not found next to {here} (looked for models/package.xml)")
 
 
 def ConfigureParser(parser: Parser) -> None:

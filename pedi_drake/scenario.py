@@ -26,6 +26,7 @@ from pedi_drake.exceptions import ProngDesignError, ScenarioError
 from pedi_drake.go1_driver.config import Go1DriverConfig
 from pedi_drake.go1_driver.constants import DEFAULT_GO1_LCM_URL, GO1_BUS_NAME
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.resources import models_dir, scenarios_dir
 
 SCENE_OBJECT_KINDS = ("door", "box", "target_panel", "back_object", "fixed_obstacle", "soft_obstacle")
 INITIAL_POSES = ("lying", "standing")
@@ -203,8 +204,6 @@ class Scenario:
 
 def resolve_model_path(model: str, base_dir: Path | None = None) -> Path:
     """The file behind a scene object's `model` (a package://pedi_drake/ URL or a path)."""
-    from pedi_drake.robot import models_dir
-
     prefix = "package://pedi_drake/"
     if model.startswith(prefix):
         return models_dir() / model[len(prefix) :]
@@ -214,18 +213,9 @@ def resolve_model_path(model: str, base_dir: Path | None = None) -> Path:
     return path
 
 
-def _scenarios_dir() -> Path:
-    """<repo>/scenarios in a source checkout, pedi_drake/scenarios in an installed wheel."""
-    package = Path(__file__).resolve().parents[1]
-    for candidate in (package.parent / "scenarios", package / "scenarios"):
-        if candidate.is_dir():
-            return candidate
-    raise ScenarioError(f"the shipped scenarios folder was not found next to {package}")
-
-
 def default_scenario_file() -> Path:
     """The shipped scenarios file."""
-    return _scenarios_dir() / "default.yaml"
+    return scenarios_dir() / "default.yaml"
 
 
 def load_scenario(

@@ -23,19 +23,28 @@ from pydrake.math import RotationMatrix
 from pedi_drake.exceptions import PediError
 
 
-def quintic_time_law(t: float, t0: float, duration: float) -> tuple[float, float, float]:
-    """(s, ds/dt [1/s], d2s/dt2 [1/s^2]) of the rest-to-rest quintic at time `t` [s]."""
-    if not duration > 0.0:
-        raise PediError(f"quintic duration must be > 0 s, got {duration!r}")
-    tau = (t - t0) / duration
+def min_jerk(tau: float) -> tuple[float, float, float]:
+    """The minimum-jerk blend (paper 000, Eq. 2, rest to rest) at normalised time `tau`, clamped to [0, 1].
+
+    Returns (s, ds/dtau, d2s/dtau2) of s = 10 tau^3 - 15 tau^4 + 6 tau^5: zero slope and
+    curvature at both ends.
+    """
     if tau <= 0.0:
         return 0.0, 0.0, 0.0
     if tau >= 1.0:
         return 1.0, 0.0, 0.0
     s = tau**3 * (10.0 - 15.0 * tau + 6.0 * tau**2)
-    ds = 30.0 * tau**2 * (1.0 - tau) ** 2 / duration
-    dds = 60.0 * tau * (1.0 - 3.0 * tau + 2.0 * tau**2) / duration**2
+    ds = 30.0 * tau**2 * (1.0 - tau) ** 2
+    dds = 60.0 * tau * (1.0 - 3.0 * tau + 2.0 * tau**2)
     return s, ds, dds
+
+
+def quintic_time_law(t: float, t0: float, duration: float) -> tuple[float, float, float]:
+    """(s, ds/dt [1/s], d2s/dt2 [1/s^2]) of the rest-to-rest quintic at time `t` [s]."""
+    if not duration > 0.0:
+        raise PediError(f"quintic duration must be > 0 s, got {duration!r}")
+    s, ds, dds = min_jerk((t - t0) / duration)
+    return s, ds / duration, dds / duration**2
 
 
 def quintic_coefficients(x0: float, x1: float, duration: float) -> np.ndarray:

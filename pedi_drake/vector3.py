@@ -14,6 +14,16 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
+def axis_angle_matrix(axis_angle: np.ndarray) -> np.ndarray:
+    """Rodrigues: the (3, 3) rotation by |axis_angle| [rad] about axis_angle / |axis_angle|."""
+    angle = float(np.linalg.norm(axis_angle))
+    if angle < 1e-12:
+        return np.eye(3)
+    x, y, z = np.asarray(axis_angle, dtype=float) / angle
+    K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+
+
 def rotation_matrix_wxyz(quaternion: np.ndarray) -> np.ndarray:
     """The (3, 3) rotation matrix of a quaternion (w, x, y, z), normalised here (any non-zero norm).
 
@@ -31,14 +41,3 @@ def rotation_matrix_wxyz(quaternion: np.ndarray) -> np.ndarray:
             [xz - wy, yz + wx, 1.0 - xx - yy],
         ]
     )
-
-
-def rotation_from_vector(r: np.ndarray) -> np.ndarray:
-    """The (3, 3) rotation of the rotation vector r (axis times angle [rad]), Rodrigues' formula."""
-    r = np.asarray(r, dtype=float)
-    angle = float(np.sqrt(r @ r))
-    if angle < 1e-12:
-        return np.eye(3)
-    k = r / angle
-    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
-    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)

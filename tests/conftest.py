@@ -1,9 +1,14 @@
 """Shared fixtures. Tests are seeded and deterministic."""
 
-import numpy as np
+import os
+
+# Plots render off screen in tests; the package itself leaves the backend to the user.
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import numpy as np  # noqa: E402 (the backend must be chosen before matplotlib is imported)
 import pytest
 
-from pedi_drake import robot
+from pedi_drake import robot  # noqa: E402
 
 
 @pytest.fixture
@@ -25,7 +30,6 @@ def execute_notebook(tmp_path, monkeypatch):
     The kernel imports this checkout (PYTHONPATH) and renders figures inline, so tests can count
     the PNGs a notebook shows.
     """
-    import os
     import shutil
     from pathlib import Path
 

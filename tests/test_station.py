@@ -1,4 +1,4 @@
-"""The simulated station: port parity with DESIGN.md section 2, standing, sensors."""
+"""The simulated station: port parity with docs/conventions.md, standing, sensors."""
 
 import numpy as np
 import pytest

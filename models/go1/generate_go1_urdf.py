@@ -1,7 +1,10 @@
 """Writes models/go1/go1.urdf from the published Go1 figures.
 
 The numbers are those of unitree_ros `robots/go1_description` (revision of 2022-11,
-"reconfirm Go1 inertial params"), as listed in the project's shared reference. Geometry is
+"reconfirm Go1 inertial params"), which example-robot-data 6.0.0 ships unchanged and the tests
+compare against. Every mass of that description is here, rotors and IMU included, as welded
+links of the same names, except its Gazebo sensor placeholders (five cameras and three
+ultrasound sensors of 1e-5 kg each) and its 1e-6 kg dummy `base` link. Geometry is
 primitive (boxes, cylinders, spheres) so that the model has no mesh dependency and Meshcat
 still shows a recognisable Go1. Regenerate with:
 
@@ -22,6 +25,10 @@ FOOT_RADIUS = 0.02  # [m]
 ROTOR_MASS = 0.089  # [kg]
 ROTOR_I_SPIN = 1.11842e-4  # [kg m^2] about the spin axis.
 ROTOR_I_OTHER = 5.9647e-5  # [kg m^2] about the two other axes.
+# Thigh and calf rotors sit on the hip and thigh links, offset along y towards the trunk's
+# midplane (+y on right legs, -y on left legs), like the thigh COM.
+THIGH_ROTOR_INBOARD = 0.00015  # [m]
+CALF_ROTOR_INBOARD = 0.03235  # [m]
 # Gear ratios: 6.33 for the Go1 joint motors; the calf adds a 1.5:1 linkage, which is why its
 # effort limit (35.55 N m) is 1.5 times the others' (23.7 N m).
 GEAR_RATIO = {"hip": 6.33, "thigh": 6.33, "calf": 9.495}
@@ -53,6 +60,8 @@ CALF = dict(
     inertia=(0.001088793059, 0.001100428748, 2.4787446e-05, -2.55679e-07, 7.117814e-06, 2.077264e-06),
 )
 FOOT = dict(mass=0.06, com=(0.0, 0.0, 0.0), inertia=(9.6e-06, 9.6e-06, 9.6e-06, 0.0, 0.0, 0.0))
+IMU = dict(mass=0.001, com=(0.0, 0.0, 0.0), inertia=(1e-4, 1e-4, 1e-4, 0.0, 0.0, 0.0))
+IMU_ORIGIN = (-0.01592, -0.06659, -0.00617)  # [m] in the trunk frame.
 
 COLORS = {"trunk": "0.15 0.15 0.17 1", "leg": "0.75 0.75 0.78 1", "rotor": "0.25 0.25 0.28 1", "foot": "0.1 0.1 0.1 1"}
 
@@ -136,8 +145,8 @@ def make_urdf() -> str:
     trunk_body += _shape("visual", '<box size="0.03 0.06 0.04"/>', (0.2, 0, 0.0), (0, 0, 0), "0.1 0.5 0.9 1")
     trunk_body += _shape("collision", '<box size="0.3762 0.0935 0.114"/>', (0, 0, 0), (0, 0, 0))
     out.append(_link("trunk", trunk_body))
-    out.append(_link("imu_link", ""))
-    out.append(_joint("imu_joint", "fixed", "trunk", "imu_link", (-0.01592, -0.06659, -0.00617)))
+    out.append(_link("imu_link", _inertial(IMU)))
+    out.append(_joint("imu_joint", "fixed", "trunk", "imu_link", IMU_ORIGIN))
     for leg in LEGS:
         left, rear = leg[1] == "L", leg[0] == "R"
         side = 1.0 if left else -1.0
@@ -166,7 +175,7 @@ def make_urdf() -> str:
             _joint(f"{thigh}_joint", "revolute", hip, thigh, (0, side * THIGH_OFFSET, 0), (0, 1, 0), LIMITS["thigh"])
         )
         out.append(_rotor_link(f"{thigh}_rotor", spin_axis=1))
-        out.append(_joint(f"{thigh}_rotor_joint", "fixed", hip, f"{thigh}_rotor", (0, -side * 0.00015, 0)))
+        out.append(_joint(f"{thigh}_rotor_joint", "fixed", hip, f"{thigh}_rotor", (0, -side * THIGH_ROTOR_INBOARD, 0)))
         # The reference description uses the FR calf's inertial values on every leg.
         calf_body = _inertial(CALF)
         calf_body += _shape(
@@ -176,7 +185,7 @@ def make_urdf() -> str:
         out.append(_link(calf, calf_body))
         out.append(_joint(f"{calf}_joint", "revolute", thigh, calf, (0, 0, -LINK_LENGTH), (0, 1, 0), LIMITS["calf"]))
         out.append(_rotor_link(f"{calf}_rotor", spin_axis=1))
-        out.append(_joint(f"{calf}_rotor_joint", "fixed", thigh, f"{calf}_rotor", (0, side * 0.03235, 0)))
+        out.append(_joint(f"{calf}_rotor_joint", "fixed", thigh, f"{calf}_rotor", (0, -side * CALF_ROTOR_INBOARD, 0)))
         foot_body = _inertial(FOOT)
         foot_body += _shape("visual", f'<sphere radius="{FOOT_RADIUS}"/>', (0, 0, 0), (0, 0, 0), COLORS["foot"])
         foot_body += _shape("collision", f'<sphere radius="{FOOT_RADIUS}"/>', (0, 0, 0), (0, 0, 0))

@@ -1,4 +1,4 @@
-"""Scripted whole-body demonstrations (not yet the Mission Manager), as diagram builders.
+"""Scripted whole-body demonstrations of the controller alone (no Mission Manager), as diagram builders.
 
 Each demo is a `DemoScript` (a stateless LeafSystem producing the controller's reference vectors
 from the time, from quintic segments planned once from the scenario's initial pose) wired with
@@ -24,7 +24,6 @@ only (the controller itself reads the estimate and go1.* signals).
 
 import dataclasses
 import time
-from pathlib import Path
 
 import numpy as np
 from pydrake.common.value import Value
@@ -45,13 +44,15 @@ from pedi_drake.estimation.ground_truth import GroundTruthEstimator
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.fall import fell_during
 from pedi_drake.leg_kinematics import foot_position_B, leg_geometry
+from pedi_drake.prongs import ProngDesign
+from pedi_drake.resources import scenarios_dir
 from pedi_drake.scenario import Scenario, load_scenario
 from pedi_drake.station.initial_state import initial_trunk_pose
 from pedi_drake.station_interface import MakeStation
 from pedi_drake.trajectory import PiecewiseQuintic, QuinticSegment
 
 DEMOS = ("stand", "three_leg_hold", "five_targets", "prongs", "push_no_prongs", "push_prongs", "push_foot")
-SCENARIO_FILE = Path(__file__).resolve().parents[2] / "scenarios" / "wbc_demos.yaml"
+SCENARIO_FILE = scenarios_dir() / "wbc_demos.yaml"
 
 
 @dataclasses.dataclass
@@ -201,8 +202,6 @@ def plan_demo(name: str, scenario: Scenario, timing: DemoTiming | None = None) -
 
 
 def robot_default_prongs():
-    from pedi_drake.prongs import ProngDesign
-
     return ProngDesign()
 
 
@@ -308,7 +307,7 @@ def build_demo(
     station = builder.AddNamedSystem("station", MakeStation(scenario, meshcat))
     plant = station.GetSubsystemByName("plant")
     if scenario.estimator != "ground_truth":
-        raise ConfigError("the demos need estimator: ground_truth until the Kalman estimator exists")
+        raise ConfigError("the demos measure the controller alone: they need estimator: ground_truth")
     estimator = builder.AddNamedSystem("estimator", GroundTruthEstimator(plant))
     builder.Connect(station.GetOutputPort("sim.plant_state"), estimator.GetInputPort("plant_state"))
     controller = builder.AddNamedSystem("controller", make_controller(scenario))

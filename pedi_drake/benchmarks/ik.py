@@ -250,7 +250,7 @@ def run_workspace(samples_per_leg: int = 2500, seed: int = 0, tol: float = 1e-3)
 
 
 def run_benchmark(num_targets: int = 200, seed: int = 0, *, workspace_samples: int = 2500, snopt: bool = True) -> dict:
-    """Both experiments and the floors of issue 3, as one JSON-ready dict."""
+    """Both experiments and their floors (paper 000 Sec. IV-A), as one JSON-ready dict."""
     cube = run_paper_cube(num_targets, seed, snopt=snopt)
     workspace = run_workspace(workspace_samples, seed) if workspace_samples > 0 else None
     fab_1mm = [r for r in cube["rows"] if r["solver"] == "fabrik" and r["threshold_m"] == 1e-3]

@@ -17,6 +17,8 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from pedi_drake.mission.spec import load_mission, shipped_missions
+from pedi_drake.run import run
+from pedi_drake.scenario import load_scenario
 
 # The obstacle each press of obstacle_sensing touches, from the mission's scene.
 EXPECTED_OBSTACLE_CLASS = {"press_a": "rigid", "press_b": "soft"}
@@ -24,20 +26,13 @@ EXPECTED_OBSTACLE_CLASS = {"press_a": "rigid", "press_b": "soft"}
 
 def run_one(mission: str, seed: int, noise: bool) -> dict:
     """One run of `mission`; returns its result dictionary (result.json)."""
-    from pedi_drake.evaluation.estimator_accuracy import run_estimate_errors
-    from pedi_drake.run import run
-    from pedi_drake.scenario import load_scenario
-
     text = (
         f"{{mission: {mission}, controller: whole_body, random_seed: {seed}, simulation_duration: 60.0, "
         f"sensor_noise: {{enabled: {'true' if noise else 'false'}}}}}"
     )
     scenario = load_scenario(scenario_text=text)
     with tempfile.TemporaryDirectory() as out:
-        result = run(scenario=scenario, name=mission, out_dir=Path(out), quiet=True, replay=False)
-        if scenario.estimator == "kalman":
-            result["estimator_errors"] = run_estimate_errors(out, scenario)
-        return result
+        return run(scenario=scenario, name=mission, out_dir=Path(out), quiet=True, replay=False)
 
 
 def _run_job(job) -> tuple[str, int, bool, dict]:

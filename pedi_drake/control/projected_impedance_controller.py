@@ -56,7 +56,7 @@ from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, QpInfeasible
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.vector3 import cross3, rotation_from_vector
+from pedi_drake.vector3 import axis_angle_matrix, cross3
 
 # Force-estimate filter state: per leg, the last impedance error rate (3), the filtered error
 # acceleration (3), and whether the leg had a foot impedance at the last tick (1).
@@ -213,7 +213,7 @@ class ProjectedImpedanceController(LeafSystem):
         (roll and pitch) towards the reference, the rotation about world z (yaw) left free."""
         c = self.config
         R_WC, J_w, bias_w = self.model.calf_orientation(i)
-        R_ref = rotation_from_vector(ref.acceleration)
+        R_ref = axis_angle_matrix(ref.acceleration)
         error = -tasks.orientation_error_W(R_ref, R_WC)  # e = x - x_ref, as a rotation vector
         return pd.ImpedanceTask(
             f"calf_{leg}",

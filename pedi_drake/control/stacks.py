@@ -34,7 +34,7 @@ from pedi_drake.control.references import (
     LegReference,
 )
 from pedi_drake.control.robot_model import RobotSnapshot
-from pedi_drake.vector3 import rotation_from_vector
+from pedi_drake.vector3 import axis_angle_matrix
 
 # A held contact moving faster than this along the ground is sliding [m/s] (well above the
 # estimator's velocity noise of a few mm/s).
@@ -123,7 +123,7 @@ class StackBuilder:
                 # The optional 5-D task: the foot held at a world pose (its calf's roll and pitch too).
                 rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, np.zeros(3)))
                 rows[-1].name = f"foot_{leg}"
-                rows.append(self.calf.rows(s, self.layout, i, rotation_from_vector(ref.acceleration)))
+                rows.append(self.calf.rows(s, self.layout, i, axis_angle_matrix(ref.acceleration)))
                 rows[-1].name = f"calf_{leg}"
             elif ref.mode == LEG_MODE_JOINTS:
                 rows.append(self.leg_joints.rows(s, self.layout, joints, ref.position, ref.velocity, ref.acceleration))

@@ -10,19 +10,7 @@ from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
 from pedi_drake.control.config import StandControllerConfig
 from pedi_drake.control.static_feedforward import standing_feedforward_torque
 from pedi_drake.go1_command import COMMAND_SIZE, pack_command
-
-
-def min_jerk(s: float) -> tuple[float, float, float]:
-    """Quintic blend with zero velocity and acceleration at both ends (paper 000, Eq. 2).
-
-    Returns (value, d/ds, d2/ds2) at the normalised time s in [0, 1].
-    """
-    s = min(max(s, 0.0), 1.0)
-    return (
-        10 * s**3 - 15 * s**4 + 6 * s**5,
-        30 * s**2 - 60 * s**3 + 30 * s**4,
-        60 * s - 180 * s**2 + 120 * s**3,
-    )
+from pedi_drake.trajectory import min_jerk
 
 
 class StandController(LeafSystem):

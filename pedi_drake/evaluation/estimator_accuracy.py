@@ -28,18 +28,3 @@ def estimate_errors(
         "velocity_rms_m_s": float(np.sqrt(np.mean(velocity_error**2))),
         "orientation_error_max_deg": float(np.max(orientation_error)),
     }
-
-
-def run_estimate_errors(out_dir, scenario) -> dict:
-    """`estimate_errors` of the run `run()` wrote to `out_dir` for `scenario` (a simulated run)."""
-    from pedi_drake.diagram import apply_mission
-    from pedi_drake.evaluation.run_logs import read_run_logs
-    from pedi_drake.mission.spec import load_mission
-    from pedi_drake.station.sim_station import MakeSimulationStation
-
-    if scenario.mission:
-        scenario = apply_mission(scenario, load_mission(scenario.mission))
-    plant = MakeSimulationStation(scenario).GetSubsystemByName("plant")
-    logs = read_run_logs(out_dir)
-    plant_map = robot.Go1PlantMap.from_plant(plant)
-    return estimate_errors(logs["base_state"], logs["sim.plant_state"], plant_map, plant.num_positions())

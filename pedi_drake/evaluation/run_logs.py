@@ -1,6 +1,6 @@
 """The logged signals of a run, saved beside result.json as logs.npz and read back for analysis.
 
-`run()` writes every logged signal (DESIGN.md section 5's plots come from the same logs):
+`run()` writes every logged signal (the plots come from the same logs):
 the go1.* station signals, the command, the base-state estimate, the controller diagnostics,
 the mission status and references, and in simulation the plant state (ground truth, for
 evaluation only). Samples are stored as float32 (about 7 significant digits, plenty for plots

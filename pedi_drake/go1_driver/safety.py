@@ -27,6 +27,7 @@ from pedi_drake import robot
 from pedi_drake.go1_command import COMMAND_SIZE, pack_command, split_command
 from pedi_drake.go1_driver.config import Go1SafetyConfig
 from pedi_drake.go1_driver.constants import STATUS_CHANNELS
+from pedi_drake.trajectory import min_jerk
 
 _log = logging.getLogger(__name__)
 
@@ -195,8 +196,7 @@ def smooth_fraction(elapsed: float, duration: float) -> float:
     """Quintic 0 -> 1 over `duration` [s] with zero slope at both ends (1 when duration <= 0)."""
     if duration <= 0.0:
         return 1.0
-    s = min(max(elapsed / duration, 0.0), 1.0)
-    return 10 * s**3 - 15 * s**4 + 6 * s**5
+    return min_jerk(elapsed / duration)[0]
 
 
 # Discrete state layout of Go1SafetyFilter.

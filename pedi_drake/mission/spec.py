@@ -25,6 +25,7 @@ from pydrake.common.yaml import yaml_load
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import FORCE_ESTIMATES
 from pedi_drake.exceptions import MissionFileError
+from pedi_drake.resources import missions_dir
 from pedi_drake.robot import LEG_NAMES
 from pedi_drake.scenario import RobotConfig, SceneObject
 
@@ -259,15 +260,6 @@ class _MissionFile:
     # The foot force estimate press phases use: "joint_torque" or "impedance"; empty: the scenario's.
     force_estimate: str = ""
     phases: list[dict] = dataclasses.field(default_factory=list)
-
-
-def missions_dir() -> Path:
-    """<repo>/missions in a source checkout, pedi_drake/missions in an installed wheel."""
-    package = Path(__file__).resolve().parents[1]
-    for candidate in (package.parent / "missions", package / "missions"):
-        if candidate.is_dir():
-            return candidate
-    raise MissionFileError(f"the shipped missions folder was not found next to {package}")
 
 
 def shipped_missions() -> list[str]:

@@ -1,6 +1,6 @@
 """Simulated Go1 sensors: joint encoders, torque estimate, IMU and foot force sensors.
 
-Outputs follow the station ports of DESIGN.md section 2 (Unitree order). Optional Gaussian
+Outputs follow the station ports of docs/conventions.md (Unitree order). Optional Gaussian
 noise is drawn from a generator seeded by (scenario seed, sample index), so a run is
 deterministic and the sensors keep no hidden state.
 """
@@ -13,18 +13,9 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 
 from pedi_drake import robot
 from pedi_drake.scenario import SensorNoiseConfig
-from pedi_drake.vector3 import cross3, rotation_matrix_wxyz
+from pedi_drake.vector3 import axis_angle_matrix, cross3, rotation_matrix_wxyz
 
 IMU_SIZE = 10  # quaternion w, x, y, z; gyro (3); accelerometer (3)
-
-
-def _skew_rotation(axis_angle: np.ndarray) -> np.ndarray:
-    angle = np.linalg.norm(axis_angle)
-    if angle < 1e-12:
-        return np.eye(3)
-    k = axis_angle / angle
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
 
 
 class Go1SensorModel(LeafSystem):
@@ -123,7 +114,7 @@ class Go1SensorModel(LeafSystem):
         accel = R_WB.T @ (a_WI - self._gravity_W)
         rng = self._rng(context, 3)
         if rng is not None:
-            R_WB = R_WB @ _skew_rotation(rng.normal(0.0, self._noise.orientation, 3))
+            R_WB = R_WB @ axis_angle_matrix(rng.normal(0.0, self._noise.orientation, 3))
             gyro = gyro + rng.normal(0.0, self._noise.gyro, 3)
             accel = accel + rng.normal(0.0, self._noise.accelerometer, 3)
         quaternion = RotationMatrix(R_WB).ToQuaternion()

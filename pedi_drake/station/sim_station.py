@@ -1,6 +1,6 @@
 """The simulated Go1 station: MultibodyPlant + SceneGraph + motor model + sensors.
 
-Exports exactly the station ports of DESIGN.md section 2 (`go1.*`), plus simulation-only
+Exports exactly the station ports of docs/conventions.md (`go1.*`), plus simulation-only
 ports (`sim.*`) for logging and tests, which controllers and estimators never read.
 """
 

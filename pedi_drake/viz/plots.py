@@ -2,13 +2,10 @@
 
 from pathlib import Path
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from pedi_drake import robot  # noqa: E402
+from pedi_drake import robot
 
 
 def plot_joint_tracking(t: np.ndarray, q_des: np.ndarray, q_meas: np.ndarray, path: Path, title: str = "") -> Path:
@@ -87,9 +84,7 @@ def plot_leg_tracking(t, command, position, velocity, leg: str, phases: list[dic
 
 def plot_mission_errors(t, states, body_reference, status, plant, result: dict, path: Path) -> Path:
     """Foot error to each reach phase's target and trunk drift from its reference, over time."""
-    from pedi_drake.robot import Go1PlantMap
-
-    plant_map = Go1PlantMap.from_plant(plant)
+    plant_map = robot.Go1PlantMap.from_plant(plant)
     context = plant.CreateDefaultContext()
     n = min(states.shape[1], body_reference.shape[1], status.shape[1], len(t))
     q0 = plant_map.base_q_start
