@@ -15,6 +15,7 @@ from pedi_drake.prongs import ProngDesign
 from pedi_drake.run import run
 from pedi_drake.scenario import load_scenario
 from pedi_drake.station_interface import MakeStation
+from pedi_drake.viz.paper002_plots import plot_foot_hold
 
 # One lap of the shipped IV-A circle, from standing (no stand-up, no put-down: a shorter run).
 IV_A = """
@@ -68,7 +69,7 @@ def test_iv_a_torso_tracks_the_circle_within_1_cm_rms(iv_a):
 
 def test_iv_a_plots_figs_3_to_5(iv_a, tmp_path):
     _, hold, _ = iv_a
-    paths = evaluation.plot_foot_hold(hold, tmp_path, title="projected_impedance")
+    paths = plot_foot_hold(hold, tmp_path, title="projected_impedance")
     assert [p.name for p in paths] == [
         "iva_positions.png",
         "iva_foot_position_error.png",

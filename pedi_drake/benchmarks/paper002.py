@@ -40,6 +40,7 @@ from pedi_drake.mission.spec import load_mission
 from pedi_drake.run import run
 from pedi_drake.scenario import Scenario, load_scenario
 from pedi_drake.station_interface import MakeStation
+from pedi_drake.viz.paper002_plots import plot_foot_hold
 
 CONTROLLERS = ("whole_body", "projected_impedance")
 MISSIONS = (
@@ -121,7 +122,7 @@ def mission_row(mission: str, controller: str, out_dir: Path, plots: Path | None
         hold = evaluation.evaluate_foot_hold(plant, read_run_logs(out_dir), circle[0]["t_start"], circle[0]["t_end"])
         row.update(hold.summary())
         if plots is not None:
-            evaluation.plot_foot_hold(hold, plots / controller, title=controller)
+            plot_foot_hold(hold, plots / controller, title=controller)
     return row
 
 
