@@ -1,7 +1,8 @@
 """Paper 002's controller against the HQP: one comparison table from one run of each case.
 
     python -m pedi_drake.benchmarks.paper002 [--out benchmarks/results/paper002.json]
-        [--missions torso_circle_foot_hold hit_target_front ...]
+        [--missions torso_circle_foot_hold hit_target_front ...] [--controllers ...]
+        [--obstacle-seeds 0,1,2] [--skip-demos] [--reuse]
 
 Cases, each on both controllers (`whole_body`, the paper-000 HQP, and `projected_impedance`):
 
@@ -90,12 +91,19 @@ def _station_plant(scenario: Scenario):
     return MakeStation(scenario).GetSubsystemByName("plant")
 
 
-def mission_row(mission: str, controller: str, out_dir: Path, plots: Path | None, estimator: str = "kalman") -> dict:
-    """One mission on one controller (default scenario; the Kalman estimate unless told)."""
+def mission_row(
+    mission: str, controller: str, out_dir: Path, plots: Path | None, estimator: str = "kalman", reuse: bool = False
+) -> dict:
+    """One mission on one controller (default scenario; the Kalman estimate unless told).
+    `reuse`: judge the run already in `out_dir` (its result.json and logs.npz) instead of
+    simulating it again."""
     scenario = load_scenario(scenario_text=f"{{mission: {mission}, controller: {controller}, estimator: {estimator}}}")
     spec = load_mission(mission)
     scenario.simulation_duration = max(scenario.simulation_duration, spec.longest_duration())
-    result = run(scenario=scenario, name=mission, out_dir=out_dir, quiet=True, replay=False)
+    if reuse and (out_dir / "result.json").exists() and (out_dir / "logs.npz").exists():
+        result = json.loads((out_dir / "result.json").read_text())
+    else:
+        result = run(scenario=scenario, name=mission, out_dir=out_dir, quiet=True, replay=False)
     row = {
         "case": f"mission {mission}" + ("" if estimator == "kalman" else f" ({estimator})"),
         "controller": controller,
@@ -243,26 +251,37 @@ def main() -> None:
         help="obstacle_sensing seeds on paper 002's controller (0 without sensor noise, others with; '' for none)",
     )
     parser.add_argument("--skip-demos", action="store_true", help="Leave out the scripted demos.")
+    parser.add_argument("--controllers", nargs="*", default=list(CONTROLLERS), help="Controllers the missions run on.")
+    parser.add_argument(
+        "--reuse", action="store_true", help="Judge mission runs already in --runs instead of simulating them again."
+    )
     args = parser.parse_args()
-    rows = [] if args.skip_demos else demo_rows()
-    for mission in args.missions:
-        for controller in CONTROLLERS:
-            rows.append(mission_row(mission, controller, Path(args.runs) / controller / mission, Path(args.plots)))
-    if "prong_pivot_rotations" in args.missions:
-        # IV-B again on the true state: the controller alone, without the estimate's drift on one prong.
-        for controller in CONTROLLERS:
-            folder = Path(args.runs) / controller / "prong_pivot_rotations_ground_truth"
-            rows.append(mission_row("prong_pivot_rotations", controller, folder, None, estimator="ground_truth"))
-    for seed in [int(s) for s in args.obstacle_seeds.split(",") if s]:
-        rows.append(obstacle_row(seed, Path(args.runs) / "obstacle_seeds" / str(seed)))
-    print_table(rows)
-    checks = floors(rows)
-    for name, ok in checks.items():
-        print(f"{'ok  ' if ok else 'MISS'} {name}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    report = {"machine": platform.processor() or platform.machine(), "rows": rows, "floors": checks}
-    out.write_text(json.dumps(report, indent=2, default=float))
+    rows: list[dict] = []
+
+    def record(new_rows: list[dict]) -> None:
+        # Written after every case: a long benchmark stopped early keeps what it measured.
+        rows.extend(new_rows)
+        report = {"machine": platform.processor() or platform.machine(), "rows": rows, "floors": floors(rows)}
+        out.write_text(json.dumps(report, indent=2, default=float))
+
+    if not args.skip_demos:
+        record(demo_rows())
+    for seed in [int(s) for s in args.obstacle_seeds.split(",") if s]:
+        record([obstacle_row(seed, Path(args.runs) / "obstacle_seeds" / str(seed))])
+    runs, plots = Path(args.runs), Path(args.plots)
+    for mission in args.missions:
+        for controller in args.controllers:
+            record([mission_row(mission, controller, runs / controller / mission, plots, reuse=args.reuse)])
+        if mission == "prong_pivot_rotations":
+            # IV-B again on the true state: the controller alone, without the estimate's drift on one prong.
+            for controller in args.controllers:
+                folder = runs / controller / "prong_pivot_rotations_ground_truth"
+                record([mission_row(mission, controller, folder, None, estimator="ground_truth", reuse=args.reuse)])
+    print_table(rows)
+    for name, ok in floors(rows).items():
+        print(f"{'ok  ' if ok else 'MISS'} {name}")
     print(f"written {out}")
 
 
