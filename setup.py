@@ -1,5 +1,5 @@
-"""Ships the top-level models/, scenarios/ and missions/ folders inside the wheel as
-pedi_drake/models, pedi_drake/scenarios and pedi_drake/missions.
+"""Ships the top-level models/, scenarios/, missions/ and studies/ folders inside the wheel as
+pedi_drake/models, pedi_drake/scenarios, pedi_drake/missions and pedi_drake/studies.
 
 Everything else about the package is in pyproject.toml; setuptools cannot express "this folder
 outside the package becomes a subpackage" there, so the package list lives here.
@@ -13,12 +13,20 @@ setup(
         "pedi_drake.models",
         "pedi_drake.scenarios",
         "pedi_drake.missions",
+        "pedi_drake.studies",
     ],
-    package_dir={"pedi_drake.models": "models", "pedi_drake.scenarios": "scenarios", "pedi_drake.missions": "missions"},
+    package_dir={
+        "pedi_drake.models": "models",
+        "pedi_drake.scenarios": "scenarios",
+        "pedi_drake.missions": "missions",
+        "pedi_drake.studies": "studies",
+    },
     package_data={
         "pedi_drake.models": ["*.xml", "**/*.urdf", "**/*.sdf", "**/*.obj", "**/*.py"],
         "pedi_drake.scenarios": ["*.yaml"],
-        "pedi_drake.missions": ["*.yaml"],
+        # The controller demonstrations (pedi_drake.benchmarks.demos) in their subfolder.
+        "pedi_drake.missions": ["*.yaml", "demos/*.yaml"],
+        "pedi_drake.studies": ["*.yaml"],
         "pedi_drake.go1_driver": ["README.md"],
         "pedi_drake.go1_driver.lcmtypes": ["*.lcm", "*.sh"],
     },

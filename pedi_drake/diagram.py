@@ -1,15 +1,17 @@
 """MakePedipulationDiagram: the one place where a whole run is wired.
 
-Scenario -> station (plant or driver) -> state estimate -> controller -> station command.
-run_sim.py, the tests, the benchmarks and the notebooks all build their diagrams here.
+Scenario -> station (plant or driver) -> state estimate -> mission manager <-> leg IK ->
+controller -> station command. run_sim.py, the tests, the benchmarks and the notebooks all build
+their diagrams here.
 """
 
 import dataclasses
 
 import numpy as np
+from pydrake.common.value import AbstractValue
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import MatrixGain, VectorLogSink
+from pydrake.systems.primitives import ConstantValueSource, MatrixGain, VectorLogSink
 
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.stand_controller import StandController
@@ -17,6 +19,7 @@ from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
 from pedi_drake.estimation.kalman_estimator import KalmanEstimator
 from pedi_drake.exceptions import ScenarioError
+from pedi_drake.ik.leg_ik_system import LegIkSystem
 from pedi_drake.log_hold import LogHold
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
@@ -34,7 +37,10 @@ LOGGED_SIGNALS = (
     "go1.imu",
     "base_state",
 )
-SIM_LOGGED_SIGNALS = ("sim.plant_state", "sim.foot_contact_forces")
+# Simulation ground truth for judging: the plant state, the torques the motors applied, the pushes.
+SIM_LOGGED_SIGNALS = ("sim.plant_state", "sim.motor_torque", "sim.push_force", "sim.foot_contact_forces")
+# The tolerance of the mission's IK solves [m]: well inside every reach phase's tolerance.
+MISSION_IK_TOLERANCE = 5e-4
 # Simulated sensor signals that are costly to compute: logged through a sample-and-hold.
 SAMPLED_SENSOR_SIGNALS = ("go1.imu", "go1.foot_contact", "go1.torque_estimated", "sim.foot_contact_forces")
 
@@ -52,17 +58,43 @@ class PedipulationDiagram:
 
 
 def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
-    """The scenario with the mission's scene objects added and its robot variant applied."""
-    merged = dataclasses.replace(scenario, scene=list(scenario.scene) + list(mission.scene))
+    """The scenario with the mission's scene objects and pushes added and its robot variant applied."""
+    merged = dataclasses.replace(
+        scenario, scene=list(scenario.scene) + list(mission.scene), pushes=list(scenario.pushes) + list(mission.pushes)
+    )
     if mission.robot is not None:
         merged.robot = dataclasses.replace(scenario.robot, prongs=mission.robot.prongs)
     return merged
 
 
+def _add_leg_ik(builder: DiagramBuilder, manager: MissionManager) -> None:
+    """One LegIkSystem per leg the mission moves ("ik.<leg>"), asked and answered by the manager.
+
+    The IK updates twice per manager period: its update at the manager's tick sees the request
+    from before that tick, the one half a period later sees the new request, so every answer is
+    in by the manager's next tick.
+    """
+    for leg in manager.ik_legs:
+        ik = builder.AddNamedSystem(f"ik.{leg}", LegIkSystem(period=manager.period / 2, tol=MISSION_IK_TOLERANCE))
+        name = builder.AddNamedSystem(f"ik.{leg}.leg", ConstantValueSource(AbstractValue.Make(leg)))
+        builder.Connect(name.get_output_port(), ik.GetInputPort("leg"))
+        builder.Connect(manager.GetOutputPort(f"ik_foot_target_W.{leg}"), ik.GetInputPort("foot_target_W"))
+        builder.Connect(manager.GetOutputPort("ik_X_WB"), ik.GetInputPort("X_WB"))
+        builder.Connect(manager.GetOutputPort("ik_q_seed"), ik.GetInputPort("q_measured"))
+        for answer, port in (
+            ("leg_q_goal", "ik_q_goal"),
+            ("solved", "ik_solved"),
+            ("ik_error", "ik_error"),
+            ("solved_target_B", "ik_target_B"),
+        ):
+            builder.Connect(ik.GetOutputPort(answer), manager.GetInputPort(f"{port}.{leg}"))
+
+
 def MakePedipulationDiagram(
     scenario: Scenario, meshcat: Meshcat | None = None, *, hardware: bool = False, log_period: float = 0.002
 ) -> PedipulationDiagram:
-    """Wires station, estimator and controller for `scenario`, with loggers of LOGGED_SIGNALS."""
+    """Wires station, estimator, mission manager, leg IK and controller for `scenario`, with loggers
+    of LOGGED_SIGNALS (and of the controller's diagnostics and the mission's outputs)."""
     mission = load_mission(scenario.mission) if scenario.mission else None
     if mission is not None:
         if scenario.controller not in MISSION_CONTROLLERS:
@@ -113,8 +145,10 @@ def MakePedipulationDiagram(
                     prongs=scenario.robot.prongs,
                     friction=scenario.ground_friction,
                     force_estimate=force_estimate,
+                    safety_margin=scenario.whole_body.safety_margin,
                 ),
             )
+            _add_leg_ik(builder, manager)
             if isinstance(system, ProjectedImpedanceController):
                 # The Eq. 11 estimate, out of the controller's diagnostics.
                 where = system.diag["force_estimate"]
@@ -133,6 +167,8 @@ def MakePedipulationDiagram(
             extra_logs["mission.status"] = manager.GetOutputPort("mission_status")
             extra_logs["mission.body_reference"] = manager.GetOutputPort("body_reference")
             extra_logs["mission.leg_reference"] = manager.GetOutputPort("leg_reference")
+            extra_logs["mission.contact_set"] = manager.GetOutputPort("contact_set")
+            extra_logs["mission.safety_polygon"] = manager.GetOutputPort("safety_polygon")
     command = controller.GetOutputPort("command")
     builder.Connect(command, station.GetInputPort("go1.command"))
 

@@ -1,7 +1,7 @@
-"""Where the shipped data folders are: models/, scenarios/ and missions/.
+"""Where the shipped data folders are: models/, scenarios/, missions/ and studies/.
 
 In a source checkout they sit beside the package (<repo>/models, ...); an installed wheel
-carries them inside it (pedi_drake/models, ...; see setup.py). One lookup serves all three.
+carries them inside it (pedi_drake/models, ...; see setup.py). One lookup serves them all.
 """
 
 from pathlib import Path
@@ -28,6 +28,11 @@ def models_dir() -> Path:
 def scenarios_dir() -> Path:
     """The shipped scenario files."""
     return shipped_dir("scenarios")
+
+
+def studies_dir() -> Path:
+    """The shipped batch studies."""
+    return shipped_dir("studies")
 
 
 def missions_dir() -> Path:

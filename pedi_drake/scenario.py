@@ -8,6 +8,7 @@ error names the file and the field.
 
 import dataclasses
 import math
+import re
 from pathlib import Path
 
 from pydrake.common.yaml import yaml_load, yaml_load_typed
@@ -17,6 +18,9 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import (
     FORCE_ESTIMATES,
+    HQP_MODES,
+    QP_BACKENDS,
+    STACKS,
     ProjectedImpedanceConfig,
     StandControllerConfig,
     WholeBodyControllerConfig,
@@ -34,6 +38,24 @@ ESTIMATORS = ("ground_truth", "kalman")
 CONTROLLERS = ("stand_pd", "whole_body", "projected_impedance")
 # The controllers that run missions (the same ports; see pedi_drake.control).
 MISSION_CONTROLLERS = ("whole_body", "projected_impedance")
+# MultibodyPlantConfig's allowed strings (Drake rejects others only when the plant is built).
+CONTACT_MODELS = ("point", "hydroelastic", "hydroelastic_with_fallback")
+DISCRETE_CONTACT_APPROXIMATIONS = ("", "tamsi", "sap", "similar", "lagged")
+# numpy's generators take seeds in [0, 2^32) for the sensor noise streams.
+MAX_RANDOM_SEED = 2**32 - 1
+# LCM URLs this package can open: UDP multicast (host:port, optional ?ttl=N) or in-process.
+_UDPM_URL = re.compile(r"^udpm://(\d{1,3})\.(\d{1,3})\.(\d{1,3})\.(\d{1,3}):(\d{1,5})(\?ttl=\d+)?$")
+
+
+def lcm_url_is_valid(url: str) -> bool:
+    """Whether `url` is a UDP multicast LCM URL (group 224-239.x.x.x, port 1-65535) or memq://."""
+    if url == "memq://":
+        return True
+    match = _UDPM_URL.match(url)
+    if match is None:
+        return False
+    octets, port = [int(g) for g in match.groups()[:4]], int(match.group(5))
+    return 224 <= octets[0] <= 239 and all(o <= 255 for o in octets) and 1 <= port <= 65535
 
 
 def _default_plant_config() -> MultibodyPlantConfig:
@@ -82,6 +104,52 @@ class SceneObject:
 
 
 @dataclasses.dataclass
+class Push:
+    """A push on a body of the simulated world: ramps up, holds, ramps down (a disturbance).
+
+    Applied in the simulated station only (never on hardware, never seen by a controller), and
+    logged as `sim.push_force`.
+    """
+
+    # Force at full strength [N] (>= 0).
+    force: float = 0.0
+    # Name of the pushed body (unique in the plant: a Go1 link or a scene object's body).
+    body: str = "trunk"
+    # Where the force acts, in the body's frame [m].
+    point: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+    # Direction of the force in the world (a unit vector) [-].
+    direction: list[float] = dataclasses.field(default_factory=lambda: [1.0, 0.0, 0.0])
+    # Simulated time the ramp up begins [s].
+    start: float = 0.0
+    # Time to ramp from zero to full force, and from full force back to zero [s] (0: a step).
+    ramp: float = 0.0
+    # Time at full force, between the two ramps [s].
+    duration: float = 1.0
+
+    def end(self) -> float:
+        """Simulated time the push has ramped back to zero [s]."""
+        return self.start + 2 * self.ramp + self.duration
+
+    def problems(self) -> list[tuple[str, str]]:
+        """(field, problem) for every invalid value; empty when the push is valid."""
+        found = []
+        for name in ("force", "start", "ramp", "duration"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value >= 0):
+                found.append((name, f"must be a finite number >= 0, got {value}"))
+        if not self.body:
+            found.append(("body", "must name a body of the plant (default trunk)"))
+        if len(self.point) != 3:
+            found.append(("point", f"expected [x, y, z] in metres (body frame), got {self.point}"))
+        if len(self.direction) != 3:
+            found.append(("direction", f"expected a unit [x, y, z] vector (world), got {self.direction}"))
+        # 1e-3: a direction written to four digits, such as [0.7071, 0.7071, 0], is unit enough.
+        elif abs(math.sqrt(sum(v * v for v in self.direction)) - 1.0) > 1e-3:
+            found.append(("direction", f"must be a unit vector (world), got {self.direction}"))
+        return found
+
+
+@dataclasses.dataclass
 class SensorNoiseConfig:
     """Gaussian noise of the simulated sensors (standard deviations); off unless enabled."""
 
@@ -111,6 +179,8 @@ class Scenario:
     scene: list[SceneObject] = dataclasses.field(default_factory=list)
     # Coulomb friction of the ground [-].
     ground_friction: float = 0.8
+    # Pushes on the simulated world (disturbances; simulation only), in any order.
+    pushes: list[Push] = dataclasses.field(default_factory=list)
     # Simulated sensor noise.
     sensor_noise: SensorNoiseConfig = dataclasses.field(default_factory=SensorNoiseConfig)
     # Which controller drives the robot: "stand_pd", "whole_body" (the HQP of papers 000 / 003) or
@@ -153,8 +223,58 @@ class Scenario:
             if not condition:
                 raise ScenarioError(f"{where}: {field}: {problem}")
 
+        for number_field in ("simulation_duration", "visualization_period", "ground_friction"):
+            need(math.isfinite(getattr(self, number_field)), number_field, "must be finite")
         need(self.simulation_duration > 0, "simulation_duration", f"must be > 0 s, got {self.simulation_duration}")
+        need(
+            0 <= self.random_seed <= MAX_RANDOM_SEED,
+            "random_seed",
+            f"must be an integer in [0, {MAX_RANDOM_SEED}], got {self.random_seed}",
+        )
         need(self.plant_config.time_step > 0, "plant_config.time_step", "must be > 0 (a discrete plant)")
+        need(
+            self.plant_config.contact_model in CONTACT_MODELS,
+            "plant_config.contact_model",
+            f"must be one of {CONTACT_MODELS}, got {self.plant_config.contact_model!r}",
+        )
+        need(
+            self.plant_config.discrete_contact_approximation in DISCRETE_CONTACT_APPROXIMATIONS,
+            "plant_config.discrete_contact_approximation",
+            f"must be one of {DISCRETE_CONTACT_APPROXIMATIONS}, got "
+            f"{self.plant_config.discrete_contact_approximation!r}",
+        )
+        need(
+            self.visualization_period > 0,
+            "visualization_period",
+            f"must be > 0 s, got {self.visualization_period}",
+        )
+        for noise_field in dataclasses.fields(SensorNoiseConfig):
+            value = getattr(self.sensor_noise, noise_field.name)
+            if noise_field.name != "enabled":
+                need(
+                    math.isfinite(value) and value >= 0,
+                    f"sensor_noise.{noise_field.name}",
+                    f"a standard deviation: must be >= 0, got {value}",
+                )
+        for field, value, allowed in (
+            ("whole_body.stack", self.whole_body.stack, STACKS),
+            ("whole_body.hqp_mode", self.whole_body.hqp_mode, HQP_MODES),
+            ("whole_body.qp_backend", self.whole_body.qp_backend, QP_BACKENDS),
+        ):
+            need(value in allowed, field, f"must be one of {allowed}, got {value!r}")
+        need(self.whole_body.period > 0, "whole_body.period", f"must be > 0 s, got {self.whole_body.period}")
+        need(
+            not self.mission or self.controller == "whole_body",
+            "controller",
+            f"the mission {self.mission!r} runs under 'whole_body', got {self.controller!r}",
+        )
+        for bus, params in self.lcm_buses.items():
+            need(
+                lcm_url_is_valid(params.lcm_url),
+                f"lcm_buses[{bus!r}].lcm_url",
+                f"expected 'udpm://GROUP:PORT' (a multicast group 224-239.x.x.x, optionally '?ttl=N') or 'memq://', "
+                f"got {params.lcm_url!r}",
+            )
         need(self.robot.initial_pose in INITIAL_POSES, "robot.initial_pose", f"must be one of {INITIAL_POSES}")
         need(len(self.robot.initial_xy) == 2, "robot.initial_xy", "expected [x, y] in metres")
         need(self.controller in CONTROLLERS, "controller", f"must be one of {CONTROLLERS}, got {self.controller!r}")
@@ -162,23 +282,11 @@ class Scenario:
         need(self.ground_friction > 0, "ground_friction", "must be > 0")
         need(len(self.stand.target_leg_pose) == 3, "stand.target_leg_pose", "expected [hip, thigh, calf] in radians")
         need(self.stand.duration > 0 and self.stand.period > 0, "stand", "duration and period must be > 0")
-        names = set()
-        for i, obj in enumerate(self.scene):
-            need(
-                obj.kind in SCENE_OBJECT_KINDS,
-                f"scene[{i}].kind",
-                f"must be one of {SCENE_OBJECT_KINDS}, got {obj.kind!r}",
-            )
-            need(len(obj.position) == 3, f"scene[{i}].position", "expected [x, y, z] in metres")
-            if obj.model:
-                need(
-                    resolve_model_path(obj.model, base_dir).exists(),
-                    f"scene[{i}].model",
-                    f"model file not found: {obj.model!r}",
-                )
-            name = obj.name or obj.kind
-            need(name not in names, f"scene[{i}].name", f"duplicate object name {name!r}")
-            names.add(name)
+        for problem in scene_problems(self.scene, base_dir):
+            raise ScenarioError(f"{where}: {problem}")
+        for i, push in enumerate(self.pushes):
+            for field, problem in push.problems():
+                need(False, f"pushes[{i}].{field}", problem)
         if self.robot.prongs is not None:
             try:
                 self.robot.prongs.validate(where="robot.prongs")
@@ -198,8 +306,30 @@ class Scenario:
         )
         for problem in self.projected_impedance.validate(where="projected_impedance"):
             raise ScenarioError(f"{where}: {problem}")
-        for number_field in ("simulation_duration", "visualization_period", "ground_friction"):
-            need(math.isfinite(getattr(self, number_field)), number_field, "must be finite")
+
+
+def scene_problems(scene: list[SceneObject], base_dir: Path | None, field: str = "scene") -> list[str]:
+    """What is wrong with the objects of `scene` ("<field>[i].<name>: <problem>"), model files included.
+
+    `base_dir` is the folder relative model paths are resolved from (the file's that lists them).
+    """
+    problems, names = [], set()
+    for i, obj in enumerate(scene):
+        where = f"{field}[{i}]"
+        if obj.kind not in SCENE_OBJECT_KINDS:
+            problems.append(f"{where}.kind: must be one of {SCENE_OBJECT_KINDS}, got {obj.kind!r}")
+        if len(obj.position) != 3:
+            problems.append(f"{where}.position: expected [x, y, z] in metres, got {obj.position}")
+        if not all(math.isfinite(v) for v in [*obj.position, obj.yaw, obj.initial_angle]):
+            problems.append(f"{where}: position, yaw and initial_angle must be finite")
+        if obj.model and not resolve_model_path(obj.model, base_dir).is_file():
+            searched = "models/" if obj.model.startswith("package://") else (base_dir or Path.cwd())
+            problems.append(f"{where}.model: model file not found: {obj.model!r} (looked in {searched})")
+        name = obj.name or obj.kind
+        if name in names:
+            problems.append(f"{where}.name: duplicate object name {name!r} (give each object a unique name)")
+        names.add(name)
+    return problems
 
 
 def resolve_model_path(model: str, base_dir: Path | None = None) -> Path:

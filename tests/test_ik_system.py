@@ -109,3 +109,11 @@ def test_unknown_leg_raises():
     ik, simulator, context = _standalone("XX", np.zeros(3))
     with pytest.raises(PediError):
         simulator.Initialize()
+
+
+def test_solved_target_B_echoes_the_trunk_frame_target_of_the_last_solve():
+    p_B = foot_position_B("FL", np.array([0.1, 0.8, -1.6]))
+    ik, simulator, context = _standalone("FL", X_WB.multiply(p_B))
+    assert np.all(np.isnan(ik.GetOutputPort("solved_target_B").Eval(context)))
+    simulator.AdvanceTo(0.05)
+    np.testing.assert_allclose(ik.GetOutputPort("solved_target_B").Eval(context), p_B, atol=1e-12)

@@ -4,12 +4,15 @@ import copy
 from pathlib import Path
 
 import numpy as np
+import pytest
 from pydrake.systems.analysis import Simulator
 
+from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.evaluation.mission_results import estimated_foot_errors
-from pedi_drake.mission.phases import ReachRunner
-from pedi_drake.mission.progress import FAILED, SUCCEEDED, MissionProgress, PhaseRecord
+from pedi_drake.exceptions import UnreachableTarget
+from pedi_drake.mission.phases import IkAnswer, ReachRunner, receive_ik_answers
+from pedi_drake.mission.progress import FAILED, SUCCEEDED, IkPlan, MissionProgress, PhaseRecord
 from pedi_drake.mission.spec import CompanionReach, Reach
 from pedi_drake.scenario import load_scenario
 
@@ -204,3 +207,33 @@ def test_a_stored_progress_is_shared_by_state_copies_and_changed_only_through_co
     changed.memo["samples"].append(2.0)
     assert progress.index == 0 and len(progress.records) == 1 and progress.records[0].status == "running"
     assert progress.memo == {"samples": [1.0]}
+
+
+def _plan_for_FR(*targets_B) -> IkPlan:
+    return IkPlan.ask("reach", np.array([1.0, 0, 0, 0, 0, 0, 0.28]), {"FR": list(targets_B)}, robot.STANDING_Q)
+
+
+def test_an_ik_answer_to_an_earlier_target_is_not_taken_for_the_pending_one():
+    plan = _plan_for_FR([0.2, -0.13, -0.2], [0.3, -0.13, -0.1])
+    stale = IkAnswer(np.array([0.0, 0.8, -1.5]), True, 1e-4, np.array([0.25, -0.13, -0.25]))
+    assert receive_ik_answers(plan, {"FR": stale}) is plan
+
+
+def test_ik_answers_chain_the_seed_along_the_waypoints():
+    plan = _plan_for_FR([0.2, -0.13, -0.2], [0.3, -0.13, -0.1])
+    q_first = np.array([0.05, 0.7, -1.4])
+    plan = receive_ik_answers(plan, {"FR": IkAnswer(q_first, True, 1e-4, np.array([0.2, -0.13, -0.2]))})
+    np.testing.assert_array_equal(plan.pending("FR"), [0.3, -0.13, -0.1])
+    np.testing.assert_array_equal(plan.q_seed[robot.leg_slice("FR")], q_first)  # the next solve starts there
+    assert not plan.done
+    q_second = np.array([0.05, 0.5, -1.0])
+    plan = receive_ik_answers(plan, {"FR": IkAnswer(q_second, True, 1e-4, np.array([0.3, -0.13, -0.1]))})
+    assert plan.done
+    np.testing.assert_array_equal(np.array(plan.solutions["FR"]), [q_first, q_second])
+
+
+def test_an_unreached_ik_target_raises_with_the_phase_and_the_miss():
+    plan = _plan_for_FR([1.5, -0.13, 0.2])
+    answer = IkAnswer(np.array([0.0, -0.5, -0.9]), False, 0.91, np.array([1.5, -0.13, 0.2]))
+    with pytest.raises(UnreachableTarget, match=r"reach: IK for FR .* closest miss 910.0 mm"):
+        receive_ik_answers(plan, {"FR": answer})

@@ -3,9 +3,12 @@
 from pathlib import Path
 
 import pytest
+from pydrake.common.yaml import yaml_load
 
 from pedi_drake.exceptions import MissionFileError
-from pedi_drake.mission.spec import PHASE_KINDS, LegToSupport, Reach, load_mission, shipped_missions
+from pedi_drake.mission.spec import PHASE_KINDS, LegToSupport, Reach, load_mission, shipped_demos, shipped_missions
+from pedi_drake.resources import scenarios_dir
+from pedi_drake.scenario import load_scenario
 
 PAPER_MISSIONS = {
     "hit_target_front",
@@ -36,15 +39,27 @@ def test_shipped_mission_loads_and_starts_by_standing_up(name):
     assert any(isinstance(phase, Reach) for phase in mission.phases)
 
 
+def test_every_demo_mission_loads_with_a_demo_scenario_of_its_name():
+    demos_file = scenarios_dir() / "wbc_demos.yaml"
+    names = {name.removeprefix("demos/") for name in shipped_demos()}
+    assert names == set(yaml_load(filename=str(demos_file)))
+    for name in names:
+        scenario = load_scenario(filename=demos_file, scenario_name=name)
+        assert scenario.mission == f"demos/{name}" and scenario.estimator == "ground_truth"
+        assert load_mission(scenario.mission).name == name
+    # The demos are not library missions (those run on the default scenario).
+    assert not names & set(shipped_missions())
+
+
 def test_numbers_are_read_as_floats(tmp_path):
-    mission = load_mission(_write(tmp_path, "phases:\n  - {kind: reach, leg: FL, target: [1, 0, 0]}\n"))
-    assert mission.phases[0].target == [1.0, 0.0, 0.0] and isinstance(mission.phases[0].target[0], float)
+    mission = load_mission(_write(tmp_path, "phases:\n  - {kind: reach, leg: FL, target: [1, 0, 1]}\n"))
+    assert mission.phases[0].target == [1.0, 0.0, 1.0] and isinstance(mission.phases[0].target[0], float)
 
 
 def test_reach_takes_companion_legs(tmp_path):
-    body = "phases:\n  - {kind: reach, leg: FR, target: [1, -1, 0], together: [{leg: FL, target: [1, 1, 0]}]}\n"
+    body = "phases:\n  - {kind: reach, leg: FR, target: [1, -1, 1], together: [{leg: FL, target: [1, 1, 1]}]}\n"
     (phase,) = load_mission(_write(tmp_path, body)).phases
-    assert [(c.leg, c.target) for c in phase.together] == [("FL", [1.0, 1.0, 0.0])]
+    assert [(c.leg, c.target) for c in phase.together] == [("FL", [1.0, 1.0, 1.0])]
     assert isinstance(phase.together[0].target[0], float)
     shipped = {phase.name: phase for phase in load_mission("prong_push_box").phases}
     assert [shipped[name].together[0].leg for name in ("touch_box", "push_box")] == ["FL", "FL"]

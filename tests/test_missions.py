@@ -1,5 +1,5 @@
-"""Every shipped mission, end to end in simulation (default scenario, seed 0), against the floors
-of the missions issue: success, reach errors, trunk drift, no fall, and each mission's own check.
+"""Every shipped mission, end to end in simulation (default scenario, seed 0), against the
+missions' floors: success, reach errors, trunk drift, no fall, and each mission's own check.
 
 The mission benchmark (python -m pedi_drake.benchmarks.missions) runs the same with sensor noise
 over more seeds.
@@ -7,7 +7,8 @@ over more seeds.
 
 import pytest
 
-from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS, run_one
+from pedi_drake.batch.tasks import run_task
+from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS, mission_study, result_of
 from pedi_drake.mission.spec import shipped_missions
 
 MAX_FOOT_ERROR = 0.010  # [m] every reach phase
@@ -16,7 +17,8 @@ MAX_DRIFT = 0.010  # [m] trunk drift while pedipulating
 
 @pytest.fixture(scope="module", params=shipped_missions())
 def mission_result(request):
-    return request.param, run_one(request.param, seed=0, noise=False)
+    (task,) = mission_study([request.param], noise_seeds=[]).tasks
+    return request.param, result_of(run_task(task))
 
 
 def test_mission_succeeds_without_falling(mission_result):

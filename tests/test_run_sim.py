@@ -1,6 +1,7 @@
 """run_sim.py from the command line: exit codes and the files it writes."""
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -36,3 +37,28 @@ def test_run_sim_bad_input_exits_2_naming_the_field(tmp_path):
     assert done.returncode == 2
     assert "robot.initial_pos" in done.stderr
     assert not (tmp_path / "result.json").exists()
+
+
+def _graph_edges(dot: str) -> set[tuple[str, str]]:
+    """(source, destination) system names of every connection in a GetGraphvizString drawing."""
+    names = dict(re.findall(r"^(s\d+) \[shape=none, border=0, label=<.*?name=([^<\n]+)", dot, re.M | re.S))
+    return {(names[a], names[b]) for a, b in re.findall(r"^(s\d+):y\d+:e -> (s\d+):u\d+:w", dot, re.M)}
+
+
+def test_run_sim_graphviz_draws_the_run_wired_station_to_controller(tmp_path):
+    dot = tmp_path / "diagram.dot"
+    args = ("--mission", "hit_target_front", "--duration", "0.05", "--graphviz", str(dot), "--out", str(tmp_path))
+    done = _run(*args)
+    assert "diagram written" in done.stdout, done.stderr
+    edges = _graph_edges(dot.read_text())
+    for edge in (
+        ("station", "estimator"),
+        ("estimator", "mission"),
+        ("station", "mission"),
+        ("mission", "ik.FR"),
+        ("ik.FR", "mission"),
+        ("mission", "controller"),
+        ("estimator", "controller"),
+        ("controller", "station"),
+    ):
+        assert edge in edges, (edge, sorted(edges))

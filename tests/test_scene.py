@@ -2,19 +2,22 @@
 
 import numpy as np
 import pytest
-from pydrake.multibody.math import SpatialForce
-from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
 from pedi_drake.go1_command import pack_command
-from pedi_drake.scenario import Scenario, SceneObject
+from pedi_drake.scenario import Push, Scenario, SceneObject
 from pedi_drake.station_interface import MakeStation
 
 
 def _simulate(obj: SceneObject, body_name: str, force_W, duration: float, p_BoBq_B=(0.0, 0.0, 0.0)):
     """Holds the Go1 lying, pushes `body_name` with `force_W` [N] at p_BoBq_B, returns (plant, contexts)."""
-    scenario = Scenario(scene=[obj])
+    force = float(np.linalg.norm(force_W))
+    pushes = []
+    if force > 0:
+        direction = (np.asarray(force_W, float) / force).tolist()
+        pushes = [Push(force=force, body=body_name, point=list(p_BoBq_B), direction=direction, duration=duration)]
+    scenario = Scenario(scene=[obj], pushes=pushes)
     station = MakeStation(scenario)
     plant = station.GetSubsystemByName("plant")
     context = station.CreateDefaultContext()
@@ -23,11 +26,6 @@ def _simulate(obj: SceneObject, body_name: str, force_W, duration: float, p_BoBq
     body = plant.GetBodyByName(body_name, model)
     start = body.EvalPoseInWorld(plant_context)
     station.GetInputPort("go1.command").FixValue(context, pack_command(robot.LYING_Q, 0, 40, 1, 0))
-    push = ExternallyAppliedSpatialForce()
-    push.body_index = body.index()
-    push.p_BoBq_B = np.asarray(p_BoBq_B, float)
-    push.F_Bq_W = SpatialForce(np.zeros(3), np.asarray(force_W, float))
-    station.GetInputPort("sim.applied_spatial_force").FixValue(context, [push])
     Simulator(station, context).AdvanceTo(duration)
     return plant, plant_context, model, start, body.EvalPoseInWorld(plant_context)
 

@@ -1,4 +1,4 @@
-"""WholeBodyController: standalone ticks (defaults, failures) and the scripted demos as short simulations."""
+"""WholeBodyController: standalone ticks (defaults, failures) and the demo missions as short simulations."""
 
 import dataclasses
 
@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 
 from pedi_drake import robot
-from pedi_drake.benchmarks.demos import DemoTiming, demo_scenario, run_demo
+from pedi_drake.benchmarks.demos import demo_scenario, run_demo
 from pedi_drake.control import references, tasks
 from pedi_drake.control.config import WholeBodyControllerConfig
+from pedi_drake.control.stacks import ResolvedInputs
 from pedi_drake.control.whole_body_controller import (
     STATUS_BAD_INPUT,
     STATUS_CONTACTS_RELAXED,
@@ -113,7 +114,7 @@ def three_leg():
 
 def test_three_leg_hold_meets_floors(three_leg):
     r = three_leg
-    assert not r.fell
+    assert r.mission_succeeded and not r.fell
     assert r.qp_failures == 0
     assert max(r.foot_errors) < 0.005
     assert r.trunk_drift < 0.01
@@ -130,15 +131,14 @@ def test_stand_on_four_legs_at_1khz_in_weighted_mode():
     scenario = demo_scenario("stand")
     scenario.whole_body = dataclasses.replace(scenario.whole_body, period=0.001, hqp_mode="weighted")
     r = run_demo("stand", scenario)
-    assert not r.fell and r.qp_failures == 0
+    assert r.mission_succeeded and not r.fell and r.qp_failures == 0
     assert r.stance_slip_whole_run < 0.002
     assert r.max_torque_ratio < 0.5
 
 
 def test_five_targets_reached():
-    timing = DemoTiming(target_move=0.5, target_hold=0.3)
-    r = run_demo("five_targets", timing=timing)
-    assert not r.fell and r.qp_failures == 0
+    r = run_demo("five_targets")
+    assert r.mission_succeeded and not r.fell and r.qp_failures == 0
     assert len(r.foot_errors) == 5
     assert max(r.foot_errors) < 0.005
     assert r.max_torque_ratio <= 1.0
@@ -146,8 +146,8 @@ def test_five_targets_reached():
 
 def test_prongs_carry_the_trunk_with_both_front_feet_lifted():
     r = run_demo("prongs")
-    assert not r.fell and r.qp_failures == 0
-    assert r.prong_force > 20.0
+    assert r.mission_succeeded and not r.fell and r.qp_failures == 0
+    assert r.prong_load > 20.0
     assert max(r.foot_errors) < 0.005
     assert r.max_torque_ratio <= 1.0
 
@@ -190,8 +190,6 @@ def test_hqp_takes_the_optional_5d_foot_task():
     assert diag[controller.diag["status"]][0] in (STATUS_OK, STATUS_CONTACTS_RELAXED)
     snapshot = controller.model.update(controller.base_state_port.Eval(context), robot.STANDING_Q, np.zeros(12))
     snapshot.calf_orientations[0] = controller.model.calf_orientation(0)
-    from pedi_drake.control.stacks import ResolvedInputs
-
     inputs = ResolvedInputs(
         body=references.parse_body_reference(
             references.body_reference_vector(
@@ -210,3 +208,15 @@ def test_hqp_takes_the_optional_5d_foot_task():
     assert names == ["foot_FR", "calf_FR"]
     calf = controller.builder.leg_tasks(snapshot, inputs)[1]
     assert calf.A.shape[0] == 2  # roll and pitch only: the yaw is free
+
+
+def test_a_safety_polygon_with_two_vertices_is_rejected_as_bad_input():
+    controller, context = standing_controller()
+    polygon = references.safety_polygon_vector(np.array([[0.1, 0.0], [0.0, 0.1], [-0.1, 0.0]]))
+    controller.safety_polygon_port.FixValue(context, polygon)
+    _, diag = tick(controller, context, 2)
+    assert diag[controller.diag["status"]][0] == STATUS_OK
+    polygon[0] = 2.0  # a count the layout does not allow
+    controller.safety_polygon_port.FixValue(context, polygon)
+    _, diag = tick(controller, context, 1)
+    assert diag[controller.diag["status"]][0] == STATUS_BAD_INPUT

@@ -25,8 +25,11 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.evaluation.run_logs import read_run_logs
+from pedi_drake.exceptions import ConfigError
+from pedi_drake.mission.spec import load_mission
 from pedi_drake.run import run
-from pedi_drake.scenario import apply_scenario_text, load_scenario
+from pedi_drake.run_checks import check_out_dir
+from pedi_drake.scenario import apply_scenario_text, lcm_url_is_valid, load_scenario
 
 GROUP = "239.255.76.67"
 BRIDGE_START_TIMEOUT = 60.0  # [s] for the bridge to build its diagram and start publishing
@@ -76,9 +79,18 @@ def run_sil(
     limits, so they are stricter in simulated time), for machines that cannot run both in real time.
     """
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
+    text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
+    # Everything both sides will read is checked here first: bad input is a ConfigError naming
+    # the flag, not a bridge that dies with its message out of sight.
+    if not lcm_url_is_valid(url):
+        raise ConfigError(f"--lcm_url: expected 'udpm://GROUP:PORT' (a multicast group 224-239.x.x.x), got {url!r}")
+    load_mission(mission)
+    bus = f"{{go1: {{lcm_url: '{url}'}}}}"
+    overrides = f"{{mission: {mission}, controller: whole_body, estimator: kalman, lcm_buses: {bus}}}"
+    scenario = apply_scenario_text(load_scenario(scenario_text=text), overrides)
+    check_out_dir(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     truth_path = out_dir / "bridge_truth.npz"
-    text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
     bridge = subprocess.Popen(
         [sys.executable, "-m", "pedi_drake.apps.sim_bridge", "--mission", mission, "--lcm_url", url]
         + ["--scenario_text", text, "--truth_log", str(truth_path), "--realtime_rate", str(realtime_rate)],
@@ -88,16 +100,15 @@ def run_sil(
     )
     try:
         start = time.monotonic()
-        line = ""
+        line, said = "", []
         while "running" not in line:
             line = bridge.stdout.readline()
+            said.append(line)
             if not line and bridge.poll() is not None:
-                raise RuntimeError(f"the simulator bridge exited with {bridge.returncode} before starting")
+                output = "".join(said).strip() or "(no output)"
+                raise RuntimeError(f"the simulator bridge exited with {bridge.returncode} before starting:\n{output}")
             if time.monotonic() - start > BRIDGE_START_TIMEOUT:
                 raise RuntimeError("the simulator bridge did not start within 60 s")
-        bus = f"{{go1: {{lcm_url: '{url}'}}}}"
-        overrides = f"{{mission: {mission}, controller: whole_body, estimator: kalman, lcm_buses: {bus}}}"
-        scenario = apply_scenario_text(load_scenario(scenario_text=text), overrides)
         result = run(
             scenario=scenario, name=mission, out_dir=out_dir, quiet=True, hardware=True, realtime_rate=realtime_rate
         )
@@ -126,8 +137,12 @@ def main() -> int:
     parser.add_argument("--out", default=None)
     parser.add_argument("--realtime_rate", type=float, default=1.0, help="< 1: both processes in slow motion")
     args = parser.parse_args()
-    out_dir = Path(args.out or f"out/sil_{args.mission}")
-    result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate)
+    out_dir = Path(args.out or f"out/sil_{Path(args.mission).stem}")
+    try:
+        result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate)
+    except ConfigError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     print(
         f"{args.mission} over {result['sil']['lcm_url']}: {'succeeded' if result['success'] else 'FAILED'}"
         f" {result['reason']}; wall {result['wall_time_s']:.1f} s"

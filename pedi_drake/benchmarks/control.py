@@ -2,7 +2,8 @@
 
     python -m pedi_drake.benchmarks.control [--repeats 3] [--out benchmarks/results/control.json]
 
-Runs the scripted demonstrations of `pedi_drake.benchmarks.demos` in simulation (500 Hz control,
+Runs the controller demonstrations of `pedi_drake.benchmarks.demos` (missions of missions/demos/
+on scenarios/wbc_demos.yaml, through MakePedipulationDiagram) in simulation (500 Hz control,
 1 ms plant) and prints one table:
 
 * controller tick (state in, command out, hierarchical QP solved) on three legs with the
@@ -12,11 +13,13 @@ Runs the scripted demonstrations of `pedi_drake.benchmarks.demos` in simulation 
 * closed-loop real-time factor (sim time / wall time, no visualisation);
 * three-leg hold: FR foot error, trunk drift, stance-foot slip, peak torque / effort limit;
 * paper 003's push test: 30 N horizontal on the trunk for 5 s while on three legs, without
-  and with the prongs loaded: trunk displacement and peak stance knee torque;
+  and with the prongs loaded (a `pushes` entry of the mission, applied by the simulated station):
+  trunk displacement and peak stance knee torque;
 * the 1 kHz variant of the stand demo.
 
-The metrics are computed from simulation ground truth for evaluation only; the controller reads
-the state estimate and go1.* signals. Writes the rows and the floors to JSON.
+The metrics (`pedi_drake.evaluation.controller_metrics`) are computed from the run's logs, from
+simulation ground truth for evaluation only; the controller reads the state estimate and go1.*
+signals. Writes the rows and the floors to JSON.
 """
 
 import argparse
@@ -28,7 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pedi_drake.benchmarks.demos import DemoResult, demo_scenario, run_demo
+from pedi_drake.benchmarks.demos import demo_scenario, run_demo
+from pedi_drake.evaluation.controller_metrics import ControllerMetrics
 
 # Floors of the whole-body controller issue.
 TICK_MEDIAN_FLOOR_MS = 1.0
@@ -64,7 +68,7 @@ def _median(values: list[float]) -> float:
     return float(statistics.median(finite)) if finite else float("nan")
 
 
-def summarise(case: Case, results: list[DemoResult]) -> dict:
+def summarise(case: Case, results: list[ControllerMetrics]) -> dict:
     """Medians over the repeats of one case (worst case for the safety figures)."""
     return {
         "label": case.label,
@@ -72,6 +76,7 @@ def summarise(case: Case, results: list[DemoResult]) -> dict:
         "overrides": case.overrides,
         "runs": len(results),
         "fell": any(r.fell for r in results),
+        "mission_succeeded": all(r.mission_succeeded for r in results),
         "tick_median_ms": _median([r.tick_median_ms for r in results]),
         "tick_p99_ms": _median([r.tick_p99_ms for r in results]),
         "real_time_factor": _median([r.real_time_factor for r in results]),
@@ -82,7 +87,8 @@ def summarise(case: Case, results: list[DemoResult]) -> dict:
         "qp_failures": sum(r.qp_failures for r in results),
         "push_displacement_m": _median([r.push_displacement for r in results]),
         "peak_knee_torque_Nm": _median([r.peak_knee_torque for r in results]),
-        "prong_force_N": _median([r.prong_force for r in results]),
+        "prong_load_N": _median([r.prong_load for r in results]),
+        "push_while_manipulating": all(r.push_while_manipulating for r in results),
     }
 
 
@@ -97,6 +103,9 @@ def floors(rows: dict[str, dict]) -> dict[str, bool]:
         "three_leg_stance_slip_below_2mm": hold["stance_slip_m"] < STANCE_SLIP_FLOOR_M,
         "torques_within_limits": all(r["max_torque_ratio"] <= 1.0 + 1e-9 for r in rows.values()),
         "push_does_not_topple": not rows["push_no_prongs"]["fell"] and not rows["push_prongs"]["fell"],
+        # The push figures mean something only if the push came while FR was lifted.
+        "push_applied_on_three_legs": rows["push_no_prongs"]["push_while_manipulating"]
+        and rows["push_prongs"]["push_while_manipulating"],
     }
 
 

@@ -1,43 +1,59 @@
 """Every shipped mission in simulation: seed 0 without noise, and more seeds with sensor noise.
 
-    python -m pedi_drake.benchmarks.missions [--missions a,b] [--noise-seeds 1,2,3,4,5] [--jobs 2]
-                                           [--out benchmarks/results/missions.json]
+    python -m pedi_drake.benchmarks.missions [--missions a,b] [--noise-seeds 1,2,3,4,5]
+        [--engine ray|serial] [--out benchmarks/results/missions.json]
 
-Prints one row per mission (successes, foot errors, trunk drift, real-time factor without any
-visualisation, the estimator's largest errors against the simulated truth, and the
-mission-specific checks: door opening, box push, obstacle classification) and writes every
-run's result.json content to the JSON file. Runs are independent processes (`--jobs`).
+A batch study (the same as studies/missions_benchmark.yaml), run on Ray (every core of this
+machine) or serially. Prints one row per mission (successes, foot errors, trunk drift,
+real-time factor without any visualisation, the estimator's largest errors against the
+simulated truth, the capture point's smallest margin in the safety polygon on three feet [mm],
+and the mission-specific checks: door opening, box push, obstacle classification) and writes
+every run's result.json content to the JSON file.
 """
 
 import argparse
 import json
 import statistics
 import tempfile
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+from pedi_drake.batch.engines import ENGINES, make_engine
+from pedi_drake.batch.runner import run_study
+from pedi_drake.batch.study import study_from_dict
 from pedi_drake.mission.spec import load_mission, shipped_missions
-from pedi_drake.run import run
-from pedi_drake.scenario import load_scenario
 
 # The obstacle each press of obstacle_sensing touches, from the mission's scene.
 EXPECTED_OBSTACLE_CLASS = {"press_a": "rigid", "press_b": "soft"}
 
 
-def run_one(mission: str, seed: int, noise: bool) -> dict:
-    """One run of `mission`; returns its result dictionary (result.json)."""
-    text = (
-        f"{{mission: {mission}, controller: whole_body, random_seed: {seed}, simulation_duration: 60.0, "
-        f"sensor_noise: {{enabled: {'true' if noise else 'false'}}}}}"
+def mission_study(missions: list[str], noise_seeds: list[int]):
+    """The study of `missions` at seed 0 without noise and at each of `noise_seeds` with noise."""
+    noise = [{"random_seed": 0, "sensor_noise.enabled": False}]
+    noise += [{"random_seed": seed, "sensor_noise.enabled": True} for seed in noise_seeds]
+    return study_from_dict(
+        {
+            "name": "missions_benchmark",
+            "kind": "mission",
+            "base": {"scenario_text": "{simulation_duration: 60.0}"},
+            "timeout": 900,
+            "factors": [{"name": "mission", "values": missions}, {"name": "noise", "values": noise}],
+        },
+        "pedi_drake.benchmarks.missions",
     )
-    scenario = load_scenario(scenario_text=text)
-    with tempfile.TemporaryDirectory() as out:
-        return run(scenario=scenario, name=mission, out_dir=Path(out), quiet=True, replay=False)
 
 
-def _run_job(job) -> tuple[str, int, bool, dict]:
-    mission, seed, noise = job
-    return mission, seed, noise, run_one(mission, seed, noise)
+def result_of(row: dict) -> dict:
+    """A study row's result.json content (a crashed or timed-out task becomes a failed result)."""
+    if "result" in row:
+        return row["result"]
+    return {
+        "success": False,
+        "fell": False,
+        "reason": f"{row['status']}: {row['reason']}",
+        "foot_errors_m": [],
+        "max_base_drift_m": 0.0,
+        "real_time_factor": 0.0,
+    }
 
 
 def summarise(mission: str, runs: list[dict]) -> dict:
@@ -53,6 +69,10 @@ def summarise(mission: str, runs: list[dict]) -> dict:
         "real_time_factor_median": statistics.median(r["real_time_factor"] for r in runs),
         "failures": [r["reason"] for r in runs if not r["success"]],
     }
+    margins = [r["three_leg_capture_point_margin_m"] for r in runs if r.get("three_leg_capture_point_margin_m")]
+    if margins:
+        # The capture point's smallest distance inside the manager's safety polygon on three feet.
+        row["capture_point_margin_min_m"] = min(m["min"] for m in margins)
     estimates = [r["estimator_errors"] for r in runs if "estimator_errors" in r]
     if estimates:
         row["estimator_position_error_max_m"] = max(e["position_error_max_m"] for e in estimates)
@@ -78,25 +98,26 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--missions", default=",".join(shipped_missions()))
     parser.add_argument("--noise-seeds", default="1,2,3,4,5", help="seeds run with sensor noise ('' for none)")
-    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--engine", choices=ENGINES, default="ray", help="ray (every core) or serial")
     parser.add_argument("--out", default="benchmarks/results/missions.json")
     args = parser.parse_args()
     missions = [m for m in args.missions.split(",") if m]
     for mission in missions:
         load_mission(mission)
     seeds = [int(s) for s in args.noise_seeds.split(",") if s]
-    jobs = [(m, 0, False) for m in missions] + [(m, s, True) for m in missions for s in seeds]
+    study = mission_study(missions, seeds)
     results: dict[str, list[dict]] = {m: [] for m in missions}
-    with ProcessPoolExecutor(max_workers=args.jobs) as pool:
-        for mission, seed, noise, result in pool.map(_run_job, jobs):
-            result["seed"], result["noise"] = seed, noise
-            results[mission].append(result)
-            status = "ok" if result["success"] else f"FAILED ({result['reason'][:80]})"
-            print(f"  {mission:<24} seed {seed} noise {noise!s:<5} {status}", flush=True)
+    with tempfile.TemporaryDirectory() as folder:
+        rows = run_study(study, Path(folder), make_engine(args.engine)).rows
+    for row in sorted(rows, key=lambda r: r["index"]):
+        result = result_of(row)
+        noise = row["factor.noise"]
+        result["seed"], result["noise"] = noise["random_seed"], noise["sensor_noise.enabled"]
+        results[row["factor.mission"]].append(result)
     summary = {m: summarise(m, runs) for m, runs in results.items()}
     print(
         f"\n{'mission':<24} {'ok':>5} {'err med':>8} {'err max':>8} {'drift':>7} {'RTF':>5} "
-        f"{'est pos':>8} {'est vel':>8} {'est ori':>8}  extra"
+        f"{'est pos':>8} {'est vel':>8} {'est ori':>8} {'cp marg':>8}  extra"
     )
     for mission, row in summary.items():
         extra = ""
@@ -118,7 +139,7 @@ def main() -> None:
             f"{mm(row['foot_error_max_m'])} {mm(row['max_base_drift_m'])} "
             f"{row['real_time_factor_median']:5.2f} {mm(row.get('estimator_position_error_max_m'))} "
             f"{mm(row.get('estimator_velocity_rms_max_m_s'))} {deg(row.get('estimator_orientation_error_max_deg'))}"
-            f"  {extra}"
+            f" {mm(row.get('capture_point_margin_min_m'))}  {extra}"
         )
     all_errors = [row["error"] for runs in results.values() for r in runs for row in r["foot_errors_m"]]
     if all_errors:

@@ -32,10 +32,11 @@ from pathlib import Path
 
 import numpy as np
 
-from pedi_drake.benchmarks.demos import demo_scenario, run_demo
+from pedi_drake.benchmarks.demos import demo_scenario, simulate_demo
 from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import paper002 as evaluation
+from pedi_drake.evaluation.controller_metrics import controller_metrics
 from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.run import run
@@ -58,16 +59,18 @@ FORCE_ESTIMATE_RMS_FLOOR_N = 2.0
 
 
 def demo_rows() -> list[dict]:
-    """three_leg_hold and push_foot on both controllers."""
+    """three_leg_hold and push_foot (missions/demos/) on both controllers."""
     rows = []
     for name in ("three_leg_hold", "push_foot"):
         for controller in CONTROLLERS:
             scenario = demo_scenario(name)
             scenario.controller = controller
-            r = run_demo(name, scenario)
+            record, judged = simulate_demo(name, scenario)
+            r = controller_metrics(record, judged)
             row = {
                 "case": f"demo {name}",
                 "controller": controller,
+                "success": judged["success"],
                 "fell": r.fell,
                 "qp_failures": r.qp_failures,
                 "tick_median_ms": r.tick_median_ms,
@@ -78,10 +81,13 @@ def demo_rows() -> list[dict]:
                 "real_time_factor": r.real_time_factor,
             }
             if name == "push_foot":
-                row["foot_stiffness_n_per_m"] = r.foot_stiffness
+                plant = record.built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
+                push = apply_mission(record.scenario, record.built.mission).pushes[0]
+                response = evaluation.foot_push_response(plant, record.logs, push)
+                row["foot_stiffness_n_per_m"] = response.stiffness_n_per_m
+                row["force_estimate_rms_n"] = response.force_estimate_rms_n
                 if controller == "projected_impedance":
                     row["commanded_stiffness_n_per_m"] = scenario.projected_impedance.foot_stiffness[0]
-                row["force_estimate_rms_n"] = r.force_estimate_rms.get("impedance", float("nan"))
             rows.append(row)
     return rows
 

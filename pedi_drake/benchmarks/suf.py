@@ -15,12 +15,17 @@ import argparse
 import json
 import platform
 import statistics
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from pedi_drake.batch.engines import ENGINES, make_engine
+from pedi_drake.batch.runner import run_study
+from pedi_drake.batch.study import load_study
 from pedi_drake.exceptions import SufError
-from pedi_drake.suf.design import height_sweep, stance_for
+from pedi_drake.resources import studies_dir
+from pedi_drake.suf.design import stance_for
 from pedi_drake.suf.go1_configuration import Go1Stance, stance_problem, with_prongs_at_height
 from pedi_drake.suf.methods import METHODS, smallest_unrejectable_force
 from pedi_drake.suf.ray_program import RfpLinearProgram
@@ -34,8 +39,8 @@ PAPER_MS = {
     "quadratic": (84.169, 709.1),
     "single": (4.65, 4.93),
 }
-# Fig. 3: trunk heights swept, and the range called practical (the Go1 stands at 0.27-0.28 m).
-SWEEP_HEIGHTS = (0.16, 0.18, 0.20, 0.22, 0.24, 0.26, 0.28, 0.30)
+# Fig. 3 (heights swept: studies/suf_height_sweep.yaml): the range called practical (the Go1
+# stands at 0.27-0.28 m).
 PRACTICAL_HEIGHTS = (0.18, 0.26)
 # Speed floors of the SUF issue: at least this many times faster than the paper (teleoperation).
 SPEEDUP_FLOOR = {"exact": 5.0, "affine": 5.0, "quadratic": 5.0, "single": 5.0, "fibonacci": 2.0}
@@ -115,12 +120,35 @@ def run_scenario(scenario: str, configs: int, timed: int, rng: np.random.Generat
     return {"summary": summary, "rows": rows}
 
 
+def height_sweep_rows(rows: list[dict]) -> list[dict]:
+    """Fig. 3 rows (as `suf.design.height_sweep` makes them) from the rows of the height-sweep study."""
+    by_height: dict[float, dict[bool, dict]] = {}
+    for row in rows:
+        if row["status"] != "ok":
+            raise SufError(f"height sweep: task {row['task_id']} {row['status']}: {row['reason']}")
+        height = row["factor.trunk_height"]
+        by_height.setdefault(height, {})[row["factor.prongs"]] = {
+            "trunk_height": height,
+            "feet_x": row["feet_x_m"],
+            "feet_y": row["feet_y_m"],
+            "prongs": row["factor.prongs"],
+            "suf": row["suf_n"],
+        }
+    sweep = []
+    for height in sorted(by_height):
+        without, with_prongs = by_height[height][False], by_height[height][True]
+        benefit = 100.0 * (with_prongs["suf"] / without["suf"] - 1.0) if without["suf"] > 0 else float("inf")
+        sweep.append({"height": height, "without": without, "with_prongs": with_prongs, "benefit_percent": benefit})
+    return sweep
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--configs", type=int, default=100, help="random configurations per scenario")
     parser.add_argument("--timed", type=int, default=10, help="configurations whose times give the median")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="benchmarks/results/suf.json")
+    parser.add_argument("--engine", choices=ENGINES, default="serial", help="engine of the height-sweep study")
     args = parser.parse_args()
     rng = np.random.default_rng(args.seed)
     scenarios = {s: run_scenario(s, args.configs, args.timed, rng) for s in ("teleoperation", "prong_manipulation")}
@@ -167,7 +195,9 @@ def main() -> None:
     figures.mkdir(parents=True, exist_ok=True)
     ratios = {m: [r["suf"][m] / r["suf"]["exact"] for r in scenarios["teleoperation"]["rows"]] for m in METHODS}
     plot_accuracy({m: v for m, v in ratios.items() if m != "exact"}, figures / "suf_accuracy.png")
-    sweep = height_sweep(SWEEP_HEIGHTS)
+    study = load_study(studies_dir() / "suf_height_sweep.yaml")
+    with tempfile.TemporaryDirectory() as folder:
+        sweep = height_sweep_rows(run_study(study, Path(folder), make_engine(args.engine), quiet=True).rows)
     plot_suf_vs_height(sweep, figures / "suf_vs_height.png")
     for row in sweep:
         print(

@@ -20,8 +20,14 @@ Layouts (world frame W, Unitree leg order FR, FL, RR, RL):
     A leg with mode != 0 is a pedipulation leg; it should not be in the contact set.
 `contact_set` (4 + number of prongs): 1 for a contact that should bear load (FR, FL, RR, RL,
     prong_0, ...), 0 otherwise. Changes are ramped over `contact_ramp_time`.
-`safety_polygon` (6): [enabled, centre x [m], centre y [m], half size x [m], half size y [m], yaw [rad]];
-    enabled = 0 selects the default: the support polygon of the loaded contacts shrunk by `safety_margin`.
+`safety_polygon` (4 + 2 SAFETY_POLYGON_MAX_VERTICES = 20): the convex polygon the capture point is
+    kept in, expressed in its own frame P (paper 000: the Mission Manager sets its size, position
+    and orientation at runtime):
+    [0] n, the number of vertices: 0 selects the default (the support polygon of the loaded
+        contacts shrunk by `safety_margin`), else 3 <= n <= SAFETY_POLYGON_MAX_VERTICES
+    [1:3] origin of P in W, x, y [m]   [3] yaw of P in W [rad]
+    [4:4+2n] the vertices (x, y) in P [m], counter-clockwise; the rest is zero.
+    Vertices rather than a centre and half sizes: the three-foot stance's polygon is a triangle.
 `friction` (1): Coulomb coefficient of the ground [-].
 """
 
@@ -31,12 +37,14 @@ import numpy as np
 from pydrake.math import RotationMatrix
 
 from pedi_drake import robot
+from pedi_drake.exceptions import PediError
 from pedi_drake.vector3 import rotation_matrix_wxyz
 
 BODY_REFERENCE_SIZE = 19
 LEG_REFERENCE_SIZE = 40
 LEG_BLOCK = 10
-SAFETY_POLYGON_SIZE = 6
+SAFETY_POLYGON_MAX_VERTICES = 8  # the four feet and up to four prong tips
+SAFETY_POLYGON_SIZE = 4 + 2 * SAFETY_POLYGON_MAX_VERTICES
 LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS, LEG_MODE_FOOT_POSE = 0, 1, 2, 3
 
 
@@ -99,11 +107,39 @@ def parse_leg_reference(x: np.ndarray) -> list[LegReference]:
     return [LegReference(round(b[0]), b[1:4], b[4:7], b[7:10]) for b in blocks]
 
 
-def safety_polygon_vector(centre_xy=None, half_sizes=None, yaw: float = 0.0) -> np.ndarray:
-    """The 6-vector of `safety_polygon`; no arguments selects the default (support polygon)."""
-    if centre_xy is None:
-        return np.zeros(SAFETY_POLYGON_SIZE)
-    return np.array([1.0, centre_xy[0], centre_xy[1], half_sizes[0], half_sizes[1], yaw])
+def _rotation_2d(yaw: float) -> np.ndarray:
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.array([[c, -s], [s, c]])
+
+
+def safety_polygon_vector(vertices_P: np.ndarray | None = None, origin_xy=(0.0, 0.0), yaw: float = 0.0) -> np.ndarray:
+    """The `safety_polygon` vector of `vertices_P` (n, 2) [m] in the frame at `origin_xy` [m], `yaw` [rad].
+
+    No vertices (None or an empty array) selects the controller's default polygon.
+    """
+    x = np.zeros(SAFETY_POLYGON_SIZE)
+    if vertices_P is None or len(vertices_P) == 0:
+        return x
+    vertices_P = np.asarray(vertices_P, float)
+    n = len(vertices_P)
+    if not 3 <= n <= SAFETY_POLYGON_MAX_VERTICES or vertices_P.shape != (n, 2):
+        raise PediError(
+            f"safety_polygon: 3 to {SAFETY_POLYGON_MAX_VERTICES} vertices (x, y), got shape {vertices_P.shape}"
+        )
+    x[0], x[1:3], x[3] = n, origin_xy, yaw
+    x[4 : 4 + 2 * n] = vertices_P.ravel()
+    return x
+
+
+def safety_polygon_vertices_W(x: np.ndarray) -> np.ndarray | None:
+    """The polygon's vertices (n, 2) in W [m]; None for the default; PediError for a bad count."""
+    n = int(round(x[0]))
+    if n == 0:
+        return None
+    if not 3 <= n <= SAFETY_POLYGON_MAX_VERTICES:
+        raise PediError(f"safety_polygon: {n} vertices; expected 0 or 3 to {SAFETY_POLYGON_MAX_VERTICES}")
+    vertices_P = np.asarray(x[4 : 4 + 2 * n], float).reshape(n, 2)
+    return x[1:3] + vertices_P @ _rotation_2d(x[3]).T
 
 
 def contact_set_vector(

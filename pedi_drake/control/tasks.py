@@ -254,13 +254,26 @@ def polygon_halfplanes(vertices_xy: np.ndarray, margin: float = 0.0) -> tuple[np
     return np.array(normals).reshape(-1, 2), np.array(offsets)
 
 
-def rectangle_halfplanes(centre: np.ndarray, half_sizes: np.ndarray, yaw: float) -> tuple[np.ndarray, np.ndarray]:
-    """(N, d) with N p <= d of a rectangle of `half_sizes` [m] at `centre` [m], rotated by `yaw` [rad]."""
-    c, s_ = np.cos(yaw), np.sin(yaw)
-    axes = np.array([[c, s_], [-s_, c]])  # rows: the rectangle's x and y axes in world
-    N = np.vstack([axes, -axes])
-    d = N @ np.asarray(centre, float) + np.concatenate([half_sizes, half_sizes])
-    return N, d
+def shrink_polygon(points_xy: np.ndarray, margin: float) -> np.ndarray:
+    """Vertices (k, 2), counter-clockwise, of the convex hull of `points_xy` [m] shrunk by `margin` [m].
+
+    Every edge moves inwards by `margin`; the result is the intersection of those half-planes
+    (an edge shorter than the shrink drops out). Empty (0, 2) when nothing is left.
+    """
+    N, d = polygon_halfplanes(points_xy, margin)
+    i, j = np.triu_indices(len(d), k=1)
+    det = N[i, 0] * N[j, 1] - N[i, 1] * N[j, 0]
+    parallel = np.abs(det) < 1e-12
+    det = np.where(parallel, 1.0, det)
+    # Cramer's rule for every pair of edge lines N_i p = d_i, N_j p = d_j.
+    corners = np.column_stack([(d[i] * N[j, 1] - d[j] * N[i, 1]) / det, (N[i, 0] * d[j] - N[j, 0] * d[i]) / det])[
+        ~parallel
+    ]
+    inside = np.all(corners @ N.T <= d + 1e-9, axis=1)
+    corners = corners[inside]
+    if len(corners) < 3:
+        return np.zeros((0, 2))
+    return convex_hull_ccw(corners)
 
 
 @dataclasses.dataclass

@@ -12,7 +12,8 @@ Inputs (all numeric vectors; reference layouts in `pedi_drake.control.references
     body_reference (19)     trunk pose trajectory sample; unconnected: hold the first-tick pose
     leg_reference (40)      per-leg foot / joint references; unconnected: no leg task
     contact_set (4 + prongs) loaded contacts 0/1; unconnected: the four feet
-    safety_polygon (6)      capture-point polygon; unconnected: the shrunk support polygon
+    safety_polygon (20)     capture-point polygon (vertices in its frame); unconnected or n = 0:
+                            the support polygon of the loaded contacts shrunk by `safety_margin`
     friction (1)            ground friction coefficient; unconnected: `config.friction`
 Outputs:
     command (60)            go1.command: q_des, qd_des, kp, kd, tau_ff (Unitree order)
@@ -39,7 +40,7 @@ from pedi_drake.control.hqp import HqpSettings, solve_hqp, solve_weighted
 from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
-from pedi_drake.exceptions import ConfigError, QpInfeasible
+from pedi_drake.exceptions import ConfigError, PediError, QpInfeasible
 from pedi_drake.go1_command import COMMAND_SIZE
 from pedi_drake.prongs import ProngDesign
 
@@ -172,6 +173,11 @@ class WholeBodyController(LeafSystem):
         if not _all_finite(body_x, leg_x, polygon_x, mu_x) or mu_x[0] <= 0.0:
             self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
             return
+        try:
+            polygon_W = references.safety_polygon_vertices_W(polygon_x)
+        except PediError:  # a vertex count the layout does not allow
+            self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
+            return
 
         snapshot = self.model.update(base, q, qd)
         legs = references.parse_leg_reference(leg_x)
@@ -185,8 +191,8 @@ class WholeBodyController(LeafSystem):
             ground = float(snapshot.p_contacts[loaded, 2].sum()) / num_loaded - robot.FOOT_RADIUS
         else:
             ground = 0.0
-        if polygon_x[0] > 0.5:
-            N, d = tasks.rectangle_halfplanes(polygon_x[1:3], polygon_x[3:5], polygon_x[5])
+        if polygon_W is not None:
+            N, d = tasks.polygon_halfplanes(polygon_W, 0.0)
         elif num_loaded >= 3:
             N, d = tasks.polygon_halfplanes(snapshot.p_contacts[loaded, :2], c.safety_margin)
         else:

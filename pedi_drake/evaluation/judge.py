@@ -9,14 +9,27 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake import robot
-from pedi_drake.evaluation import mission_results
+from pedi_drake.evaluation import capture_point, mission_results
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
 from pedi_drake.evaluation.result_file import write_result
-from pedi_drake.evaluation.run_logs import write_run_logs
+from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
 from pedi_drake.fall import fell_during
 from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
+from pedi_drake.run_checks import control_period
 from pedi_drake.viz import plots
+
+# The trunk has stood when it is within this of its commanded height [m]: a centimetre-level
+# sag under the PD's own compliance is a stand, an object under the trunk is not.
+STAND_HEIGHT_TOLERANCE = 0.02
+# A foot that slid this far on the ground while the robot failed to stand slipped [m].
+SLIP_DISTANCE = 0.03
+
+
+def commanded_stand_height(scenario) -> float:
+    """Trunk height the stand controller's target pose puts the trunk at, feet under the hips [m]."""
+    _, thigh, calf = scenario.stand.target_leg_pose
+    return float(robot.trunk_height_for(thigh, calf))
 
 
 def judge_run(record) -> dict:
@@ -24,26 +37,32 @@ def judge_run(record) -> dict:
     scenario, logs, hardware = record.scenario, record.logs, record.hardware
     base = logs["base_state"].data
     has_prongs = scenario.robot.prongs is not None
+    estimate_fell = fell_during(base[0:4], base[6], has_prongs=has_prongs) if base.shape[1] else False
+    plant = states = t_state = None
     if hardware:
         # The estimate is all there is: the trunk pose [quaternion; position] of base_state.
-        p_WB = base[4:7]
-        fell = fell_during(base[0:4], base[6], has_prongs=has_prongs)
+        p_WB, t_WB = base[4:7], logs["base_state"].times
+        fell = estimate_fell
     else:
         plant = record.built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
         q0 = robot.Go1PlantMap.from_plant(plant).base_q_start
-        states = logs["sim.plant_state"].data
-        p_WB = states[q0 + 4 : q0 + 7]
-        fell = fell_during(states[q0 : q0 + 4], states[q0 + 6], has_prongs=has_prongs)
+        states, t_state = logs["sim.plant_state"].data, logs["sim.plant_state"].times
+        p_WB, t_WB = states[q0 + 4 : q0 + 7], t_state
+        fell = fell_during(states[q0 : q0 + 4], states[q0 + 6], has_prongs=has_prongs) if states.shape[1] else False
     sim_time, wall_time = record.sim_time, record.wall_time
+    final_height = float(p_WB[2, -1]) if p_WB.shape[1] else None
     result = {
         "mission": record.built.mission.name if record.built.mission else None,
         "scenario": record.name,
         "success": not fell,
-        "reason": "the trunk fell" if fell else "",
+        "reason": "",
+        "interrupted": record.interrupted is not None,
+        "interrupt_reason": record.interrupted or "",
         "phases": [],
         "foot_errors_m": [],
         "max_base_drift_m": 0.0,
         "fell": fell,
+        "estimate_fell": estimate_fell,
         "sim_time_s": sim_time,
         "wall_time_s": wall_time,
         "real_time_factor": sim_time / wall_time if wall_time > 0 else None,
@@ -58,7 +77,7 @@ def judge_run(record) -> dict:
         "judged_by": "state_estimate" if hardware else "ground_truth",
         "random_seed": scenario.random_seed,
         "sensor_noise": scenario.sensor_noise.enabled,
-        "final_trunk_height_m": float(p_WB[2, -1]),
+        "final_trunk_height_m": final_height,
     }
     if hardware:
         station, station_context = record.subsystem("station")
@@ -69,26 +88,41 @@ def judge_run(record) -> dict:
     if "controller.diagnostics" in logs:
         tick_ms = 1e3 * logs["controller.diagnostics"].data[2]
         tick_ms = tick_ms[tick_ms > 0]
-        result["controller_tick_ms"] = {
-            "median": float(np.median(tick_ms)),
-            "p99": float(np.percentile(tick_ms, 99)),
-            "max": float(np.max(tick_ms)),
-        }
+        if tick_ms.size:
+            result["controller_tick_ms"] = {
+                "median": float(np.median(tick_ms)),
+                "p99": float(np.percentile(tick_ms, 99)),
+                "max": float(np.max(tick_ms)),
+            }
     progress = record.mission_progress()
-    if progress is not None:
-        mission_ok = progress.status == SUCCEEDED
-        result["success"] = mission_ok and not fell
-        result["reason"] = progress.reason if not mission_ok else ("the trunk fell" if fell else "")
-        if progress.status not in (SUCCEEDED, FAILED):
-            result["reason"] = f"the simulation ended ({sim_time:.1f} s) before the mission did"
+    reason = ""
+    if progress is None:
+        reason = _stand_reason(scenario, final_height, sim_time)
+    else:
         result["phases"] = mission_results.phase_table(progress)
+        if not hardware:
+            _check_stand_up_phases(result["phases"], record.built.mission, p_WB, t_WB)
+        failed = [row for row in result["phases"] if row["status"] == FAILED]
+        if progress.status == SUCCEEDED and not failed:
+            reason = ""
+        elif progress.status not in (SUCCEEDED, FAILED):
+            reason = f"the simulation ended ({sim_time:.1f} s) before the mission did"
+        else:
+            reason = failed[0]["reason"] if failed else progress.reason
         status_log, body_log = logs["mission.status"].data, logs["mission.body_reference"].data
         result["max_base_drift_m"] = mission_results.max_base_drift(p_WB, body_log, status_log)
         result["presses"] = mission_results.press_results(progress)
+        polygon = logs["mission.safety_polygon"]
+        result["three_leg_capture_point_margin_m"] = capture_point.three_leg_margin(
+            polygon.times,
+            logs["controller.diagnostics"].data,
+            polygon.data,
+            logs["mission.contact_set"].data,
+            result["phases"],
+        )
         if hardware:
             result["foot_errors_m"] = mission_results.estimated_foot_errors(progress)
         else:
-            t_state = logs["sim.plant_state"].times
             result["foot_errors_m"] = mission_results.foot_errors(progress, plant, t_state, states)
             door = mission_results.door_opening(plant, states)
             if door is not None:
@@ -96,22 +130,115 @@ def judge_run(record) -> dict:
             box = mission_results.box_displacement(plant, states)
             if box is not None:
                 result["box"] = box
-    if not hardware and scenario.estimator == "kalman":
+    if not hardware:
+        manager_saw_fall = progress is not None and any(r.metrics.get("estimate_fell") for r in progress.records)
+        reason = _fall_reason(reason, fell, estimate_fell, manager_saw_fall)
+        stand_failed = (progress is None and reason) or any(
+            row["kind"] == "stand_up" and row["status"] == FAILED for row in result["phases"]
+        )
+        if stand_failed and not fell and states.shape[1]:
+            t_fail = next((row["t_end"] for row in result["phases"] if row["status"] == FAILED), sim_time)
+            slip = mission_results.max_foot_slip(plant, states, t_state, t_fail)
+            if slip > SLIP_DISTANCE:
+                reason = (
+                    f"friction too low to stand: the feet slid {100 * slip:.0f} cm on the ground "
+                    f"(ground_friction {scenario.ground_friction}); " + reason
+                )
+    elif fell and not reason:
+        reason = "the trunk fell (state estimate)"
+    if not hardware and scenario.estimator == "kalman" and base.shape[1]:
         plant_map = robot.Go1PlantMap.from_plant(plant)
         result["estimator_errors"] = estimate_errors(
             logs["base_state"], logs["sim.plant_state"], plant_map, plant.num_positions()
         )
     if hardware and result["driver"]["latched"] is not None:
         # Damping took over: whatever the estimate says afterwards, the run did not go as planned.
-        result["success"] = False
-        result["reason"] = f"the driver latched damping ({result['driver']['latched']}); " + result["reason"]
+        reason = f"the driver latched damping ({result['driver']['latched']}); " + reason
+    if record.interrupted is not None:
+        # What ran is judged as it stands; the run as a whole did not happen.
+        reason = f"interrupted at t = {sim_time:.2f} s ({record.interrupted})" + (f"; {reason}" if reason else "")
+    result["reason"] = reason
+    result["success"] = not reason
     return result
 
 
+def _stand_reason(scenario, final_height: float | None, sim_time: float) -> str:
+    """Why a run without a mission did not stand ("" when it did): the trunk must end at the
+    height the stand controller commands, within STAND_HEIGHT_TOLERANCE."""
+    if scenario.controller != "stand_pd":
+        return ""
+    if sim_time < scenario.stand.duration:
+        return f"the run ended ({sim_time:.2f} s) before the stand did ({scenario.stand.duration} s)"
+    target = commanded_stand_height(scenario)
+    if final_height is None or abs(final_height - target) > STAND_HEIGHT_TOLERANCE:
+        shown = "unknown" if final_height is None else f"{final_height:.3f} m"
+        return (
+            f"did not stand: the trunk ended at {shown}, not at the commanded {target:.3f} m "
+            f"(within {STAND_HEIGHT_TOLERANCE} m)"
+        )
+    return ""
+
+
+def _check_stand_up_phases(phases: list[dict], mission, p_WB: np.ndarray, t_WB: np.ndarray) -> None:
+    """Fails a stand_up phase the mission manager passed on the estimate when the true trunk did
+    not reach the phase's height (the estimate can be wrong; physics is the judge)."""
+    heights = {phase.name: phase.height for phase in mission.phases if hasattr(phase, "height")}
+    for row in phases:
+        if row["kind"] != "stand_up" or row["status"] != SUCCEEDED or row["name"] not in heights:
+            continue
+        height = mission_results.trunk_height_at(p_WB, t_WB, row["t_end"])
+        target = heights[row["name"]]
+        if abs(height - target) > STAND_HEIGHT_TOLERANCE:
+            row["status"] = FAILED
+            row["reason"] = (
+                f"{row['name']}: the estimate reached {target} m but the trunk was at {height:.3f} m "
+                "(ground truth): the robot did not stand"
+            )
+
+
+def _fall_reason(reason: str, fell: bool, estimate_fell: bool, manager_saw_fall: bool) -> str:
+    """The reason, saying whether the robot fell (ground truth) or only its estimate did."""
+    if fell:
+        said = " as the state estimate said" if estimate_fell else ""
+        return f"the robot fell (ground truth: trunk height or tilt out of range){said}" + (
+            f"; {reason}" if reason else ""
+        )
+    if manager_saw_fall:
+        return f"the state estimate failed, not the robot: {reason}; the robot did not fall (ground truth)"
+    return reason
+
+
+def first_valid_index(times: np.ndarray) -> int:
+    """Index of the first logged sample that follows the estimator's first update.
+
+    The sample logged at t = 0 is published at initialisation, before any periodic update has
+    run: the estimate, the mission's references and the held sensor values there are initial
+    guesses, not measurements, and show up as spikes at the start of every plot.
+    """
+    later = np.nonzero(np.asarray(times) > 0.0)[0]
+    return int(later[0]) if later.size else 0
+
+
+def _from_first_estimate(logs: dict) -> dict:
+    """Every log from the first valid estimate on (see `first_valid_index`)."""
+    base_times = logs["base_state"].times
+    t0 = base_times[first_valid_index(base_times)] if len(base_times) else 0.0
+    trimmed = {}
+    for name, log in logs.items():
+        keep = np.asarray(log.times) >= t0
+        trimmed[name] = SignalLog(log.times[keep], log.data[:, keep]) if np.any(keep) else log
+    return trimmed
+
+
 def write_run(record, result: dict, out_dir: Path) -> None:
-    """Writes result.json, logs.npz, the PNG plots and (when recorded) replay.html to `out_dir`."""
+    """Writes result.json, logs.npz, the PNG plots and (when recorded) replay.html to `out_dir`.
+
+    logs.npz keeps every sample; the plots start at the first valid estimate. result.json is
+    written last and atomically, so a folder with a result.json holds a finished run's files.
+    """
     out_dir = Path(out_dir)
-    logs, name = record.logs, record.name
+    name = record.name
+    logs = _from_first_estimate(record.logs)
     if record.replay_html is not None:
         (out_dir / "replay.html").write_text(record.replay_html)
     command, position = logs["go1.command"], logs["go1.position_measured"]
@@ -145,5 +272,5 @@ def write_run(record, result: dict, out_dir: Path) -> None:
                     result,
                     out_dir / "mission_errors.png",
                 )
-    write_run_logs(out_dir, logs)
-    write_result(out_dir, result)
+    write_run_logs(out_dir, record.logs)
+    write_result(out_dir, result, time_step=control_period(record.scenario))

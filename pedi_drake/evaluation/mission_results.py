@@ -12,6 +12,7 @@ from pedi_drake.control.references import LEG_BLOCK
 from pedi_drake.mission.progress import MissionProgress
 
 RIGID_STIFFNESS = 1500.0  # [N/m] a press stiffer than this is a rigid obstacle
+FOOT_ON_GROUND = 0.005  # [m] a foot centre this close above its radius touches the ground
 
 
 def _sample_index(times: np.ndarray, t: float) -> int:
@@ -155,3 +156,27 @@ def pedipulation_leg(leg_reference_log: np.ndarray) -> str | None:
         if np.any(leg_reference_log[k * LEG_BLOCK] > 0.5):
             return leg
     return None
+
+
+def max_foot_slip(plant, states: np.ndarray, t_state: np.ndarray, t_end: float) -> float:
+    """Largest horizontal distance any foot moved on the ground from the first sample to `t_end` [m].
+
+    Only samples where the foot is low enough to touch the ground count, so a foot lifted on
+    purpose is not taken for one that slid.
+    """
+    context = plant.CreateDefaultContext()
+    last = _sample_index(t_state, t_end)
+    step = max(1, last // 200)  # a few hundred samples are enough to see a slide of centimetres
+    slip = 0.0
+    for leg in robot.LEG_NAMES:
+        start = _foot_W(plant, context, states[:, 0], leg)
+        for k in range(0, last + 1, step):
+            p = _foot_W(plant, context, states[:, k], leg)
+            if p[2] < robot.FOOT_RADIUS + FOOT_ON_GROUND:
+                slip = max(slip, float(np.linalg.norm((p - start)[:2])))
+    return slip
+
+
+def trunk_height_at(p_WB: np.ndarray, times: np.ndarray, t: float) -> float:
+    """The trunk origin's height at time `t` (the logged sample at or after it) [m]."""
+    return float(p_WB[2, _sample_index(times, t)])

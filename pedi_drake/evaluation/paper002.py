@@ -201,3 +201,50 @@ def evaluate_pivot_rotations(
     tips = np.array(tips)
     slip = float(np.max(np.linalg.norm(tips[:, :2] - tips[0, :2], axis=1)))
     return PivotEvaluation(reached, drift, slip)
+
+
+@dataclasses.dataclass
+class FootPushResponse:
+    """A known push on a lifted, held foot: its steady displacement and the force estimate's error."""
+
+    stiffness_n_per_m: float  # push force / steady displacement along the push
+    force_estimate_rms_n: float  # RMS |Eq. 11 estimate - applied force| over the steady push (nan without one)
+
+
+def foot_push_response(
+    plant, logs: dict[str, SignalLog], push, leg: str = "FR", settle: float = 1.0, before: float = 0.4
+) -> FootPushResponse:
+    """The response of the foot of `leg` to `push` (a `pedi_drake.scenario.Push` on it): the foot's
+    mean position over the last `before` [s] before the push against its mean over the full-force
+    window (from `settle` [s] after the ramp), both from ground truth; and the controller's Eq. 11
+    estimate (the `force_estimate` diagnostic, when there is one) against the logged push force."""
+    states = logs["sim.plant_state"]
+    foot = plant.GetBodyByName(f"{leg}_foot")
+    context = plant.CreateDefaultContext()
+    nq = plant.num_positions()
+    full_start, full_end = push.start + push.ramp, push.start + push.ramp + push.duration
+    quiet = (states.times >= push.start - before) & (states.times < push.start)
+    steady = (states.times >= full_start + settle) & (states.times <= full_end)
+
+    def mean_foot(mask: np.ndarray) -> np.ndarray:
+        points = []
+        for x in states.data[:, mask].T:
+            plant.SetPositions(context, x[:nq])
+            points.append(plant.EvalBodyPoseInWorld(context, foot).translation())
+        return np.mean(points, axis=0)
+
+    direction = np.asarray(push.direction, float) / np.linalg.norm(push.direction)
+    moved = float((mean_foot(steady) - mean_foot(quiet)) @ direction)
+    stiffness = push.force / moved if moved > 0 else float("inf")
+    rms = float("nan")
+    diagnostics = logs.get("controller.diagnostics")
+    num_contacts = _num_contacts_of(diagnostics.data.shape[0]) if diagnostics is not None else None
+    if num_contacts is not None:
+        k = robot.LEG_NAMES.index(leg)
+        where = projected_diagnostics_layout(num_contacts)["force_estimate"]
+        window = (diagnostics.times >= full_start + settle) & (diagnostics.times <= full_end)
+        estimate = diagnostics.data[where, :][3 * k : 3 * k + 3, window].T
+        applied = logs["sim.push_force"]
+        index = np.clip(np.searchsorted(applied.times, diagnostics.times[window]), 0, len(applied.times) - 1)
+        rms = float(np.sqrt(np.mean(np.sum((estimate - applied.data[:, index].T) ** 2, axis=1))))
+    return FootPushResponse(stiffness, rms)

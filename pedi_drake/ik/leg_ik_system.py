@@ -5,10 +5,13 @@ Ports:
     input  X_WB           (7)       estimated trunk pose: quaternion (w, x, y, z), p_WB [m]
                                     (the first 7 entries of the base-state vector)
     input  leg            abstract  str, one of FR, FL, RR, RL
-    input  q_measured     (12)      current joint angles, Unitree motor order [rad]
+    input  q_measured     (12)      joint angles the solve starts from, Unitree motor order [rad]
+                                    (the measured ones, or a client's seed: see below)
     output leg_q_goal     (3)       the selected leg's goal (hip, thigh, calf) [rad]
     output solved         (1)       1.0 if the last solve reached the target within tol, else 0.0
     output ik_error       (1)       foot-to-target distance of the last solve [m]
+    output solved_target_B (3)      the trunk-frame target of the last solve [m] (NaN before the
+                                    first one, or for a non-finite target)
 
 The system solves on an initialization event and on periodic discrete updates, and only when
 the target changed: a different leg, or the foot target expressed in the trunk frame moved by
@@ -17,6 +20,11 @@ below the tolerance does not trigger a solve). The solve starts from the measure
 the selected leg. The memo of the last solved target, the goal and the flags live in the
 discrete state, so the system has no mutable Python members and contexts can be cloned.
 A non-finite target or pose gives solved = 0 and holds the measured leg angles as the goal.
+
+A client that asks for several targets in turn (the MissionManager) reads `solved_target_B` to
+tell the answer to its request from the previous one: the answer is its own once that output is
+within `retarget_tolerance` of the requested trunk-frame target. Such a client may feed its own
+seed into `q_measured` (e.g. the previous waypoint's answer) to chain solves along a path.
 """
 
 import numpy as np
@@ -36,6 +44,9 @@ _SOLVED = 7  # 1.0 or 0.0
 _ERROR = 8  # [m]
 _SOLVE_COUNT = 9  # number of solves so far (diagnostics and tests)
 _STATE_SIZE = 10
+# Trunk-frame target motion that triggers a new solve [m]; also the distance within which a
+# client matches an answer to its request (see the module docstring).
+RETARGET_TOLERANCE = 1e-4
 
 
 class LegIkSystem(LeafSystem):
@@ -47,7 +58,7 @@ class LegIkSystem(LeafSystem):
         period: float = 0.002,
         tol: float = 1e-3,
         max_iterations: int = DEFAULT_MAX_ITERATIONS,
-        retarget_tolerance: float = 1e-4,
+        retarget_tolerance: float = RETARGET_TOLERANCE,
     ):
         """
         Args:
@@ -81,6 +92,9 @@ class LegIkSystem(LeafSystem):
         self._solved = self.DeclareVectorOutputPort("solved", 1, self._calc_solved, prerequisites_of_calc=state_ticket)
         self._ik_error = self.DeclareVectorOutputPort(
             "ik_error", 1, self._calc_ik_error, prerequisites_of_calc=state_ticket
+        )
+        self._solved_target_B = self.DeclareVectorOutputPort(
+            "solved_target_B", 3, self._calc_solved_target_B, prerequisites_of_calc=state_ticket
         )
 
     def _target_in_trunk(self, context: Context) -> np.ndarray:
@@ -136,6 +150,9 @@ class LegIkSystem(LeafSystem):
 
     def _calc_ik_error(self, context: Context, output: BasicVector) -> None:
         output.SetAtIndex(0, self._state(context)[_ERROR])
+
+    def _calc_solved_target_B(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._state(context)[_TARGET_B])
 
     def solve_count(self, context: Context) -> int:
         """How many IK solves this context has seen (diagnostics)."""

@@ -5,6 +5,17 @@ ports (layouts in pedi_drake/control/references.py) and a status vector. The mis
 is one abstract state value (MissionProgress), updated at `period`; references are quintic
 trajectories sampled at output time, so the controller sees smooth references at its own rate.
 
+Joint angles for foot targets come from one LegIkSystem per leg the mission moves (`ik_legs`),
+through ports: the manager asks on `ik_foot_target_W.<leg>` (NaN when it asks nothing), with
+the trunk pose the target was planned in on `ik_X_WB` and the solve's start angles on
+`ik_q_seed`; the IK system answers on its discrete state, read back on `ik_q_goal.<leg>`,
+`ik_solved.<leg>`, `ik_error.<leg>` and `ik_target_B.<leg>`. The answer arrives on a later
+manager tick (the IK updates between the manager's ticks): a phase asks, holds its legs, and
+plans its motion when the answers are in (a path of waypoints takes one tick a waypoint).
+
+`safety_polygon` is the capture-point polygon of the current stance (see
+`phases.stance_safety_polygon`), recomputed at every update from the estimated support points.
+
 A failed phase (IK unreachable, timeout, fall) fails the mission with a reason; the manager then
 places any lifted leg back on the ground ("recovering") and holds the robot standing.
 """
@@ -16,10 +27,18 @@ from pydrake.systems.framework import BasicVector, LeafSystem
 from pedi_drake import robot
 from pedi_drake.control import references as controller_refs
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE, BaseState
-from pedi_drake.exceptions import PediError
+from pedi_drake.exceptions import ConfigError, PediError
 from pedi_drake.fall import trunk_has_fallen
 from pedi_drake.mission import spec
-from pedi_drake.mission.phases import RUNNERS, MissionEnvironment, ReachRunner, kind_name
+from pedi_drake.mission.phases import (
+    RUNNERS,
+    IkAnswer,
+    MissionEnvironment,
+    ReachRunner,
+    kind_name,
+    receive_ik_answers,
+    stance_safety_polygon,
+)
 from pedi_drake.mission.progress import (
     FAILED,
     LEG_MODE_FOOT,
@@ -35,6 +54,18 @@ from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.prongs import ProngDesign
 
 MISSION_STATUS_SIZE = 4  # [phase index, status code, pedipulation active, number of phases]
+_IDENTITY_POSE = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+
+
+def ik_legs_of(mission: spec.MissionSpec) -> tuple[str, ...]:
+    """The legs whose joint angles the mission's phases (and their recovery) ask the IK for."""
+    legs = set()
+    for phase in mission.phases:
+        if isinstance(phase, spec.LegToPedipulation | spec.LegToSupport):
+            legs.add(phase.leg)
+        elif isinstance(phase, spec.Reach):
+            legs.update([phase.leg, *(companion.leg for companion in phase.together)])
+    return tuple(leg for leg in robot.LEG_NAMES if leg in legs)
 
 
 class MissionManager(LeafSystem):
@@ -46,14 +77,32 @@ class MissionManager(LeafSystem):
         *,
         prongs: ProngDesign | None = None,
         friction: float = 0.8,
+        safety_margin: float = 0.03,
         period: float = 0.01,
         force_estimate: str = "joint_torque",
     ):
+        """
+        Args:
+            mission: the phases to run.
+            prongs: the robot's prongs (their tips count as supports when loaded), or None.
+            friction: ground friction coefficient sent to the controller [-].
+            safety_margin: the stance's support polygon is shrunk by this for the capture point [m].
+            period: update period [s].
+        """
         super().__init__()
         self._mission = mission
         self._env = MissionEnvironment(prongs, force_estimate)
         self._friction = friction
+        self._safety_margin = float(safety_margin)
         num_contacts = 4 + self._env.num_prongs
+        if num_contacts > controller_refs.SAFETY_POLYGON_MAX_VERTICES:
+            raise ConfigError(
+                f"robot.prongs: {self._env.num_prongs} prongs; the safety polygon holds at most "
+                f"{controller_refs.SAFETY_POLYGON_MAX_VERTICES} supports (four feet and "
+                f"{controller_refs.SAFETY_POLYGON_MAX_VERTICES - 4} prong tips)"
+            )
+        self.ik_legs = ik_legs_of(mission)
+        self._period = period
         self._base_state = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
         self._position = self.DeclareVectorInputPort("position_measured", 12)
         self._velocity = self.DeclareVectorInputPort("velocity_measured", 12)
@@ -62,7 +111,17 @@ class MissionManager(LeafSystem):
         # Eq. 11 of paper 002 per foot, world [N] (the projected-impedance controller's
         # `force_estimate` diagnostic); unconnected: only the joint-torque estimate exists.
         self._impedance_force = self.DeclareVectorInputPort("foot_force_estimate", 12)
+        self._ik_answer_ports = {
+            leg: (
+                self.DeclareVectorInputPort(f"ik_q_goal.{leg}", 3),
+                self.DeclareVectorInputPort(f"ik_solved.{leg}", 1),
+                self.DeclareVectorInputPort(f"ik_error.{leg}", 1),
+                self.DeclareVectorInputPort(f"ik_target_B.{leg}", 3),
+            )
+            for leg in self.ik_legs
+        }
         self._progress = self.DeclareAbstractState(AbstractValue.Make(MissionProgress()))
+        self._polygon = self.DeclareDiscreteState(controller_refs.SAFETY_POLYGON_SIZE)
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
         # Trajectory samples change with time; the contact set and the status only with the progress
@@ -78,11 +137,17 @@ class MissionManager(LeafSystem):
         self.DeclareVectorOutputPort(
             "contact_set", num_contacts, self._calc_contacts, prerequisites_of_calc=progress_only
         )
+        self.DeclareStateOutputPort("safety_polygon", self._polygon)
+        for leg in self.ik_legs:
+            self.DeclareVectorOutputPort(
+                f"ik_foot_target_W.{leg}",
+                3,
+                lambda context, output, leg=leg: output.SetFromVector(self._ik_target_W(context, leg)),
+                prerequisites_of_calc=progress_only,
+            )
+        self.DeclareVectorOutputPort("ik_X_WB", 7, self._calc_ik_pose, prerequisites_of_calc=progress_only)
         self.DeclareVectorOutputPort(
-            "safety_polygon",
-            controller_refs.SAFETY_POLYGON_SIZE,
-            lambda context, output: output.SetFromVector(np.zeros(controller_refs.SAFETY_POLYGON_SIZE)),
-            prerequisites_of_calc={self.nothing_ticket()},
+            "ik_q_seed", robot.NUM_JOINTS, self._calc_ik_seed, prerequisites_of_calc=progress_only
         )
         self.DeclareVectorOutputPort(
             "friction", 1, lambda c, o: o.SetFromVector([self._friction]), prerequisites_of_calc={self.nothing_ticket()}
@@ -94,6 +159,11 @@ class MissionManager(LeafSystem):
     @property
     def mission(self) -> spec.MissionSpec:
         return self._mission
+
+    @property
+    def period(self) -> float:
+        """Update period [s]."""
+        return self._period
 
     def progress(self, context) -> MissionProgress:
         """The mission's progress in `context` (this system's context)."""
@@ -121,12 +191,30 @@ class MissionManager(LeafSystem):
         progress = MissionProgress(phase_start=view.time)
         progress.references = References.holding(view.base.p_WB, view.X_WB.rotation(), view.time, self._env.num_prongs)
         state.get_mutable_abstract_state(self._progress).set_value(progress)
+        # The polygon stays the default (zeros) until the first update: the estimate seen here
+        # may not be initialised yet (see `_update`).
+
+    def _set_polygon(self, state, view: RobotView, progress: MissionProgress) -> None:
+        polygon = stance_safety_polygon(view, self._env, progress.references.contacts, self._safety_margin)
+        state.get_mutable_discrete_state(self._polygon).SetFromVector(polygon)
+
+    def _ik_answers(self, context) -> dict[str, IkAnswer]:
+        answers = {}
+        for leg, (q_goal, solved, error, target_B) in self._ik_answer_ports.items():
+            answers[leg] = IkAnswer(
+                q=np.asarray(q_goal.Eval(context), float),
+                solved=bool(solved.Eval(context)[0] > 0.5),
+                error=float(error.Eval(context)[0]),
+                target_B=np.asarray(target_B.Eval(context), float),
+            )
+        return answers
 
     def _update(self, context, state) -> None:
         progress = self.progress(context).copy()
-        if progress.status in (SUCCEEDED, FAILED):
-            return
         view = self._view(context)
+        if progress.status in (SUCCEEDED, FAILED):
+            self._set_polygon(state, view, progress)  # the robot still stands on whatever it stands on
+            return
         phases = self._mission.phases if progress.status == RUNNING else progress.recovery
         phase = phases[progress.index]
         runner = RUNNERS[type(phase)]
@@ -147,6 +235,8 @@ class MissionManager(LeafSystem):
                 outcome, progress.reason = FAILED, str(error)
         if outcome == RUNNING:
             try:
+                if progress.ik is not None and not progress.ik.done:
+                    progress.ik = receive_ik_answers(progress.ik, self._ik_answers(context))
                 outcome = runner.step(phase, progress, view, self._env)
             except PediError as error:
                 outcome, progress.reason = FAILED, str(error)
@@ -154,10 +244,16 @@ class MissionManager(LeafSystem):
             detail = ReachRunner.timeout_reason(phase, progress) if isinstance(phase, spec.Reach) else "not done"
             outcome, progress.reason = FAILED, f"{phase.name}: timed out after {phase.timeout:.1f} s ({detail})"
         if outcome == RUNNING and self._fell(view, progress):
-            outcome, progress.reason = FAILED, f"{phase.name}: the robot fell (trunk height or tilt out of range)"
+            # The manager sees only the estimate: the judge compares this with what the robot did.
+            outcome = FAILED
+            progress.reason = (
+                f"{phase.name}: the state estimate says the robot fell (trunk height or tilt out of range)"
+            )
+            progress.records[-1].metrics["estimate_fell"] = True
         if outcome != RUNNING:
             self._finish_phase(progress, phases, outcome, view)
         state.get_mutable_abstract_state(self._progress).set_value(progress)
+        self._set_polygon(state, view, progress)
 
     def _fell(self, view: RobotView, progress: MissionProgress) -> bool:
         standing_started = any(r.kind == "stand_up" and r.status == SUCCEEDED for r in progress.records)
@@ -176,7 +272,7 @@ class MissionManager(LeafSystem):
         record.status, record.t_end = outcome, view.time
         if outcome == FAILED:
             record.reason = progress.reason
-        progress.started = False
+        progress.started, progress.ik = False, None
         if outcome == SUCCEEDED:
             progress.index += 1
             if progress.index < len(phases):
@@ -226,6 +322,23 @@ class MissionManager(LeafSystem):
                 np.zeros(3),
             )
         output.SetFromVector(controller_refs.leg_reference_vector(entries))
+
+    def _ik_target_W(self, context, leg: str) -> np.ndarray:
+        """The world-frame foot target `leg` is asked for; NaN when nothing is asked."""
+        plan = self.progress(context).ik
+        p_B = plan.pending(leg) if plan is not None else None
+        if p_B is None:
+            return np.full(3, np.nan)
+        pose = BaseState(plan.X_WB[0:4], plan.X_WB[4:7], np.zeros(3), np.zeros(3)).pose()
+        return pose @ p_B
+
+    def _calc_ik_pose(self, context, output: BasicVector) -> None:
+        plan = self.progress(context).ik
+        output.SetFromVector(_IDENTITY_POSE if plan is None else plan.X_WB)
+
+    def _calc_ik_seed(self, context, output: BasicVector) -> None:
+        plan = self.progress(context).ik
+        output.SetFromVector(robot.STANDING_Q if plan is None else plan.q_seed)
 
     def _calc_contacts(self, context, output: BasicVector) -> None:
         output.SetFromVector(self.progress(context).references.contacts)

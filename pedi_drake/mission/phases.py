@@ -6,15 +6,17 @@ or potential failure". A runner is stateless: `start` and `step` read and write 
 MissionProgress they are given (held in the MissionManager's Context).
 """
 
+import dataclasses
 import math
 
 import numpy as np
 from pydrake.math import RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
-from pedi_drake.control.tasks import orientation_error_W
+from pedi_drake.control.references import safety_polygon_vector
+from pedi_drake.control.tasks import orientation_error_W, shrink_polygon
 from pedi_drake.exceptions import UnreachableTarget
-from pedi_drake.ik.fabrik import solve_leg_ik
+from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
 from pedi_drake.mission import spec
 from pedi_drake.mission.progress import (
@@ -24,6 +26,7 @@ from pedi_drake.mission.progress import (
     LEG_MODE_JOINTS,
     RUNNING,
     SUCCEEDED,
+    IkPlan,
     LegTrajectory,
     MissionProgress,
 )
@@ -82,6 +85,27 @@ def _support_points_W(view: RobotView, env: MissionEnvironment, contacts: np.nda
     return np.array(points)
 
 
+def stance_safety_polygon(view: RobotView, env: MissionEnvironment, contacts: np.ndarray, margin: float) -> np.ndarray:
+    """The controller's `safety_polygon` for the loaded contacts (three feet: a triangle).
+
+    Their support polygon (prong tips included) shrunk by `margin` [m], in a frame at the shrunk
+    polygon's vertex centroid turned to the trunk's heading. With fewer than three supports, or
+    nothing left after the shrink, the controller's default (an empty polygon vector).
+    """
+    points = _support_points_W(view, env, contacts)
+    if len(points) < 3:
+        return safety_polygon_vector()
+    vertices_W = shrink_polygon(points[:, :2], margin)
+    if len(vertices_W) < 3:
+        return safety_polygon_vector()
+    origin = vertices_W.mean(axis=0)
+    yaw = RollPitchYaw(view.X_WB.rotation()).yaw_angle()
+    c, s = math.cos(yaw), math.sin(yaw)
+    # Rows are vertices: (v - origin) R_WP, i.e. R_PW (v - origin) for each.
+    vertices_P = (vertices_W - origin) @ np.array([[c, -s], [s, c]])
+    return safety_polygon_vector(vertices_P, origin, yaw)
+
+
 def _trunk_target_for_com(view: RobotView, p_body_ref: np.ndarray, com_xy_goal: np.ndarray) -> np.ndarray:
     """Trunk position reference that puts the CoM's ground projection at `com_xy_goal` [m]."""
     offset = view.com_W() - view.base.p_WB
@@ -90,19 +114,75 @@ def _trunk_target_for_com(view: RobotView, p_body_ref: np.ndarray, com_xy_goal: 
     return target
 
 
-def _ik(leg: str, p_B: np.ndarray, q_init: np.ndarray, what: str) -> np.ndarray:
-    result = solve_leg_ik(leg, np.asarray(p_B, float), q_init, tol=5e-4)
-    if not result.success:
-        raise UnreachableTarget(
-            f"{what}: IK for {leg} found no joint angles within the limits for the foot target "
-            f"{np.round(p_B, 3).tolist()} m (trunk frame); closest miss {result.error * 1000:.1f} mm"
-        )
-    return result.q
+@dataclasses.dataclass(frozen=True)
+class IkAnswer:
+    """One leg IK system's last answer (its output ports, see pedi_drake.ik.leg_ik_system)."""
+
+    q: np.ndarray  # (3,) goal (hip, thigh, calf) [rad]
+    solved: bool
+    error: float  # foot-to-target distance [m]
+    target_B: np.ndarray  # (3,) the trunk-frame target it answers [m]
+
+
+def _ask_ik(progress: MissionProgress, view: RobotView, targets_B: dict[str, list], what: str) -> None:
+    """Asks the leg IK systems for the joint angles of `targets_B` (per leg, trunk frame, in order).
+
+    The answers arrive over the manager's ports on later ticks (`receive_ik_answers`); the phase
+    reads them with `_ik_solutions` and meanwhile holds its legs where their references are.
+    """
+    pose = np.concatenate([view.base.quaternion_wxyz, view.base.p_WB])
+    progress.ik = IkPlan.ask(what, pose, targets_B, view.q)
+
+
+def _ik_solutions(progress: MissionProgress) -> dict[str, tuple[np.ndarray, ...]] | None:
+    """Per leg, the joint angles of every asked target once all have arrived (closing the request)."""
+    plan = progress.ik
+    if plan is None or not plan.done:
+        return None
+    progress.ik = None
+    return plan.solutions
+
+
+def receive_ik_answers(plan: IkPlan, answers: dict[str, IkAnswer]) -> IkPlan:
+    """`plan` with every answer that matches its leg's pending target taken in.
+
+    An answer to an earlier target (the IK system has not seen the request yet) is left for a
+    later tick. Raises UnreachableTarget for an answered target that the IK could not reach.
+    """
+    for leg, answer in answers.items():
+        p_B = plan.pending(leg)
+        if p_B is None or not np.all(np.abs(answer.target_B - p_B) <= RETARGET_TOLERANCE):
+            continue
+        if not answer.solved:
+            raise UnreachableTarget(
+                f"{plan.what}: IK for {leg} found no joint angles within the limits for the foot target "
+                f"{np.round(p_B, 3).tolist()} m (trunk frame); closest miss {answer.error * 1000:.1f} mm"
+            )
+        plan = plan.answered(leg, answer.q, robot.leg_slice(leg))
+    return plan
 
 
 def _to_trunk(view: RobotView, point, frame: str) -> np.ndarray:
     point = np.asarray(point, float)
     return view.X_WB.inverse() @ point if frame == "world" else point
+
+
+def target_problem(p_W: np.ndarray, X_WB) -> str | None:
+    """Why no foot can be at `p_W` (a foot centre in the world, trunk at X_WB), or None.
+
+    The ground is the plane z = 0, so a foot centre lower than its radius is in the floor; a foot
+    centre within a radius of the trunk's box is inside the robot.
+    """
+    p_W = np.asarray(p_W, float)
+    if p_W[2] < robot.FOOT_RADIUS:
+        return (
+            f"target below the floor: the foot centre would be at z = {p_W[2]:.3f} m in the world, "
+            f"below the foot radius ({robot.FOOT_RADIUS} m) above the ground"
+        )
+    p_B = X_WB.inverse() @ p_W
+    if np.all(np.abs(p_B) < np.asarray(robot.TRUNK_HALF_EXTENTS) + robot.FOOT_RADIUS):
+        return f"target inside the robot: {np.round(p_B, 3).tolist()} m in the trunk frame is within the trunk"
+    return None
 
 
 def _foot_error(view: RobotView, leg: str, target_W: np.ndarray) -> float:
@@ -157,6 +237,8 @@ class BodyMoveRunner(PhaseRunner):
     def start(self, phase, progress, view, env):
         p_now, _ = _body_sample(progress, view.time)
         goal = p_now + np.asarray(phase.offset)
+        if phase.height is not None:
+            goal[2] = phase.height
         _move_body(progress, view.time, goal, None, phase.duration)
         progress.memo["goal"] = goal
 
@@ -269,14 +351,18 @@ class LegToPedipulationRunner(PhaseRunner):
         k = robot.LEG_NAMES.index(leg)
         if memo["stage"] == "shift" and t >= t0 + SHIFT_DURATION:
             refs.contacts[k] = 0.0
-            memo.update(stage="release", t_release=t)
-        elif memo["stage"] == "release" and t >= memo["t_release"] + CONTACT_RAMP_WAIT:
+            # The working pose's joint angles are asked now, to be there when the force has ramped away.
             geometry = leg_geometry(leg)
             p_work_B = geometry.p_BH + geometry.p_HT - np.array([0.0, 0.0, phase.working_depth])
-            q_goal = _ik(leg, p_work_B, view.leg_q(leg), phase.name)
-            lift = PiecewiseQuintic.through(np.array([view.leg_q(leg), q_goal]), t, [phase.duration])
+            _ask_ik(progress, view, {leg: [p_work_B]}, phase.name)
+            memo.update(stage="release", t_release=t, p_work_B=p_work_B)
+        elif memo["stage"] == "release" and t >= memo["t_release"] + CONTACT_RAMP_WAIT:
+            solutions = _ik_solutions(progress)
+            if solutions is None:
+                return RUNNING
+            lift = PiecewiseQuintic.through(np.array([view.leg_q(leg), solutions[leg][0]]), t, [phase.duration])
             refs.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, lift)
-            memo.update(stage="lift", t_lift_end=t + phase.duration, p_work_B=p_work_B)
+            memo.update(stage="lift", t_lift_end=t + phase.duration)
         elif memo["stage"] == "lift" and t >= memo["t_lift_end"]:
             error = float(np.linalg.norm(view.foot_B(leg) - memo["p_work_B"]))
             if error < 0.01:
@@ -305,30 +391,42 @@ class ReachRunner(PhaseRunner):
                 raise UnreachableTarget(
                     f"{phase.name}: {leg} is not in pedipulation mode (add leg_to_pedipulation first)"
                 )
-        plans = []
+        targets_B, targets_W = {}, {}
         for leg, target, via_points in legs:
             points = [np.asarray(p, float) for p in via_points]
             if phase.approach_offset:
                 points.append(np.asarray(target) + np.asarray(phase.approach_offset))
             points.append(np.asarray(target, float))
-            q, waypoints = view.leg_q(leg), [view.leg_q(leg)]
             for point in points:
-                q = _ik(leg, _to_trunk(view, point, phase.frame), q, phase.name)
-                waypoints.append(q)
-            target_W = np.asarray(target, float) if phase.frame == "world" else view.X_WB @ points[-1]
-            plans.append((leg, np.array(waypoints), target_W))
+                problem = target_problem(point if phase.frame == "world" else view.X_WB @ point, view.X_WB)
+                if problem is not None:
+                    raise UnreachableTarget(f"{phase.name}: {leg}: {problem}")
+            targets_B[leg] = [_to_trunk(view, point, phase.frame) for point in points]
+            targets_W[leg] = np.asarray(target, float) if phase.frame == "world" else view.X_WB @ points[-1]
+        _ask_ik(progress, view, targets_B, phase.name)
+        # The motion starts once the IK has answered (`t_arrive` is set then).
+        progress.memo.update(t_arrive=math.inf, target_W=targets_W[phase.leg], targets_W=targets_W, t_ok=None)
+
+    @staticmethod
+    def _plan(phase, progress, view) -> None:
+        """Joint-space quintics through the answered waypoints, every leg over the same span."""
+        solutions = _ik_solutions(progress)
+        if solutions is None:
+            return
+        plans = [(leg, np.array([view.leg_q(leg), *solutions[leg]])) for leg in progress.memo["targets_W"]]
         # Every leg spans the time of the leg with the most segments (`duration` per segment).
         t = view.time
-        span = phase.duration * max(len(waypoints) - 1 for _, waypoints, _ in plans)
-        for leg, waypoints, _ in plans:
+        span = phase.duration * max(len(waypoints) - 1 for _, waypoints in plans)
+        for leg, waypoints in plans:
             n = len(waypoints) - 1
             trajectory = PiecewiseQuintic.through(waypoints, t, [span / n] * n)
             progress.references.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
-        targets = {leg: target_W for leg, _, target_W in plans}
-        progress.memo.update(t_arrive=t + span, target_W=targets[phase.leg], targets_W=targets, t_ok=None)
+        progress.memo["t_arrive"] = t + span
 
     def step(self, phase, progress, view, env):
         memo = progress.memo
+        if memo["t_arrive"] == math.inf:
+            self._plan(phase, progress, view)
         errors = {leg: _foot_error(view, leg, target_W) for leg, target_W in memo["targets_W"].items()}
         record = progress.records[-1]
         # The main leg's figures at the top level, every leg's in `legs`.
@@ -428,20 +526,24 @@ class LegToSupportRunner(PhaseRunner):
         # phase switches the foot to a contact as soon as its sensor feels the floor.
         ground = np.array([p_WF[0], p_WF[1], robot.FOOT_RADIUS - PLACE_DEPTH])
         above = ground + [0.0, 0.0, 0.05]
-        q_above = _ik(leg, view.X_WB.inverse() @ above, view.leg_q(leg), phase.name)
-        q_ground = _ik(leg, view.X_WB.inverse() @ ground, q_above, phase.name)
-        t = view.time
-        trajectory = PiecewiseQuintic.through(
-            np.array([view.leg_q(leg), q_above, q_ground]), t, [phase.duration, 0.6 * phase.duration]
-        )
-        progress.references.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
-        progress.memo.update(
-            stage="place", footprint_W=ground, t_above=t + phase.duration, t_down=t + 1.6 * phase.duration
-        )
+        X_BW = view.X_WB.inverse()
+        _ask_ik(progress, view, {leg: [X_BW @ above, X_BW @ ground]}, phase.name)
+        progress.memo.update(stage="plan", footprint_W=ground)
 
     def step(self, phase, progress, view, env):
         t, leg, memo, refs = view.time, phase.leg, progress.memo, progress.references
         k = robot.LEG_NAMES.index(leg)
+        if memo["stage"] == "plan":
+            solutions = _ik_solutions(progress)
+            if solutions is None:
+                return RUNNING
+            q_above, q_ground = solutions[leg]
+            trajectory = PiecewiseQuintic.through(
+                np.array([view.leg_q(leg), q_above, q_ground]), t, [phase.duration, 0.6 * phase.duration]
+            )
+            refs.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
+            memo.update(stage="place", t_above=t + phase.duration, t_down=t + 1.6 * phase.duration)
+            return RUNNING
         # A touch counts only on the way down from above the footprint: before that, the foot
         # sensor may still feel whatever the foot was pushing (an obstacle, a box).
         touched = t >= memo["t_above"] and view.foot_force[k] > CONTACT_FORCE_THRESHOLD

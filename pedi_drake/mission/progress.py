@@ -56,6 +56,45 @@ class References:
         )
 
 
+@dataclasses.dataclass(frozen=True)
+class IkPlan:
+    """Foot targets a phase waits on the leg IK systems to turn into joint angles.
+
+    Each leg's targets are asked one at a time, in order: the next is asked once the answer to
+    the previous has arrived (one manager tick later) and starts from that answer, so a path of
+    waypoints gets continuous joint solutions. Legs are asked in parallel.
+    """
+
+    what: str  # the asking phase's name, for the failure message
+    X_WB: np.ndarray  # (7,) trunk pose [quaternion wxyz, p_WB [m]] the targets are expressed in
+    targets_B: dict[str, tuple[np.ndarray, ...]]  # per leg, foot-centre targets in the trunk frame [m]
+    q_seed: np.ndarray  # (12,) start of every leg's next solve, Unitree order [rad]
+    solutions: dict[str, tuple[np.ndarray, ...]]  # per leg, the joint angles answered so far [rad]
+
+    @staticmethod
+    def ask(what: str, X_WB: np.ndarray, targets_B: dict[str, list], q: np.ndarray) -> "IkPlan":
+        targets = {leg: tuple(np.asarray(p, float) for p in points) for leg, points in targets_B.items()}
+        return IkPlan(what, np.asarray(X_WB, float), targets, np.asarray(q, float).copy(), {leg: () for leg in targets})
+
+    def pending(self, leg: str) -> np.ndarray | None:
+        """The trunk-frame target `leg` is waiting on, or None."""
+        done = len(self.solutions.get(leg, ()))
+        targets = self.targets_B.get(leg, ())
+        return targets[done] if done < len(targets) else None
+
+    def answered(self, leg: str, q_leg: np.ndarray, leg_slice: slice) -> "IkPlan":
+        """The plan with `q_leg` [rad] as the answer to `leg`'s pending target (and its next seed)."""
+        q_seed = self.q_seed.copy()
+        q_seed[leg_slice] = q_leg
+        solutions = dict(self.solutions)
+        solutions[leg] = solutions[leg] + (np.asarray(q_leg, float).copy(),)
+        return dataclasses.replace(self, q_seed=q_seed, solutions=solutions)
+
+    @property
+    def done(self) -> bool:
+        return all(self.pending(leg) is None for leg in self.targets_B)
+
+
 @dataclasses.dataclass
 class PhaseRecord:
     """A finished (or running) phase, as reported in result.json."""
@@ -84,6 +123,8 @@ class MissionProgress:
     records: list[PhaseRecord] = dataclasses.field(default_factory=list)
     # Recovery after a failure: the phases still to run to reach a safe posture.
     recovery: list = dataclasses.field(default_factory=list)
+    # Foot targets waiting for joint angles from the leg IK systems (None: nothing asked).
+    ik: IkPlan | None = None
 
     def copy(self) -> "MissionProgress":
         """An independent deep copy: the one to change (a progress in a Context is never changed)."""

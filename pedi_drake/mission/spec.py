@@ -6,6 +6,8 @@ A mission file is YAML:
     scene:                       # scene objects (pedi_drake.scenario.SceneObject)
       - {kind: target_panel, position: [0.46, -0.13, 0.0], yaw: 3.14159}
     robot: {prongs: null}        # optional: the robot variant the mission needs
+    pushes:                      # optional: disturbances (pedi_drake.scenario.Push), simulation only
+      - {force: 30.0, direction: [0.0, -1.0, 0.0], start: 6.0, ramp: 0.5, duration: 5.0}
     phases:
       - {kind: stand_up}
       - {kind: leg_to_pedipulation, leg: FR}
@@ -26,8 +28,8 @@ from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import FORCE_ESTIMATES
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.resources import missions_dir
-from pedi_drake.robot import LEG_NAMES
-from pedi_drake.scenario import RobotConfig, SceneObject
+from pedi_drake.robot import FOOT_RADIUS, LEG_NAMES
+from pedi_drake.scenario import Push, RobotConfig, SceneObject, resolve_model_path, scene_problems
 
 FRAMES = ("world", "trunk")
 
@@ -61,9 +63,12 @@ class LieDown(PhaseBase):
 
 @dataclasses.dataclass
 class BodyMove(PhaseBase):
-    """Moves the trunk by `offset` (world frame, from the phase's start pose) [m]."""
+    """Moves the trunk by `offset` (world frame, from the phase's start pose) [m]; with `height`,
+    to that trunk height above the ground instead of by the offset's z."""
 
     offset: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+    # Trunk height above the ground at the end of the move [m]; unset: start height + offset z.
+    height: float | None = None
     duration: float = 1.0
     # Success when the trunk is within this distance of its target [m].
     tolerance: float = 0.01
@@ -243,6 +248,8 @@ class MissionSpec:
     robot: RobotConfig | None
     source: str  # the file it came from
     force_estimate: str = ""  # "joint_torque" or "impedance"; empty: the scenario's
+    # Disturbances of the simulated world during the mission (added to the scenario's).
+    pushes: list[Push] = dataclasses.field(default_factory=list)
 
     def longest_duration(self) -> float:
         """Simulated time [s] the mission can take at most: every phase running to its timeout,
@@ -259,7 +266,14 @@ class _MissionFile:
     robot: RobotConfig | None = None
     # The foot force estimate press phases use: "joint_torque" or "impedance"; empty: the scenario's.
     force_estimate: str = ""
+    pushes: list[Push] = dataclasses.field(default_factory=list)
     phases: list[dict] = dataclasses.field(default_factory=list)
+
+
+# The controller demonstrations (pedi_drake.benchmarks.demos) live in this subfolder of the
+# missions: they start standing and run on the scenarios of scenarios/wbc_demos.yaml, so they are
+# not part of the library that runs on the default scenario.
+DEMOS_FOLDER = "demos"
 
 
 def shipped_missions() -> list[str]:
@@ -267,17 +281,36 @@ def shipped_missions() -> list[str]:
     return sorted(path.stem for path in missions_dir().glob("*.yaml"))
 
 
+# Longest mission name [characters]: it names the out dir, and file names stop at 255 bytes.
+MAX_MISSION_NAME = 100
+
+
+def shipped_demos() -> list[str]:
+    """Names ("demos/<name>") of the shipped controller demonstrations, as load_mission takes them."""
+    return sorted(f"{DEMOS_FOLDER}/{path.stem}" for path in (missions_dir() / DEMOS_FOLDER).glob("*.yaml"))
+
+
 def resolve_mission(name_or_path: str) -> Path:
     """A shipped mission's file from its name, or the given YAML path."""
     path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml"):
-        if not path.exists():
-            raise MissionFileError(f"{path}: mission file not found")
-        return path
-    candidate = missions_dir() / f"{name_or_path}.yaml"
-    if not candidate.exists():
+    shown = name_or_path if len(name_or_path) <= 80 else name_or_path[:77] + "..."
+    if len(path.stem) > MAX_MISSION_NAME:
         raise MissionFileError(
-            f"unknown mission {name_or_path!r}; shipped missions: {', '.join(shipped_missions())}, or give a .yaml path"
+            f"mission {shown!r}: name is {len(path.stem)} characters long; at most {MAX_MISSION_NAME} "
+            "(it names the output folder)"
+        )
+    try:
+        if path.suffix in (".yaml", ".yml"):
+            if not path.is_file():
+                raise MissionFileError(f"{path}: mission file not found")
+            return path
+        candidate = missions_dir() / f"{name_or_path}.yaml"
+        found = candidate.is_file()
+    except OSError as error:  # a path the file system cannot look up (too long, bad characters)
+        raise MissionFileError(f"mission {shown!r}: cannot be looked up ({error.strerror})") from None
+    if not found:
+        raise MissionFileError(
+            f"unknown mission {shown!r}; shipped missions: {', '.join(shipped_missions())}, or give a .yaml path"
         )
     return candidate
 
@@ -324,6 +357,15 @@ def load_mission(name_or_path: str) -> MissionSpec:
         raise MissionFileError(
             f"{where}: force_estimate: must be one of {FORCE_ESTIMATES} (or absent), got {header.force_estimate!r}"
         )
+    for problem in scene_problems(header.scene, path.parent):
+        raise MissionFileError(f"{where}: {problem}")
+    for obj in header.scene:
+        # A mission's own model files sit beside it: resolved now, not against the current folder.
+        if obj.model and not obj.model.startswith("package://"):
+            obj.model = str(resolve_model_path(obj.model, path.parent).resolve())
+    for i, push in enumerate(header.pushes):
+        for field, problem in push.problems():
+            raise MissionFileError(f"{where}: pushes[{i}].{field}: {problem}")
     raw_phases = raw.get("phases")
     if not isinstance(raw_phases, list) or not raw_phases:
         raise MissionFileError(f"{where}: phases: expected a non-empty list of phases")
@@ -354,6 +396,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
         robot=header.robot,
         source=where,
         force_estimate=header.force_estimate,
+        pushes=header.pushes,
     )
 
 
@@ -381,6 +424,21 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         for k, point in enumerate(phase.via_points):
             need(len(point) == 3, f"via_points[{k}]", f"expected [x, y, z] in metres, got {point}")
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+        if phase.frame == "world":
+            # The ground is z = 0: a foot centre below its radius would be in the floor.
+            points = {"target": phase.target, **{f"via_points[{k}]": p for k, p in enumerate(phase.via_points)}}
+            if phase.approach_offset:
+                points["approach_offset"] = [a + b for a, b in zip(phase.target, phase.approach_offset, strict=True)]
+            for k, companion in enumerate(phase.together):
+                if len(companion.target) == 3:
+                    points[f"together[{k}].target"] = companion.target
+            for field, point in points.items():
+                need(
+                    len(point) != 3 or point[2] >= FOOT_RADIUS,
+                    field,
+                    f"target below the floor: z = {point[2]} m puts the foot centre less than its radius "
+                    f"({FOOT_RADIUS} m) above the ground (z = 0)",
+                )
         legs = [phase.leg]
         for k, companion in enumerate(phase.together):
             field = f"together[{k}]"

@@ -10,6 +10,7 @@ from pydrake.systems.framework import Diagram, DiagramBuilder
 
 from pedi_drake import robot
 from pedi_drake.scenario import Scenario
+from pedi_drake.station.disturbance import PushDisturbance
 from pedi_drake.station.initial_state import initial_trunk_pose, set_default_go1_state
 from pedi_drake.station.motor_model import Go1MotorModel
 from pedi_drake.station.scene import add_ground, add_scene_object
@@ -55,6 +56,10 @@ def MakeSimulationStation(scenario: Scenario, meshcat: Meshcat | None = None) ->
     for name in GO1_OUTPUT_PORTS:
         builder.ExportOutput(sensors.GetOutputPort(name.removeprefix("go1.")), name)
 
+    # The world's disturbances: the plant's applied forces come from the scenario only.
+    pushes = builder.AddNamedSystem("pushes", PushDisturbance(plant, scenario.pushes))
+    builder.Connect(pushes.forces_port, plant.get_applied_spatial_force_input_port())
+
     feet = builder.AddNamedSystem("foot_contact_forces", FootContactForces(plant, plant_map))
     builder.Connect(plant.get_contact_results_output_port(), feet.GetInputPort("contact_results"))
     builder.ExportOutput(feet.GetOutputPort("foot_contact_forces"), "sim.foot_contact_forces")
@@ -62,7 +67,7 @@ def MakeSimulationStation(scenario: Scenario, meshcat: Meshcat | None = None) ->
     builder.ExportOutput(plant.get_contact_results_output_port(), "sim.contact_results")
     builder.ExportOutput(plant.get_body_poses_output_port(), "sim.body_poses")
     builder.ExportOutput(motors.GetOutputPort("torque"), "sim.motor_torque")
-    builder.ExportInput(plant.get_applied_spatial_force_input_port(), "sim.applied_spatial_force")
+    builder.ExportOutput(pushes.push_force_port, "sim.push_force")
     builder.ExportOutput(scene_graph.get_query_output_port(), "sim.query_object")
 
     if meshcat is not None:

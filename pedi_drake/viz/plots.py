@@ -109,7 +109,8 @@ def plot_mission_errors(t, states, body_reference, status, plant, result: dict, 
     ax_foot.set_ylabel("foot error [mm]")
     ax_foot.set_yscale("log")
     ax_foot.grid(alpha=0.3)
-    ax_foot.legend(fontsize=8)
+    if ax_foot.lines:  # a mission without reach phases has no foot errors to name
+        ax_foot.legend(fontsize=8)
     ax_drift.plot(t[:n], 1000 * drift, color="tab:purple")
     active = status[2, :n] > 0.5
     ax_drift.fill_between(

@@ -1,0 +1,280 @@
+"""A study: what varies across many runs, read from a YAML file and expanded into tasks.
+
+    name: friction_robustness          # names the results file
+    kind: mission                      # mission (simulate and judge) | suf (a prong design) | noop
+    base:                              # the scenario every task starts from (optional)
+      scenario_name: default           #   a name in scenario_file (default: the shipped file)
+      scenario_text: "{simulation_duration: 60.0}"
+    design: grid                       # grid: every combination of the factors; list: zipped
+    timeout: 600                       # per task, wall time [s]
+    factors:
+      - {name: mission, values: [hit_target_front, open_door]}    # or `values: shipped`
+      - {name: ground_friction, range: {start: 0.4, stop: 1.0, num: 4}}
+      - {name: seed, field: random_seed, random: {low: 0, high: 1000, count: 3, seed: 7, integer: true}}
+      - name: noise                    # a value may set several fields at once
+        values:
+          - {random_seed: 0, sensor_noise.enabled: false}
+          - {random_seed: 1, sensor_noise.enabled: true}
+
+A factor sets the scenario field `field` (default: its name; dotted for nested fields, e.g.
+`sensor_noise.enabled`, `whole_body.stack`, `robot.prongs`), or, when a value is a mapping,
+every field of that mapping. For `kind: suf` the fields are those of `SufDesign` (trunk height,
+feet, prongs, method). Every task's settings are checked when the study is loaded, so a bad
+study file stops before any task starts.
+"""
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+from pydrake.common.yaml import yaml_load
+
+from pedi_drake.exceptions import ConfigError
+from pedi_drake.mission.spec import load_mission, shipped_missions
+from pedi_drake.scenario import Scenario, apply_scenario_text, load_scenario
+
+KINDS = ("mission", "suf", "noop")
+DESIGNS = ("grid", "list")
+SUF_METHODS = ("exact", "single", "fibonacci", "affine", "quadratic")
+
+
+class StudyError(ConfigError):
+    """A study file that cannot be run (the message names the file and the field)."""
+
+
+@dataclasses.dataclass
+class SufDesign:
+    """One prong design evaluation of a `kind: suf` study (see pedi_drake.suf.design)."""
+
+    trunk_height: float = 0.27  # [m]
+    feet_x: float = 0.19  # feet at (+-feet_x, +-feet_y) in the trunk frame [m]
+    feet_y: float = 0.13  # [m]
+    prongs: bool = True  # the two prong tips carry load besides the three stance feet
+    method: str = "affine"  # SUF method (SUF_METHODS)
+    optimise_feet: bool = False  # choose feet_x, feet_y that maximise the SUF at this height
+
+
+@dataclasses.dataclass
+class NoopTask:
+    """A `kind: noop` task: it only waits, to measure an engine's own cost per task."""
+
+    duration_s: float = 0.0  # how long the task sleeps [s]
+
+
+@dataclasses.dataclass(frozen=True)
+class Task:
+    """One run of a study: its settings (field -> value) and a stable id for resuming."""
+
+    study: str
+    kind: str
+    index: int
+    factors: dict  # factor name -> the value it took (for the results' columns)
+    settings: dict  # field -> value (scenario fields, or SufDesign fields)
+    base: dict  # scenario_file, scenario_name, scenario_text
+    timeout: float  # [s]
+
+    @property
+    def task_id(self) -> str:
+        text = json.dumps([self.kind, self.base, self.settings], sort_keys=True, default=str)
+        return hashlib.sha1(text.encode()).hexdigest()[:12]
+
+
+@dataclasses.dataclass
+class Study:
+    name: str
+    kind: str
+    tasks: list[Task]
+    factor_names: list[str]
+    source: str  # the file it came from
+
+
+def _values(raw: dict, where: str, missions_ok: bool) -> list:
+    keys = [k for k in ("values", "range", "random") if k in raw]
+    if len(keys) != 1:
+        raise StudyError(f"{where}: give exactly one of values, range, random (got {keys or 'none'})")
+    key = keys[0]
+    spec = raw[key]
+    if key == "values":
+        if spec == "shipped" and missions_ok:
+            return shipped_missions()
+        if not isinstance(spec, list) or not spec:
+            raise StudyError(f"{where}.values: a non-empty list (or `shipped` for missions), got {spec!r}")
+        return list(spec)
+    if not isinstance(spec, dict):
+        raise StudyError(f"{where}.{key}: a mapping, got {spec!r}")
+    if key == "range":
+        unknown = set(spec) - {"start", "stop", "num"}
+        if unknown or not {"start", "stop", "num"} <= set(spec):
+            raise StudyError(f"{where}.range: needs start, stop, num (and nothing else), got {sorted(spec)}")
+        start, stop, num = spec["start"], spec["stop"], spec["num"]
+        if not (isinstance(num, int) and num >= 1):
+            raise StudyError(f"{where}.range.num: a whole number >= 1, got {num!r}")
+        if not all(isinstance(v, int | float) and math.isfinite(v) for v in (start, stop)):
+            raise StudyError(f"{where}.range: start and stop must be finite numbers")
+        return [float(v) for v in np.linspace(start, stop, num)]
+    unknown = set(spec) - {"low", "high", "count", "seed", "integer"}
+    if unknown or not {"low", "high", "count"} <= set(spec):
+        raise StudyError(f"{where}.random: needs low, high, count (optional seed, integer), got {sorted(spec)}")
+    low, high, count = spec["low"], spec["high"], spec["count"]
+    if not (isinstance(count, int) and count >= 1):
+        raise StudyError(f"{where}.random.count: a whole number >= 1, got {count!r}")
+    if not (isinstance(low, int | float) and isinstance(high, int | float) and low < high):
+        raise StudyError(f"{where}.random: low < high, got low {low!r}, high {high!r} (an empty range)")
+    rng = np.random.default_rng(spec.get("seed", 0))
+    if spec.get("integer", False):
+        return [int(v) for v in rng.integers(int(low), int(high), size=count)]
+    return [float(v) for v in rng.uniform(low, high, size=count)]
+
+
+def _nested(settings: dict) -> dict:
+    """{'a.b': 1} -> {'a': {'b': 1}}."""
+    out: dict = {}
+    for path, value in settings.items():
+        node = out
+        parts = path.split(".")
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+        node[parts[-1]] = value
+    return out
+
+
+def scenario_text_for(settings: dict) -> str:
+    """The --scenario_text-style YAML mapping (as JSON, which YAML reads) of a task's scenario fields."""
+    settings = dict(settings)
+    if "mission" in settings and "controller" not in settings:
+        settings["controller"] = "whole_body"
+    return json.dumps(_nested(settings))
+
+
+def _check_field(path: str, kind: str, where: str) -> None:
+    schema = {"suf": SufDesign, "noop": NoopTask}.get(kind, Scenario)
+    node = schema
+    for part in path.split("."):
+        fields = {f.name: f for f in dataclasses.fields(node)} if dataclasses.is_dataclass(node) else None
+        if fields is None:
+            return  # below a mapping-typed field (lcm_buses, ...): the loader checks it
+        if part not in fields:
+            raise StudyError(f"{where}: unknown field {path!r} for kind {kind} (known: {', '.join(sorted(fields))})")
+        node = fields[part].type if dataclasses.is_dataclass(fields[part].type) else None
+        if node is None:
+            return
+
+
+def scenario_for(task: Task) -> Scenario:
+    """The scenario a `kind: mission` task runs (its mission gets room for every phase's timeout)."""
+    base = task.base
+    scenario = load_scenario(
+        filename=base.get("scenario_file"),
+        scenario_name=base.get("scenario_name", "default"),
+        scenario_text=base.get("scenario_text", "{}"),
+    )
+    from_base = scenario.simulation_duration
+    scenario = apply_scenario_text(scenario, scenario_text_for(task.settings))
+    if scenario.mission and "simulation_duration" not in task.settings:
+        scenario.simulation_duration = max(from_base, load_mission(scenario.mission).longest_duration())
+    return scenario
+
+
+def suf_design_for(task: Task) -> SufDesign:
+    design = SufDesign(**{**dataclasses.asdict(SufDesign()), **task.settings})
+    if design.method not in SUF_METHODS:
+        raise StudyError(f"method: must be one of {SUF_METHODS}, got {design.method!r}")
+    for name in ("trunk_height", "feet_x", "feet_y"):
+        value = getattr(design, name)
+        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+            raise StudyError(f"{name}: a finite length > 0 m, got {value!r}")
+    return design
+
+
+def load_study(path: str | Path) -> Study:
+    """Reads and checks a study file; raises StudyError naming the file and the field."""
+    path = Path(path)
+    if not path.is_file():
+        raise StudyError(f"{path}: study file not found")
+    try:
+        raw = yaml_load(filename=str(path))
+    except Exception as error:  # Drake's YAML parser raises RuntimeError with the line
+        raise StudyError(f"{path}: not valid YAML: {error}") from None
+    return study_from_dict(raw, str(path))
+
+
+def study_from_dict(raw, where: str) -> Study:
+    """`load_study` for an already-parsed mapping (`where` names it in errors)."""
+    if not isinstance(raw, dict):
+        raise StudyError(f"{where}: a study is a mapping")
+    unknown = set(raw) - {"name", "kind", "base", "design", "factors", "timeout"}
+    if unknown:
+        raise StudyError(
+            f"{where}: unknown field(s) {sorted(unknown)}; known: name, kind, base, design, factors, timeout"
+        )
+    name = raw.get("name", Path(where).stem)
+    if not isinstance(name, str) or not name.replace("_", "").replace("-", "").isalnum():
+        raise StudyError(f"{where}: name: letters, digits, - and _ only, got {name!r}")
+    kind = raw.get("kind", "mission")
+    if kind not in KINDS:
+        raise StudyError(f"{where}: kind: must be one of {KINDS}, got {kind!r}")
+    design = raw.get("design", "grid")
+    if design not in DESIGNS:
+        raise StudyError(f"{where}: design: must be one of {DESIGNS}, got {design!r}")
+    timeout = raw.get("timeout", 900.0)
+    if not (isinstance(timeout, int | float) and math.isfinite(timeout) and timeout > 0):
+        raise StudyError(f"{where}: timeout: a finite number of seconds > 0, got {timeout!r}")
+    base = raw.get("base", {}) or {}
+    if not isinstance(base, dict) or set(base) - {"scenario_file", "scenario_name", "scenario_text"}:
+        raise StudyError(f"{where}: base: a mapping of scenario_file, scenario_name, scenario_text")
+    factors = raw.get("factors", [])
+    if not isinstance(factors, list) or not factors:
+        raise StudyError(f"{where}: factors: a non-empty list")
+    names, columns = [], []
+    for i, factor in enumerate(factors):
+        at = f"{where}: factors[{i}]"
+        if not isinstance(factor, dict) or "name" not in factor:
+            raise StudyError(f"{at}: a mapping with a name")
+        unknown = set(factor) - {"name", "field", "values", "range", "random"}
+        if unknown:
+            raise StudyError(f"{at}: unknown field(s) {sorted(unknown)}")
+        fname = factor["name"]
+        if fname in names:
+            raise StudyError(f"{at}.name: duplicate factor {fname!r}")
+        field = factor.get("field", fname)
+        values = _values(factor, at, missions_ok=(field == "mission"))
+        settings = []
+        for k, value in enumerate(values):
+            if isinstance(value, dict):
+                for sub in value:
+                    _check_field(str(sub), kind, f"{at}.values[{k}]")
+                settings.append({str(f): v for f, v in value.items()})
+            else:
+                _check_field(field, kind, f"{at}.field")
+                settings.append({field: value})
+        names.append(fname)
+        columns.append(list(zip(values, settings, strict=True)))
+    if design == "list" and len({len(c) for c in columns}) != 1:
+        raise StudyError(f"{where}: design list: every factor needs the same number of values")
+    combos = itertools.product(*columns) if design == "grid" else zip(*columns, strict=True)
+    tasks = []
+    for index, combo in enumerate(combos):
+        settings, shown = {}, {}
+        for fname, (value, setting) in zip(names, combo, strict=True):
+            settings.update(setting)
+            shown[fname] = value
+        task = Task(name, kind, index, shown, settings, base, float(timeout))
+        _check_task(task, f"{where}: task {index} ({shown})")
+        tasks.append(task)
+    return Study(name=name, kind=kind, tasks=tasks, factor_names=names, source=where)
+
+
+def _check_task(task: Task, where: str) -> None:
+    try:
+        if task.kind == "mission":
+            scenario_for(task)
+        elif task.kind == "suf":
+            suf_design_for(task)
+        elif not all(isinstance(v, int | float) and math.isfinite(v) and v >= 0 for v in task.settings.values()):
+            raise StudyError(f"duration_s: a finite number of seconds >= 0, got {task.settings}")
+    except ConfigError as error:
+        raise StudyError(f"{where}: {error}") from None

@@ -1,0 +1,1 @@
+"""One command per paper: its tables and figures for the Go1, beside the published numbers."""
