@@ -264,9 +264,9 @@ class Scenario:
             need(value in allowed, field, f"must be one of {allowed}, got {value!r}")
         need(self.whole_body.period > 0, "whole_body.period", f"must be > 0 s, got {self.whole_body.period}")
         need(
-            not self.mission or self.controller == "whole_body",
+            not self.mission or self.controller in MISSION_CONTROLLERS,
             "controller",
-            f"the mission {self.mission!r} runs under 'whole_body', got {self.controller!r}",
+            f"the mission {self.mission!r} runs under one of {MISSION_CONTROLLERS}, got {self.controller!r}",
         )
         for bus, params in self.lcm_buses.items():
             need(

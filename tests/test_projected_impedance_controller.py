@@ -115,7 +115,7 @@ def test_contact_removal_ramps_the_force_bound_down():
 
 
 def test_bad_controller_name_is_a_scenario_error_naming_the_field():
-    with pytest.raises(ScenarioError, match=r"controller: must be one of"):
+    with pytest.raises(ScenarioError, match=r"controller: .*got 'projected'"):
         load_scenario(scenario_text="{controller: projected}")
 
 
