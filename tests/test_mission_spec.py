@@ -109,6 +109,14 @@ def test_reach_takes_companion_legs(tmp_path):
             r"phases\[0\]\.together\[0\]\.targt: unknown field; CompanionReach has",
         ),
         ("phases:\n  - {kind: reach, together: {leg: FL}}\n", r"phases\[0\]\.together: expected a list"),
+        ("phases:\n  - {kind: body_path, radius: -0.1}\n", r"phases\[0\]\.radius: must be >= 0 m"),
+        ("phases:\n  - {kind: body_path}\n", r"phases\[0\]\.via_points: give a circle radius > 0 or"),
+        ("phases:\n  - {kind: body_path, via_points: [[0.01, 0]]}\n", r"phases\[0\]\.via_points\[0\]: expected"),
+        ("phases:\n  - {kind: body_path, radius: 0.03, laps: 0}\n", r"phases\[0\]\.laps: must be at least 1"),
+        ("phases:\n  - {kind: hold_foot_pose, leg: XX}\n", r"phases\[0\]\.leg: must be one of"),
+        ("phases:\n  - {kind: lean_on_prongs, prongs: [front]}\n", r"phases\[0\]\.prongs\[0\]: expected a prong name"),
+        ("phases:\n  - {kind: body_rotate, pivot: tip}\n", r"phases\[0\]\.pivot: expected a prong name"),
+        ("force_estimate: sensor\nphases:\n  - {kind: wait}\n", r"force_estimate: must be one of"),
     ],
 )
 def test_mistakes_name_file_phase_and_field(tmp_path, body, pattern):

@@ -70,6 +70,9 @@ def judge_run(record) -> dict:
         "controller_tick_ms": None,
         "controller": scenario.controller,
         "estimator": scenario.estimator,
+        # The foot force estimate the press phases stopped on (every available one is in "presses").
+        "force_estimate": (record.built.mission.force_estimate if record.built.mission else "")
+        or scenario.force_estimate,
         "hardware": hardware,
         # Where foot errors, drift and falls come from: simulation ground truth, or the estimate.
         "judged_by": "state_estimate" if hardware else "ground_truth",
