@@ -152,8 +152,3 @@ def contact_set_vector(
     if prongs:
         x[len(robot.LEG_NAMES) :] = 1.0
     return x
-
-
-def validate_reference(name: str, x: np.ndarray) -> bool:
-    """True when every entry is finite (non-finite references are rejected by the controller)."""
-    return bool(np.all(np.isfinite(x)))

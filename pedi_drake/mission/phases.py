@@ -665,7 +665,3 @@ assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a
 
 def kind_name(phase) -> str:
     return next(name for name, cls in spec.PHASE_KINDS.items() if isinstance(phase, cls))
-
-
-def is_finite_reference(value) -> bool:
-    return all(math.isfinite(float(v)) for v in np.ravel(value))

@@ -83,13 +83,3 @@ class RobotView:
         if self.impedance_forces is not None:
             estimates["impedance"] = self.impedance_forces[robot.LEG_NAMES.index(leg)]
         return estimates
-
-
-def com_offset_from_trunk(view: RobotView) -> np.ndarray:
-    """p_BoCm_W: the CoM relative to the trunk origin, in the world [m]."""
-    return view.com_W() - view.base.p_WB
-
-
-def foot_jacobian_W(view: RobotView, leg: str) -> np.ndarray:
-    """(3, 3) world-frame Jacobian of the foot w.r.t. the leg's joints (trunk fixed)."""
-    return view.X_WB.rotation().matrix() @ foot_jacobian_B(leg, view.leg_q(leg))
