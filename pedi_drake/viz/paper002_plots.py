@@ -1,14 +1,16 @@
 """Plots of paper 002's evaluations (Figs. 3 to 5 of IV-A) from `pedi_drake.evaluation.paper002`."""
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import matplotlib.pyplot as plt
 import numpy as np
 
-from pedi_drake.evaluation.paper002 import FootHoldEvaluation
+if TYPE_CHECKING:  # the plots read the evaluation's fields; the evaluation never imports plots
+    from pedi_drake.evaluation.paper002 import FootHoldEvaluation
 
 
-def plot_foot_hold(evaluation: FootHoldEvaluation, out_dir: Path, title: str = "") -> list[Path]:
+def plot_foot_hold(evaluation: "FootHoldEvaluation", out_dir: Path, title: str = "") -> list[Path]:
     """Figs. 3 to 5 of paper 002: positions, foot position error, foot orientation error (PNG)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     e = evaluation
