@@ -7,6 +7,7 @@ replay.html, PNG plots and the logged signals (logs.npz, read back with
 `pedi_drake.evaluation.run_logs.read_run_logs`).
 """
 
+import contextlib
 import dataclasses
 import shutil
 import sys
@@ -21,6 +22,7 @@ from pedi_drake.diagram import MakePedipulationDiagram, PedipulationDiagram, app
 from pedi_drake.evaluation.judge import judge_run, write_run
 from pedi_drake.evaluation.out_dir import claim_out_dir
 from pedi_drake.evaluation.run_logs import SignalLog
+from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.interrupt import StopRequest
 from pedi_drake.mission.progress import FAILED, RUNNING, SUCCEEDED, MissionProgress
 from pedi_drake.scenario import Scenario
@@ -95,17 +97,19 @@ def simulate(
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
     monitor = _MissionMonitor(diagram, manager, built.mission, scenario.simulation_duration, quiet, stop)
     simulator.set_monitor(monitor)
-    simulator.Initialize()
-    recording = meshcat is not None and not hardware
-    if recording:
-        # The view opens on the robot and the mission's objects, live and in the replay.
-        frame_scene(meshcat, apply_mission(scenario, built.mission) if built.mission else scenario)
-        meshcat.StartRecording(set_visualizations_while_recording=False)
-    wall_start = time.perf_counter()
-    if stop.reason is None:
-        simulator.AdvanceTo(scenario.simulation_duration)
-    wall_time = time.perf_counter() - wall_start
-    monitor.finish()
+    # On hardware every exit of the loop (its end, a stop request, an exception) leaves damping on the wire.
+    with hardware_run(diagram, realtime_rate=realtime_rate) if hardware else contextlib.nullcontext():
+        simulator.Initialize()
+        recording = meshcat is not None and not hardware
+        if recording:
+            # The view opens on the robot and the mission's objects, live and in the replay.
+            frame_scene(meshcat, apply_mission(scenario, built.mission) if built.mission else scenario)
+            meshcat.StartRecording(set_visualizations_while_recording=False)
+        wall_start = time.perf_counter()
+        if stop.reason is None:
+            simulator.AdvanceTo(scenario.simulation_duration)
+        wall_time = time.perf_counter() - wall_start
+        monitor.finish()
     replay_html = None
     if recording:
         meshcat.StopRecording()

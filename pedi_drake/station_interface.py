@@ -3,7 +3,7 @@
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram
 
-from pedi_drake.go1_driver.hardware_station import MakeHardwareStation, go1_lcm
+from pedi_drake.go1_driver.hardware_station import MakeHardwareStation, go1_link
 from pedi_drake.scenario import Scenario
 from pedi_drake.station.sim_station import MakeSimulationStation
 
@@ -26,5 +26,5 @@ def MakeStation(scenario: Scenario, meshcat: Meshcat | None = None, *, hardware:
     """
     if hardware:
         # The driver draws nothing: `meshcat` is for the simulation's visualiser.
-        return MakeHardwareStation(scenario.go1_driver, go1_lcm(scenario.lcm_buses))
+        return MakeHardwareStation(scenario.go1_driver, go1_link(scenario.go1_driver, scenario.lcm_buses))
     return MakeSimulationStation(scenario, meshcat)

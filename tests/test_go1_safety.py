@@ -68,7 +68,9 @@ class Harness:
             t = self.context.get_time()
             if fresh_status:
                 self.status_time = t + self.wall_offset
-            self.filter.GetInputPort("status_receipt_times").FixValue(self.context, [self.status_time] * 2)
+            self.filter.GetInputPort("status_silence").FixValue(
+                self.context, [t + self.wall_offset - self.status_time] * 2
+            )
             self.simulator.AdvanceTo(t + PERIOD)
         return self.command()
 
@@ -204,8 +206,18 @@ def test_status_timeout_latches_damping():
 
 def test_controller_silence_latches_damping():
     harness = Harness()
-    harness.step(10)
+    harness.step(int(CONFIG.warmup_duration / PERIOD) + 10)
     harness.wall_offset += CONFIG.command_timeout + 0.01  # the loop hung for 60 ms of wall time
+    assert is_damping(harness.step())
+    assert harness.latched() == "controller_silence"
+
+
+def test_the_first_ticks_may_be_slow_but_not_hung():
+    harness = Harness()
+    harness.step(2)
+    harness.wall_offset += CONFIG.command_timeout + 0.01  # one-time work of the first ticks
+    assert not is_damping(harness.step(5))
+    harness.wall_offset += CONFIG.warmup_command_timeout + 0.01  # a hang, even while warming up
     assert is_damping(harness.step())
     assert harness.latched() == "controller_silence"
 

@@ -19,6 +19,7 @@ from pedi_drake.go1_driver import constants as c
 from pedi_drake.go1_driver.config import Go1DriverConfig, Go1SafetyConfig
 from pedi_drake.go1_driver.hardware_station import MakeHardwareStation
 from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, pd_tau_targets_lcmt, rc_command_lcmt
+from pedi_drake.go1_driver.link import DrakeLcmTransport, Go1Link
 from pedi_drake.go1_driver.safety import INTERVENTION_INDEX, INTERVENTIONS
 from pedi_drake.scenario import Scenario, load_scenario
 from pedi_drake.station_interface import STATION_PORTS
@@ -28,6 +29,10 @@ from pedi_drake.station_interface import STATION_PORTS
 LOCKSTEP_CONFIG = Go1DriverConfig(
     first_status_timeout=1.0, safety=Go1SafetyConfig(status_timeout=1.0, command_timeout=1.0)
 )
+
+
+def _lockstep_link(lcm: DrakeLcm, config: Go1DriverConfig = LOCKSTEP_CONFIG) -> Go1Link:
+    return Go1Link(DrakeLcmTransport(lcm), config, url=lcm.get_lcm_url(), threaded=False)
 
 
 def _wire_log(lcm: DrakeLcm, channel: str = c.COMMAND_CHANNEL) -> list[bytes]:
@@ -44,7 +49,8 @@ class LockStep:
         self.wire = _wire_log(self.lcm)
         self.bridge = MakeSimBridgeDiagram(scenario, self.lcm)
         builder = DiagramBuilder()
-        station = builder.AddNamedSystem("station", MakeHardwareStation(config, self.lcm))
+        self.link = _lockstep_link(self.lcm, config)
+        station = builder.AddNamedSystem("station", MakeHardwareStation(config, self.link))
         source = builder.AddNamedSystem("controller", command_source)
         if source.HasInputPort("position_measured"):
             builder.Connect(station.GetOutputPort("go1.position_measured"), source.GetInputPort("position_measured"))
@@ -87,7 +93,7 @@ def scenario() -> Scenario:
 
 
 def test_station_exports_exactly_the_station_ports(scenario):
-    station = MakeHardwareStation(scenario.go1_driver, DrakeLcm("memq://"))
+    station = MakeHardwareStation(scenario.go1_driver, _lockstep_link(DrakeLcm("memq://")))
     inputs = {station.get_input_port(i).get_name(): station.get_input_port(i) for i in range(station.num_input_ports())}
     outputs = {
         station.get_output_port(i).get_name(): station.get_output_port(i) for i in range(station.num_output_ports())
@@ -122,7 +128,7 @@ def test_round_trip_stands_the_robot_up(scenario):
 
 def test_waits_for_first_status_and_names_channel_and_url(scenario):
     config = dataclasses.replace(LOCKSTEP_CONFIG, first_status_timeout=0.2)
-    station = MakeHardwareStation(config, DrakeLcm("memq://"))
+    station = MakeHardwareStation(config, _lockstep_link(DrakeLcm("memq://"), config))
     simulator = Simulator(station)
     station.GetInputPort("go1.command").FixValue(simulator.get_mutable_context(), np.zeros(60))
     start = time.monotonic()

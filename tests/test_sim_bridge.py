@@ -19,7 +19,7 @@ import pedi_drake
 from pedi_drake.control.stand_controller import StandController
 from pedi_drake.go1_driver import constants as c
 from pedi_drake.go1_driver.config import Go1DriverConfig, Go1SafetyConfig
-from pedi_drake.go1_driver.hardware_station import MakeHardwareStation, go1_lcm
+from pedi_drake.go1_driver.hardware_station import MakeHardwareStation, go1_link
 from pedi_drake.go1_driver.log import read_go1_log
 from pedi_drake.go1_driver.safety import INTERVENTIONS
 from pedi_drake.scenario import load_scenario
@@ -118,17 +118,26 @@ def wire(tmp_path):
         return bridge
 
     yield start_bridge, log_path, recorder
+    # A link outlives its loop on purpose (its guard damps a silent loop until the process leaves):
+    # close this test's links so that their guards stay off the next test's wire.
+    while _LINKS:
+        _LINKS.pop().close()
     for process in processes:
         if process.poll() is None:
             os.kill(process.pid, signal.SIGCONT)  # a test may have left the bridge stopped
         _stop(process)
 
 
+_LINKS: list = []
+
+
 def _driver(config: Go1DriverConfig | None = None):
     config = config if config is not None else Go1DriverConfig()
     scenario = load_scenario(scenario_text=f"{{lcm_buses: {{go1: {{lcm_url: '{URL}'}}}}}}")
     builder = DiagramBuilder()
-    station = builder.AddNamedSystem("station", MakeHardwareStation(config, go1_lcm(scenario.lcm_buses)))
+    link = go1_link(config, scenario.lcm_buses)
+    _LINKS.append(link)
+    station = builder.AddNamedSystem("station", MakeHardwareStation(config, link))
     controller = builder.AddNamedSystem("controller", StandController(scenario.stand))
     builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
     builder.Connect(controller.GetOutputPort("command"), station.GetInputPort("go1.command"))
@@ -210,11 +219,11 @@ import sys
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pedi_drake.control.stand_controller import StandController
-from pedi_drake.go1_driver.hardware_station import MakeHardwareStation, go1_lcm
+from pedi_drake.go1_driver.hardware_station import MakeHardwareStation, go1_link
 from pedi_drake.scenario import load_scenario
 scenario = load_scenario(scenario_text="{lcm_buses: {go1: {lcm_url: '%s'}}}")
 builder = DiagramBuilder()
-station = builder.AddSystem(MakeHardwareStation(scenario.go1_driver, go1_lcm(scenario.lcm_buses)))
+station = builder.AddSystem(MakeHardwareStation(scenario.go1_driver, go1_link(scenario.go1_driver, scenario.lcm_buses)))
 controller = builder.AddSystem(StandController(scenario.stand))
 builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
 builder.Connect(controller.GetOutputPort("command"), station.GetInputPort("go1.command"))

@@ -10,6 +10,7 @@ from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.go1_command import pack_command
 from pedi_drake.go1_driver.config import Go1DriverConfig
 from pedi_drake.go1_driver.hardware_station import MakeHardwareStation
+from pedi_drake.go1_driver.link import DrakeLcmTransport, Go1Link
 from pedi_drake.scenario import Scenario, load_scenario
 from pedi_drake.station.motor_model import Go1MotorModel, motor_torque
 from pedi_drake.station_interface import STATION_PORTS, MakeStation
@@ -35,7 +36,8 @@ def test_station_exports_exactly_the_documented_go1_ports():
 
 
 def test_hardware_station_exports_the_same_ports():
-    station = MakeHardwareStation(Go1DriverConfig(), DrakeLcm("memq://"))
+    config = Go1DriverConfig()
+    station = MakeHardwareStation(config, Go1Link(DrakeLcmTransport(DrakeLcm("memq://")), config, threaded=False))
     assert _go1_ports(station) == STATION_PORTS
 
 

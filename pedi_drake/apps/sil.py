@@ -1,8 +1,8 @@
 """Software in the loop over real UDP: a mission through the Go1 LCM driver against the simulator
 bridge in a second process, judged against the bridge's ground truth.
 
-    python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_text YAML]
-                                     [--lcm_url URL] [--out out/sil_<mission>]
+    python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_name NAME]
+                                  [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
 
 Starts `python -m pedi_drake.apps.sim_bridge --mission M --truth_log ...` (the robot side,
 real time, 500 Hz), then runs the mission here exactly as `run_sim.py --hardware` does (driver,
@@ -71,7 +71,12 @@ def estimator_error(controller_logs: dict, truth: dict) -> dict:
 
 
 def run_sil(
-    mission: str, out_dir: Path, scenario_text: str = "{}", lcm_url: str | None = None, realtime_rate: float = 1.0
+    mission: str,
+    out_dir: Path,
+    scenario_text: str = "{}",
+    lcm_url: str | None = None,
+    realtime_rate: float = 1.0,
+    scenario_name: str = "default",
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
@@ -87,13 +92,14 @@ def run_sil(
     load_mission(mission)
     bus = f"{{go1: {{lcm_url: '{url}'}}}}"
     overrides = f"{{mission: {mission}, controller: whole_body, estimator: kalman, lcm_buses: {bus}}}"
-    scenario = apply_scenario_text(load_scenario(scenario_text=text), overrides)
+    scenario = apply_scenario_text(load_scenario(scenario_name=scenario_name, scenario_text=text), overrides)
     check_out_dir(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     truth_path = out_dir / "bridge_truth.npz"
     bridge = subprocess.Popen(
         [sys.executable, "-m", "pedi_drake.apps.sim_bridge", "--mission", mission, "--lcm_url", url]
-        + ["--scenario_text", text, "--truth_log", str(truth_path), "--realtime_rate", str(realtime_rate)],
+        + ["--scenario_name", scenario_name, "--scenario_text", text]
+        + ["--truth_log", str(truth_path), "--realtime_rate", str(realtime_rate)],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,
@@ -132,6 +138,7 @@ def run_sil(
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--mission", default="hit_target_front")
+    parser.add_argument("--scenario_name", default="default", help="scenario of both sides, e.g. control_250hz")
     parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto both sides' scenario")
     parser.add_argument("--lcm_url", default=None, help="default: the Go1 group on a port of this process's own")
     parser.add_argument("--out", default=None)
@@ -139,7 +146,8 @@ def main() -> int:
     args = parser.parse_args()
     out_dir = Path(args.out or f"out/sil_{Path(args.mission).stem}")
     try:
-        result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate)
+        options = {"scenario_name": args.scenario_name}
+        result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate, **options)
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
@@ -157,6 +165,13 @@ def main() -> int:
     trunk = result["sil"]["estimator_trunk_position_error"]
     print(
         f"estimated trunk position vs truth: max {1000 * trunk['max_m']:.1f} mm, final {1000 * trunk['final_m']:.1f} mm"
+    )
+    loop = result["driver"]["loop"]
+    lateness = loop["lateness_ms"] or {}
+    print(
+        f"loop: {loop['ticks']} ticks, {loop['deadline_misses_per_1000']:.2f} deadline misses per 1000 "
+        f"(longest {loop['longest_miss_ms']:.1f} ms), lateness median {lateness.get('median', 0):.2f} ms, "
+        f"max {lateness.get('max', 0):.1f} ms; driver latched: {result['driver']['latched']}"
     )
     print(f"wrote {out_dir / 'sil.json'}")
     return 0 if result["success"] else 1

@@ -40,8 +40,9 @@ from pedi_drake.exceptions import ConfigError
 from pedi_drake.go1_command import COMMAND_SIZE, pack_command
 from pedi_drake.go1_driver import constants as c
 from pedi_drake.go1_driver.config import Go1BridgeConfig
-from pedi_drake.go1_driver.hardware_station import go1_lcm
+from pedi_drake.go1_driver.hardware_station import go1_lcm_url
 from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimator_lcmt
+from pedi_drake.go1_driver.link import Inbox
 from pedi_drake.go1_driver.status_receiver import Go1LcmReceiver
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.scenario import Scenario, load_scenario
@@ -180,16 +181,11 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
     builder = DiagramBuilder()
     builder.AddNamedSystem("lcm", LcmInterfaceSystem(lcm))
     station = builder.AddNamedSystem("station", MakeStation(scenario, hardware=False))
+    inbox = Inbox(c.COMMAND_CHANNEL, c.CHANNEL_TYPES[c.COMMAND_CHANNEL], c.message_to_command)
+    lcm.Subscribe(c.COMMAND_CHANNEL, inbox.handle)
     receiver = builder.AddNamedSystem(
         "command_receiver",
-        Go1LcmReceiver(
-            lcm,
-            c.COMMAND_CHANNEL,
-            c.CHANNEL_TYPES[c.COMMAND_CHANNEL],
-            c.message_to_command,
-            np.zeros(COMMAND_SIZE),
-            {"command": slice(0, COMMAND_SIZE)},
-        ),
+        Go1LcmReceiver(inbox, np.zeros(COMMAND_SIZE), {"command": slice(0, COMMAND_SIZE)}, period=c.BRIDGE_PERIOD),
     )
     hold = builder.AddNamedSystem("command_hold", Go1BridgeCommandHold())
     builder.Connect(receiver.GetOutputPort("command"), hold.GetInputPort("received_command"))
@@ -269,7 +265,7 @@ def main(argv: list[str] | None = None) -> int:
         config.latency = args.latency
     if args.drop_probability is not None:
         config.drop_probability = args.drop_probability
-    lcm = DrakeLcm(args.lcm_url) if args.lcm_url else go1_lcm(scenario.lcm_buses)
+    lcm = DrakeLcm(args.lcm_url or go1_lcm_url(scenario.lcm_buses))
     diagram = MakeSimBridgeDiagram(scenario, lcm, config)
     simulator = Simulator(diagram)
     simulator.set_target_realtime_rate(args.realtime_rate)

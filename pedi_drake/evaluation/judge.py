@@ -14,6 +14,7 @@ from pedi_drake.evaluation.estimator_accuracy import estimate_errors
 from pedi_drake.evaluation.result_file import write_result
 from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
 from pedi_drake.fall import fell_during
+from pedi_drake.go1_driver.hardware_station import hardware_link
 from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
 from pedi_drake.run_checks import control_period
@@ -36,7 +37,10 @@ def judge_run(record) -> dict:
     """The result of `record` (a `pedi_drake.run.RunRecord`): success, phases, errors, timing."""
     scenario, logs, hardware = record.scenario, record.logs, record.hardware
     base = logs["base_state"].data
-    has_prongs = scenario.robot.prongs is not None
+    mission = record.built.mission
+    # A mission's robot variant replaces the scenario's (as the diagram applied it).
+    prongs = mission.robot.prongs if mission is not None and mission.robot is not None else scenario.robot.prongs
+    has_prongs = prongs is not None
     estimate_fell = fell_during(base[0:4], base[6], has_prongs=has_prongs) if base.shape[1] else False
     plant = states = t_state = None
     if hardware:
@@ -69,6 +73,9 @@ def judge_run(record) -> dict:
         "controller_tick_ms": None,
         "controller": scenario.controller,
         "estimator": scenario.estimator,
+        # The foot force estimate the press phases stopped on (every available one is in "presses").
+        "force_estimate": (record.built.mission.force_estimate if record.built.mission else "")
+        or scenario.force_estimate,
         "hardware": hardware,
         # Where foot errors, drift and falls come from: simulation ground truth, or the estimate.
         "judged_by": "state_estimate" if hardware else "ground_truth",
@@ -82,6 +89,12 @@ def judge_run(record) -> dict:
             station.GetOutputPort("driver.status").Eval(station_context),
             station.GetOutputPort("driver.message_counts").Eval(station_context),
         )
+        # The link's own view: every message by channel (rejected ones by reason), the loop's
+        # lateness and deadline misses, and whether its guard had to damp a silent loop.
+        link_report = hardware_link(station).report()
+        result["driver"].update(link_report)
+        if result["driver"]["latched"] is None and link_report["guard"]["latched"] == "controller_silence":
+            result["driver"]["latched"] = "controller_silence"
     if "controller.diagnostics" in logs:
         tick_ms = 1e3 * logs["controller.diagnostics"].data[2]
         tick_ms = tick_ms[tick_ms > 0]

@@ -29,6 +29,11 @@ class Go1SafetyConfig:
     # Switch to damping when the driver's own loop has not published for this long [s]: the
     # controller stopped producing (a hang); the robot-side bridge would hold the last command.
     command_timeout: float = 0.05
+    # The first ticks of a run do one-time work (the mission's first update, the first solves, the
+    # first evaluations of every cache) while the soft start publishes the measured pose: during
+    # the first `warmup_duration` [s] of the loop the loop-silence limit is `warmup_command_timeout` [s].
+    warmup_duration: float = 0.1
+    warmup_command_timeout: float = 0.5
     # Duration of the soft start that blends targets from the measured pose [s].
     soft_start_duration: float = 1.0
     # rc_command fields whose non-zero value latches the E-stop (the remote's button).
@@ -51,6 +56,10 @@ class Go1DriverConfig:
 
     # Wait this long for the first status message when the driver starts [s].
     first_status_timeout: float = 5.0
+    # Every exit of a hardware run (mission end, Ctrl-C, SIGTERM, an exception) puts damping on the
+    # wire for this long before the process leaves [s]: the bridge holds the last command it
+    # received, so the last one must be damping, repeated in case a datagram is lost.
+    shutdown_damping_duration: float = 0.3
     # Safety layer bounds and watchdogs.
     safety: Go1SafetyConfig = dataclasses.field(default_factory=Go1SafetyConfig)
     # The simulator bridge's latency and message drops.

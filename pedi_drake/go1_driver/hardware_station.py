@@ -10,18 +10,22 @@ all on the scenario's LCM bus "go1" through one LcmInterfaceSystem. Driver-only 
     output driver.message_counts (6): [received, dropped] for leg_control_data,
            state_estimator_data, rc_command
     output driver.command_published (60): the bounded command that goes on the wire
-Run the diagram in real time (Simulator target_realtime_rate = 1): the watchdogs use the wall clock.
+The messages travel through a Go1Link (go1_driver/link.py): its receive thread stamps status
+messages as they arrive and its guard damps a loop that went silent; `hardware_link(diagram)`
+finds it, for `hold_damping` at shutdown and for `report()` (rejected messages by reason, the
+loop's lateness). Run the diagram in real time (Simulator target_realtime_rate = 1): the
+watchdogs use the wall clock.
 """
 
-from pydrake.lcm import DrakeLcm, DrakeLcmInterface, DrakeLcmParams
+from pydrake.lcm import DrakeLcmParams
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.lcm import LcmInterfaceSystem
 from pydrake.systems.primitives import Multiplexer
 
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.go1_driver import constants as c
 from pedi_drake.go1_driver.command_sender import Go1CommandSender
 from pedi_drake.go1_driver.config import Go1DriverConfig
+from pedi_drake.go1_driver.link import Go1Link
 from pedi_drake.go1_driver.safety import Go1SafetyFilter
 from pedi_drake.go1_driver.status_receiver import (
     MakeLegControlReceiver,
@@ -30,38 +34,53 @@ from pedi_drake.go1_driver.status_receiver import (
 )
 
 
-def go1_lcm(lcm_buses: dict[str, DrakeLcmParams]) -> DrakeLcm:
-    """A DrakeLcm on the bus "go1" of `lcm_buses` (a Scenario's; default udpm://239.255.76.67:7667?ttl=0)."""
+def go1_lcm_url(lcm_buses: dict[str, DrakeLcmParams]) -> str:
+    """The URL of the bus "go1" of `lcm_buses` (a Scenario's; default udpm://239.255.76.67:7667?ttl=0)."""
     if c.GO1_BUS_NAME not in lcm_buses:
         raise ScenarioError(f"lcm_buses: no bus named {c.GO1_BUS_NAME!r}, which the Go1 driver uses")
-    return DrakeLcm(lcm_buses[c.GO1_BUS_NAME])
+    return lcm_buses[c.GO1_BUS_NAME].lcm_url
 
 
-def MakeHardwareStation(config: Go1DriverConfig, lcm: DrakeLcmInterface) -> Diagram:
-    """The Go1 LCM driver with settings `config` on `lcm` (ports as MakeStation's; see the module docstring).
+def go1_link(config: Go1DriverConfig, lcm_buses: dict[str, DrakeLcmParams]) -> Go1Link:
+    """The driver's Go1Link on the bus "go1" of `lcm_buses`."""
+    return Go1Link.from_url(go1_lcm_url(lcm_buses), config)
 
-    `lcm`: the bus to the robot (`go1_lcm(scenario.lcm_buses)`, or "memq://" for in-process tests).
-    Initialising the diagram waits up to config.first_status_timeout [s] for leg_control_data and
-    state_estimator_data and raises LcmTimeout naming channel and URL when they do not come.
+
+def hardware_link(diagram: Diagram) -> Go1Link | None:
+    """The Go1Link of the hardware station inside `diagram` (or `diagram` itself), None without one."""
+    for system in diagram.GetSystems():
+        if isinstance(system, Go1CommandSender):
+            return system.link
+        if isinstance(system, Diagram):
+            link = hardware_link(system)
+            if link is not None:
+                return link
+    return None
+
+
+def MakeHardwareStation(config: Go1DriverConfig, link: Go1Link) -> Diagram:
+    """The Go1 LCM driver with settings `config` on `link` (ports as MakeStation's; see the module docstring).
+
+    `link`: the bus to the robot (`go1_link(config, scenario.lcm_buses)`, or a Go1Link on an
+    in-process transport for tests). Initialising the diagram starts the link's receive thread and
+    waits up to config.first_status_timeout [s] for leg_control_data and state_estimator_data,
+    raising LcmTimeout naming channel and URL when they do not come.
     """
     period = config.safety.period
     builder = DiagramBuilder()
-    builder.AddNamedSystem("lcm", LcmInterfaceSystem(lcm))
     wait = config.first_status_timeout
-    leg = builder.AddNamedSystem("leg_control_receiver", MakeLegControlReceiver(lcm, period=period, wait_timeout=wait))
+    leg = builder.AddNamedSystem("leg_control_receiver", MakeLegControlReceiver(link, period=period, wait_timeout=wait))
     estimator = builder.AddNamedSystem(
-        "state_estimator_receiver", MakeStateEstimatorReceiver(lcm, period=period, wait_timeout=wait)
+        "state_estimator_receiver", MakeStateEstimatorReceiver(link, period=period, wait_timeout=wait)
     )
-    remote = builder.AddNamedSystem(
-        "rc_command_receiver", MakeRcCommandReceiver(lcm, config.safety.rc_estop_fields, period=period)
-    )
+    remote = builder.AddNamedSystem("rc_command_receiver", MakeRcCommandReceiver(link, period=period))
     safety = builder.AddNamedSystem("safety", Go1SafetyFilter(config.safety, num_status_channels=2))
-    sender = builder.AddNamedSystem("command_sender", Go1CommandSender(lcm, period=period))
+    sender = builder.AddNamedSystem("command_sender", Go1CommandSender(link, period=period))
 
-    times = builder.AddNamedSystem("status_receipt_times", Multiplexer([1, 1]))
-    builder.Connect(leg.GetOutputPort("receipt_time"), times.get_input_port(0))
-    builder.Connect(estimator.GetOutputPort("receipt_time"), times.get_input_port(1))
-    builder.Connect(times.get_output_port(), safety.GetInputPort("status_receipt_times"))
+    silence = builder.AddNamedSystem("status_silence", Multiplexer([1, 1]))
+    builder.Connect(leg.GetOutputPort("silence"), silence.get_input_port(0))
+    builder.Connect(estimator.GetOutputPort("silence"), silence.get_input_port(1))
+    builder.Connect(silence.get_output_port(), safety.GetInputPort("status_silence"))
     builder.Connect(leg.GetOutputPort("position_measured"), safety.GetInputPort("position_measured"))
     builder.Connect(leg.GetOutputPort("velocity_measured"), safety.GetInputPort("velocity_measured"))
     builder.Connect(remote.GetOutputPort("estop"), safety.GetInputPort("rc_estop"))

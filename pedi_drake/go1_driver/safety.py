@@ -182,6 +182,11 @@ def bound_command(
     return pack_command(q_des, qd_des, kp, kd, tau_ff), flags
 
 
+def command_timeout(config: Go1SafetyConfig, elapsed: float) -> float:
+    """The loop-silence limit [s] after `elapsed` [s] of the loop (longer while it warms up)."""
+    return config.warmup_command_timeout if elapsed < config.warmup_duration else config.command_timeout
+
+
 def soft_start_blend(command: np.ndarray, q_start: np.ndarray, fraction: float) -> np.ndarray:
     """The command with targets blended from q_start [rad]: fraction 0 holds q_start, 1 passes through.
 
@@ -221,8 +226,8 @@ class Go1SafetyFilter(LeafSystem):
     Inputs:
       command (60): the controller's `go1.command`.
       position_measured (12) [rad], velocity_measured (12) [rad/s]: from leg_control_data.
-      status_receipt_times (n): wall-clock receipt time [s] (time.monotonic) of the latest message of
-        each status channel; the watchdog uses the oldest.
+      status_silence (n): how long each status channel has been silent [s], judged by the receive
+        thread's clock (Go1Link.silence); the watchdog trips on the longest.
       estop (1, optional): > 0.5 latches damping.
       rc_estop (1, optional): > 0.5 latches damping (the remote's button).
     Outputs:
@@ -246,7 +251,7 @@ class Go1SafetyFilter(LeafSystem):
         self._command = self.DeclareVectorInputPort("command", COMMAND_SIZE)
         self._q = self.DeclareVectorInputPort("position_measured", 12)
         self._qd = self.DeclareVectorInputPort("velocity_measured", 12)
-        self._status_times = self.DeclareVectorInputPort("status_receipt_times", num_status_channels)
+        self._status_silence = self.DeclareVectorInputPort("status_silence", num_status_channels)
         self._estop = self.DeclareVectorInputPort("estop", 1)
         self._rc_estop = self.DeclareVectorInputPort("rc_estop", 1)
         initial = np.zeros(_STATE_SIZE)
@@ -275,13 +280,14 @@ class Go1SafetyFilter(LeafSystem):
             x[_T_START] = context.get_time()
             x[_CMD] = pack_command(x[_Q_START], 0.0, 0.0, 0.0, 0.0)
             x[_STARTED] = 1.0
-        elif now - x[_LAST_WALL] > config.command_timeout:
+        elif now - x[_LAST_WALL] > command_timeout(config, context.get_time() - x[_T_START]):
             fired.add("controller_silence")
         x[_LAST_WALL] = now
 
-        times = self._status_times.Eval(context)
-        oldest = float(np.min(times)) if np.all(np.isfinite(times)) else -math.inf
-        if now - oldest > config.status_timeout:
+        # The receive thread's judgement, not `now - receipt`: a late tick does not make the robot
+        # look silent, and the robot's real silence trips within status_timeout + one look.
+        silence = self._status_silence.Eval(context)
+        if not float(np.max(silence)) <= config.status_timeout:  # NaN counts as silent
             fired.add("status_timeout")
         if self._flag(self._estop, context):
             fired.add("estop_port")

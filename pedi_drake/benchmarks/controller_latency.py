@@ -1,0 +1,287 @@
+"""Latency of the controller side of a hardware run, against a replay of recorded status messages.
+
+    python -m pedi_drake.benchmarks.controller_latency [--mission hit_target_front] [--period 0.002]
+        [--out benchmarks/results/controller_latency.json]
+
+1. Records: the mission in simulation (seed 0); the status the robot would have sent at every
+   tick (q, qd, tau_est, IMU, foot sensors) is read from the run's logs.
+2. Replays: the `--hardware` diagram (driver, estimator, mission manager, IK, whole-body
+   controller) is built on an in-process bus; before every tick the recorded status is published,
+   and the tick (receive, estimate, mission, IK, control, safety, send) is timed alone, unpaced.
+   Two passes: with the garbage collector as Python leaves it, and as a hardware run runs
+   (go1_driver.hardware_run: the heap frozen at the start). Each tick is attributed to what ran
+   in it: a garbage collection (gc.callbacks), a mission phase transition, or nothing special.
+3. A profiled pass gives each stage's mean cost per tick (by package: go1_driver, estimation,
+   mission, ik, control), from cProfile's own time of the functions in each.
+4. The same mission in simulation: the whole-body controller's own tick (its diagnostics).
+5. The bare plant's cost in the same run (`station_fixed_cmd` of the station benchmark: the
+   simulated Go1 with a constant command), the baseline for machines of different speed.
+
+Prints a table and writes JSON. The run is open loop (the replayed status ignores the commands),
+which is what a latency measurement needs: the same inputs for every pass.
+"""
+
+import argparse
+import cProfile
+import gc
+import json
+import platform
+import pstats
+import time
+from pathlib import Path
+
+import numpy as np
+from pydrake.systems.analysis import Simulator
+
+from pedi_drake.apps.sim_bridge import status_messages
+from pedi_drake.benchmarks.station import real_time_factor
+from pedi_drake.diagram import MakePedipulationDiagram
+from pedi_drake.go1_driver import constants as c
+from pedi_drake.go1_driver.hardware_run import hardware_run
+from pedi_drake.go1_driver.hardware_station import hardware_link
+from pedi_drake.run import simulate
+from pedi_drake.scenario import load_scenario
+
+STAGES = ("go1_driver", "estimation", "mission", "ik", "control")
+
+
+def _scenario(mission: str, period: float, lcm_url: str = ""):
+    periods = f"whole_body: {{period: {period}}}, kalman: {{period: {period}}}"
+    text = f"{{{periods}, go1_driver: {{safety: {{period: {period}}}}}}}"
+    scenario = load_scenario(scenario_text=text)
+    scenario.mission, scenario.controller = mission, "whole_body"
+    if lcm_url:
+        scenario.lcm_buses["go1"].lcm_url = lcm_url
+    # No watchdog may trip in an unpaced replay: it measures the computation, not the clock.
+    scenario.go1_driver.safety.status_timeout = 1e9
+    scenario.go1_driver.safety.command_timeout = 1e9
+    scenario.go1_driver.shutdown_damping_duration = 0.0
+    return scenario
+
+
+def record_status(mission: str, period: float) -> tuple[np.ndarray, dict]:
+    """(samples (n, 50) of the robot's status at every control tick, the simulation's timing)."""
+    scenario = _scenario(mission, period)
+    scenario.simulation_duration = 60.0
+    record = simulate(scenario=scenario, name=mission, quiet=True, replay=False)
+    logs = record.logs
+    times = logs["go1.position_measured"].times
+    # The sample logged at t = 0 precedes the sensors' first update (all zeros): start a tick later.
+    ticks = np.arange(period, times[-1], period)
+    index = np.searchsorted(times, ticks - 1e-9)
+    parts = ["go1.position_measured", "go1.velocity_measured", "go1.torque_estimated", "go1.imu", "go1.foot_contact"]
+    samples = np.concatenate([logs[name].data[:, index] for name in parts], axis=0).T
+    tick_ms = 1e3 * logs["controller.diagnostics"].data[2]
+    tick_ms = tick_ms[tick_ms > 0]
+    sim = {
+        "sim_time_s": record.sim_time,
+        "wall_time_s": record.wall_time,
+        "real_time_factor": record.sim_time / record.wall_time,
+        "controller_tick_ms": _distribution(tick_ms),
+    }
+    return samples, sim
+
+
+def _distribution(x_ms: np.ndarray) -> dict:
+    x = np.asarray(x_ms)
+    return {
+        "median": float(np.median(x)),
+        "p99": float(np.percentile(x, 99)),
+        "p99_9": float(np.percentile(x, 99.9)),
+        "max": float(np.max(x)),
+    }
+
+
+class Replay:
+    """The hardware diagram on an in-process bus, fed the recorded status tick by tick."""
+
+    def __init__(self, mission: str, period: float, samples: np.ndarray):
+        self.period, self.samples = period, samples
+        self.scenario = _scenario(mission, period, "memq://")
+        self.built = MakePedipulationDiagram(self.scenario, hardware=True)
+        self.diagram = self.built.diagram
+        self.link = hardware_link(self.diagram)
+        self.bus = self.link.transport
+        self.simulator = Simulator(self.diagram)
+        self.manager = self.diagram.GetSubsystemByName("mission")
+        self.commands: list[np.ndarray] = []
+        self.bus.subscribe(c.COMMAND_CHANNEL, lambda _c, data: self.commands.append(data))
+
+    def _publish(self, k: int) -> None:
+        leg, estimator = status_messages(self.samples[min(k, len(self.samples) - 1)], k)
+        received = self.link.leg_control.received, self.link.state_estimator.received
+        self.bus.publish(c.LEG_CONTROL_CHANNEL, leg.encode())
+        self.bus.publish(c.STATE_ESTIMATOR_CHANNEL, estimator.encode())
+        # The receive thread takes them in; the tick is timed from when they are in the inbox.
+        deadline = time.monotonic() + 1.0
+        while (self.link.leg_control.received, self.link.state_estimator.received) == received:
+            if time.monotonic() > deadline:
+                counts = {inbox.channel: inbox.counts() for inbox in self.link.inboxes}
+                raise RuntimeError(f"replayed status of tick {k} was not received: {counts}")
+            time.sleep(0.00005)
+
+    def run(self, ticks: int, profile: cProfile.Profile | None = None) -> dict:
+        """Times `ticks` ticks; returns tick times [ms] and what happened in each."""
+        collections: list[float] = []
+
+        def on_gc(phase, info) -> None:
+            collections.append((time.perf_counter(), phase, info["generation"]))
+
+        self.link.start()
+        self._publish(0)
+        self.simulator.Initialize()
+        context = self.simulator.get_context()
+        manager_context = self.manager.GetMyContextFromRoot(context)
+        tick_ms = np.zeros(ticks)
+        # The loop thread's own CPU time in the tick: wall time far above it means the thread was
+        # waiting (preempted by other processes), not computing.
+        cpu_ms = np.zeros(ticks)
+        phase_index = np.zeros(ticks, dtype=int)
+        gc_generation = np.full(ticks, -1)
+        gc.callbacks.append(on_gc)
+        try:
+            for k in range(ticks):
+                self._publish(k + 1)
+                collections.clear()
+                if profile is not None:
+                    profile.enable()
+                start, cpu_start = time.perf_counter(), time.thread_time()
+                self.simulator.AdvanceTo((k + 1) * self.period)
+                tick_ms[k] = 1e3 * (time.perf_counter() - start)
+                cpu_ms[k] = 1e3 * (time.thread_time() - cpu_start)
+                if profile is not None:
+                    profile.disable()
+                phase_index[k] = self.manager.progress(manager_context).index
+                starts = [g for _, p, g in collections if p == "start"]
+                if starts:
+                    gc_generation[k] = max(starts)
+        finally:
+            gc.callbacks.remove(on_gc)
+            self.link.close()
+        transition = np.zeros(ticks, dtype=bool)
+        transition[1:] = phase_index[1:] != phase_index[:-1]
+        return {"tick_ms": tick_ms, "cpu_ms": cpu_ms, "gc_generation": gc_generation, "transition": transition}
+
+
+def _max_or_none(x: np.ndarray) -> float | None:
+    return float(x.max()) if x.size else None
+
+
+def _summary(run: dict, period_ms: float) -> dict:
+    tick = run["tick_ms"]
+    late = tick > period_ms
+    gc_any = run["gc_generation"] >= 0
+    worst = np.argsort(tick)[-10:][::-1]
+    return {
+        "ticks": int(tick.size),
+        "tick_ms": _distribution(tick),
+        "tick_cpu_ms": _distribution(run["cpu_ms"]),
+        "deadline_misses_per_10000": float(1e4 * np.count_nonzero(late) / tick.size),
+        "ticks_with_gc": {f"gen{g}": int(np.count_nonzero(run["gc_generation"] == g)) for g in range(3)},
+        "max_tick_with_full_gc_ms": float(tick[run["gc_generation"] == 2].max())
+        if np.any(run["gc_generation"] == 2)
+        else None,
+        "max_tick_without_gc_or_transition_ms": float(tick[~gc_any & ~run["transition"]].max()),
+        "max_tick_at_phase_transition_ms": _max_or_none(tick[run["transition"]]),
+        "worst_ticks": [
+            {
+                "tick": int(k),
+                "ms": float(tick[k]),
+                "cpu_ms": float(run["cpu_ms"][k]),
+                "gc_generation": int(run["gc_generation"][k]),
+                "phase_transition": bool(run["transition"][k]),
+            }
+            for k in worst
+        ],
+    }
+
+
+def stage_costs(profile: cProfile.Profile, ticks: int) -> dict:
+    """Mean own time per tick [ms] of the functions in each stage's package."""
+    stats = pstats.Stats(profile).stats
+    costs = dict.fromkeys(STAGES, 0.0)
+    costs["other"] = 0.0
+    for (filename, _, _), (_, _, own, _, _) in stats.items():
+        stage = next((s for s in STAGES if f"/pedi_drake/{s}/" in filename), "other")
+        costs[stage] += own
+    return {stage: 1e3 * total / ticks for stage, total in costs.items()}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--mission", default="hit_target_front")
+    parser.add_argument("--period", type=float, default=0.002, help="control period [s]")
+    parser.add_argument("--baseline_duration", type=float, default=4.0, help="simulated seconds of the bare plant")
+    parser.add_argument("--out", default="benchmarks/results/controller_latency.json")
+    args = parser.parse_args()
+    load_start = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
+
+    baseline_rtf = real_time_factor("station_fixed_cmd", args.baseline_duration)
+    # Wall time of the bare plant per control period [ms].
+    baseline_ms = 1e3 * args.period / baseline_rtf
+    samples, sim = record_status(args.mission, args.period)
+    ticks = len(samples) - 1
+    period_ms = 1e3 * args.period
+
+    default_gc = Replay(args.mission, args.period, samples).run(ticks)
+    replay = Replay(args.mission, args.period, samples)
+    with hardware_run(replay.diagram, shutdown_damping_duration=0.0):
+        frozen_gc = replay.run(ticks)
+    profile = cProfile.Profile()
+    profiled = Replay(args.mission, args.period, samples)
+    profiled.run(ticks, profile)
+    stages = stage_costs(profile, ticks)
+
+    rows = {"python_gc": _summary(default_gc, period_ms), "hardware_run_gc": _summary(frozen_gc, period_ms)}
+    load_end = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
+    print(f"controller side of {args.mission} at {1 / args.period:.0f} Hz, {ticks} replayed ticks")
+    print(f"load average (1, 5, 15 min) at the start {load_start}, at the end {load_end}")
+    print(f"bare plant (station_fixed_cmd): {baseline_ms:.3f} ms per {period_ms:.1f} ms step (RTF {baseline_rtf:.2f})")
+    header = f"{'pass':<18}{'median':>8}{'p99':>8}{'p99.9':>8}{'max':>9}{'miss/1e4':>10}{'median/plant':>14}"
+    print(header + "  worst tick cause")
+    for name, row in rows.items():
+        t = row["tick_ms"]
+        worst = row["worst_ticks"][0]
+        cause = f"gc gen{worst['gc_generation']} " if worst["gc_generation"] >= 0 else ""
+        cause += "phase transition " if worst["phase_transition"] else ""
+        cause += f"(its CPU time {worst['cpu_ms']:.2f} ms)"
+        print(
+            f"{name:<18}{t['median']:8.3f}{t['p99']:8.3f}{t['p99_9']:8.3f}{t['max']:9.2f}"
+            f"{row['deadline_misses_per_10000']:10.1f}{t['median'] / baseline_ms:14.2f}  {cause}"
+        )
+        cpu = row["tick_cpu_ms"]
+        print(f"{'  CPU time':<18}{cpu['median']:8.3f}{cpu['p99']:8.3f}{cpu['p99_9']:8.3f}{cpu['max']:9.2f}")
+    total = sum(stages.values())
+    print("mean own time per tick by stage (profiled pass, cProfile inflates Python calls):")
+    for stage, ms in stages.items():
+        print(f"  {stage:<12}{ms:8.3f} ms  {100 * ms / total:5.1f} %")
+    sim_tick = sim["controller_tick_ms"]
+    print(
+        f"simulation: real-time factor {sim['real_time_factor']:.2f}; whole-body controller tick median "
+        f"{sim_tick['median']:.3f} ms, p99 {sim_tick['p99']:.3f}, p99.9 {sim_tick['p99_9']:.3f}, "
+        f"max {sim_tick['max']:.2f}"
+    )
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    machine = {"processor": platform.processor() or platform.machine(), "python": platform.python_version()}
+    out.write_text(
+        json.dumps(
+            {
+                "mission": args.mission,
+                "period_s": args.period,
+                "machine": machine,
+                "loadavg_start": load_start,
+                "loadavg_end": load_end,
+                "bare_plant": {"real_time_factor": baseline_rtf, "ms_per_period": baseline_ms},
+                "replay": rows,
+                "stage_ms_per_tick_profiled": stages,
+                "simulation": sim,
+            },
+            indent=2,
+        )
+    )
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

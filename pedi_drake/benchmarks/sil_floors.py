@@ -1,0 +1,98 @@
+"""Software in the loop at real time, repeated: how often each mission succeeds over the wire.
+
+    python -m pedi_drake.benchmarks.sil_floors [--missions hit_target_front open_door prong_push_box]
+        [--runs 5] [--scenario_name default] [--out benchmarks/results/sil_floors.json]
+
+Each run is `python -m pedi_drake.apps.sil --mission M` (the simulator bridge in its own process,
+the controller here, both at real time), judged by the bridge's ground truth. Per run: success,
+the driver's latch, the largest true foot error, the loop's deadline misses per 1000 ticks and
+the longest, its lateness, and the load average before and after (this machine may be shared).
+"""
+
+import argparse
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+from pedi_drake.apps.sil import run_sil
+
+DEFAULT_MISSIONS = ("hit_target_front", "open_door", "prong_push_box")
+
+
+def _load() -> list[str] | None:
+    path = Path("/proc/loadavg")
+    return path.read_text().split()[:3] if path.exists() else None
+
+
+def one_run(mission: str, scenario_name: str, out_dir: Path) -> dict:
+    load_before = _load()
+    start = time.monotonic()
+    result = run_sil(mission, out_dir, scenario_name=scenario_name)
+    driver, sil = result["driver"], result["sil"]
+    errors = [row["true_error_m"] for row in sil["foot_errors"]]
+    loop = driver["loop"]
+    return {
+        "mission": mission,
+        "success": bool(result["success"]),
+        "reason": result["reason"],
+        "latched": driver["latched"],
+        "max_true_foot_error_mm": 1e3 * max(errors) if errors else None,
+        "estimator_trunk_error_max_mm": 1e3 * sil["estimator_trunk_position_error"]["max_m"],
+        "ticks": loop["ticks"],
+        "deadline_misses_per_1000": loop["deadline_misses_per_1000"],
+        "longest_miss_ms": loop["longest_miss_ms"],
+        "lateness_ms": loop["lateness_ms"],
+        "command_interdeparture_ms": loop["command_interdeparture_ms"],
+        "controller_tick_ms": result["controller_tick_ms"],
+        "real_time_factor": result["real_time_factor"],
+        "wall_s": time.monotonic() - start,
+        "load_before": load_before,
+        "load_after": _load(),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--missions", nargs="+", default=list(DEFAULT_MISSIONS))
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--scenario_name", default="default", help="e.g. control_250hz")
+    parser.add_argument("--work", default="out/sil_floors", help="folder of the runs' outputs")
+    parser.add_argument("--out", default="benchmarks/results/sil_floors.json")
+    args = parser.parse_args()
+    rows = []
+    for run in range(args.runs):  # interleaved, so machine load affects every mission alike
+        for mission in args.missions:
+            row = one_run(mission, args.scenario_name, Path(args.work) / f"{mission}_{run}")
+            rows.append(row)
+            error = row["max_true_foot_error_mm"]
+            print(
+                f"{mission:<18} run {run}: {'ok  ' if row['success'] else 'FAIL'} latched {row['latched']}, "
+                f"true foot error {error if error is None else round(error, 1)} mm, "
+                f"misses {row['deadline_misses_per_1000']:.2f}/1000 (longest {row['longest_miss_ms']:.1f} ms), "
+                f"load {row['load_before']} -> {row['load_after']}",
+                flush=True,
+            )
+    print(f"{'mission':<18}{'successes':>10}{'misses/1000 (worst)':>21}{'longest miss [ms]':>19}")
+    summary = {}
+    for mission in args.missions:
+        mine = [row for row in rows if row["mission"] == mission]
+        ok = sum(row["success"] for row in mine)
+        worst_rate = max(row["deadline_misses_per_1000"] for row in mine)
+        longest = max(row["longest_miss_ms"] for row in mine)
+        summary[mission] = {"successes": ok, "runs": len(mine), "worst_misses_per_1000": worst_rate}
+        print(f"{mission:<18}{f'{ok}/{len(mine)}':>10}{worst_rate:21.2f}{longest:19.1f}")
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    machine = {"processor": platform.processor() or platform.machine(), "cpus": os.cpu_count()}
+    out.write_text(
+        json.dumps(
+            {"scenario_name": args.scenario_name, "machine": machine, "summary": summary, "runs": rows}, indent=2
+        )
+    )
+    print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,439 @@
+"""Go1Link: the driver's wire to the robot, with its own receive thread and guard.
+
+The control loop (a Drake Simulator paced to the wall clock) can be late: a slow tick, a
+garbage collection, a loaded machine. The robot's silence must not be judged by a clock that a
+late loop stops reading, so the link receives on a thread of its own:
+
+  * status messages are decoded, checked and time-stamped (time.monotonic) by that thread within
+    about a millisecond of their arrival, while the loop computes; `Inbox.snapshot` hands the
+    newest to the loop;
+  * the thread records when it last looked at the socket (`last_look`): a channel's silence is
+    `last_look - receipt_time`, judged by the receiver's clock only. A stalled loop cannot make the
+    robot look silent, and if the thread itself was held up (by the GIL), both stamps are late
+    together and silence is not overestimated;
+  * the guard: when the loop has not published for `command_timeout` the thread latches
+    "controller_silence" and puts damping on the wire itself, every period, until the process
+    leaves. The robot-side bridge (like walk-these-ways' `lcm_position`) holds the last command it
+    received, so without this a hung loop would leave the robot on stale targets indefinitely;
+  * `hold_damping(duration)` puts damping on the wire for a bounded time: every exit of a hardware
+    run calls it before the process leaves;
+  * the loop's lateness: every published command is stamped against its tick's wall-clock
+    schedule, and `report()` gives the distribution, deadline misses and command inter-departure
+    times.
+
+Every rejected message is counted by channel and reason (REJECT_REASONS) at a cost of
+microseconds: the size and fingerprint are checked before any decoding.
+
+`threaded=False` keeps the same path without the thread: the loop polls the transport at every
+tick (lock-step runs on an in-process bus, `DrakeLcmTransport`, use it).
+"""
+
+import array
+import dataclasses
+import logging
+import math
+import select
+import threading
+import time
+import weakref
+from collections.abc import Callable
+
+import lcm as lcm_module
+import numpy as np
+
+from pedi_drake.go1_driver import constants as c
+from pedi_drake.go1_driver.config import Go1DriverConfig
+from pedi_drake.go1_driver.safety import SafetyLimits, command_timeout, damping_command
+
+_log = logging.getLogger(__name__)
+
+# Why a message was rejected (index = position in this tuple).
+REJECT_REASONS = (
+    "wrong_size",  # not the encoded size of the channel's type (truncated, padded, foreign)
+    "wrong_fingerprint",  # right size, another type's fingerprint
+    "undecodable",  # the type's decoder raised
+    "nonfinite",  # NaN or Inf in a value the driver uses
+)
+_REASON_INDEX = {name: i for i, name in enumerate(REJECT_REASONS)}
+
+# Messages the LCM library keeps per subscription between two looks of the receive thread: enough
+# for a flood of malformed messages to be counted rather than silently displacing the valid ones.
+QUEUE_CAPACITY = 4096
+
+# Longest wait of the receive thread for a message [s]: how often it looks even when nothing
+# arrives (the silence judgement and the guard advance at this pace).
+RECEIVE_POLL_PERIOD = 0.002
+
+
+class Inbox:
+    """The newest valid message of one channel, its receipt stamp and the counts of what arrived.
+
+    `handle` runs on the receive thread (or the polling loop); `snapshot` on the control loop.
+    """
+
+    def __init__(
+        self,
+        channel: str,
+        lcm_type,
+        to_vector: Callable[[object], np.ndarray],
+        *,
+        sticky_max: bool = False,
+        clock: Callable[[], float] = time.monotonic,
+    ):
+        self.channel = channel
+        self._type = lcm_type
+        self._size = c.REFERENCE_ENCODED_SIZE[lcm_type.__name__]
+        self._fingerprint = lcm_type._get_packed_fingerprint()
+        self._to_vector = to_vector
+        # sticky_max: keep the element-wise maximum of the values that arrived since the last
+        # snapshot, so a button pressed between two control ticks is never missed.
+        self._sticky_max = sticky_max
+        self._taken = True
+        self._clock = clock
+        self._lock = threading.Lock()
+        self.first = threading.Event()
+        self.values: np.ndarray | None = None
+        self.received = 0
+        self.rejected = [0] * len(REJECT_REASONS)
+        self.receipt_time = -math.inf
+
+    def _reject(self, reason: str, detail: str = "") -> None:
+        i = _REASON_INDEX[reason]
+        with self._lock:
+            self.rejected[i] += 1
+            count = self.rejected[i]
+        # First occurrence, then every power of ten: counted always, never a flood of log lines.
+        if count == 1 or math.log10(count).is_integer():
+            _log.warning("rejected a message on %s: %s %s (%d so far)", self.channel, reason, detail, count)
+
+    def handle(self, data: bytes) -> None:
+        """Checks, decodes and stamps one message; a foreign or broken one is counted and dropped."""
+        if len(data) != self._size:
+            self._reject("wrong_size", f"{len(data)} bytes, expected {self._size}")
+            return
+        if data[:8] != self._fingerprint:
+            self._reject("wrong_fingerprint")
+            return
+        try:
+            values = np.asarray(self._to_vector(self._type.decode(data)), dtype=float)
+        except Exception as error:  # the type's own decoder: whatever it raises, the driver carries on
+            self._reject("undecodable", str(error))
+            return
+        if not np.isfinite(values).all():
+            self._reject("nonfinite")
+            return
+        now = self._clock()
+        with self._lock:
+            if self._sticky_max and not self._taken and self.values is not None:
+                values = np.maximum(values, self.values)
+            self._taken = False
+            self.values = values
+            self.received += 1
+            self.receipt_time = now
+        self.first.set()
+
+    def snapshot(self) -> tuple[np.ndarray | None, int, int, float]:
+        """(newest values or None, messages received, messages rejected, receipt time [s])."""
+        with self._lock:
+            self._taken = True
+            return self.values, self.received, sum(self.rejected), self.receipt_time
+
+    def counts(self) -> dict:
+        with self._lock:
+            return {
+                "received": self.received,
+                "dropped": sum(self.rejected),
+                "rejected": {reason: n for reason, n in zip(REJECT_REASONS, self.rejected, strict=True) if n},
+            }
+
+
+def _leg_control_vector(message) -> np.ndarray:
+    return np.concatenate([message.q, message.qd, message.tau_est])
+
+
+def _state_estimator_vector(message) -> np.ndarray:
+    return np.concatenate([message.quat, message.omegaBody, message.aBody, message.contact_estimate])
+
+
+def _estop_vector(fields: tuple[str, ...]) -> Callable[[object], np.ndarray]:
+    for field in fields:
+        if field not in c.CHANNEL_TYPES[c.RC_COMMAND_CHANNEL].__slots__:
+            raise ValueError(f"rc_command_lcmt has no field {field!r}")
+
+    # Only the switches are used (int16 on the wire, always finite): NaN sticks do not hide a press.
+    def to_vector(message) -> np.ndarray:
+        return np.array([1.0 if any(getattr(message, f) != 0 for f in fields) else 0.0])
+
+    return to_vector
+
+
+@dataclasses.dataclass
+class _Timing:
+    """The loop's publications: lateness against the tick's schedule, and inter-departure times [s]."""
+
+    # array('d'): 8 bytes a tick and no Python objects for the garbage collector to walk.
+    lateness: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
+    interdeparture: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
+    anchor: float | None = None  # wall time of diagram time 0 on the schedule [s]
+    last_departure: float | None = None
+
+
+def _distribution_ms(values) -> dict | None:
+    if len(values) == 0:
+        return None
+    x = 1e3 * np.asarray(values)
+    return {
+        "median": float(np.median(x)),
+        "p99": float(np.percentile(x, 99)),
+        "p99_9": float(np.percentile(x, 99.9)),
+        "max": float(np.max(x)),
+    }
+
+
+class Go1Link:
+    """The bus to the Go1: status inboxes filled by a receive thread, commands out, the guard.
+
+    `transport`: an `lcm.LCM` (or anything with its subscribe / publish / handle_timeout and,
+    for the thread, fileno). `config`: the driver's settings (period, watchdogs, damping gain).
+    """
+
+    def __init__(
+        self,
+        transport,
+        config: Go1DriverConfig,
+        *,
+        url: str = "",
+        threaded: bool = True,
+        clock: Callable[[], float] = time.monotonic,
+    ):
+        self._transport = transport
+        self.url = url
+        self._config = config
+        self._period = config.safety.period
+        self._limits = SafetyLimits.from_config(config.safety)
+        self._threaded = threaded
+        self._clock = clock
+        self._publish_lock = threading.Lock()
+        # The pace of the loop against the wall clock (the Simulator's target real-time rate).
+        self.realtime_rate = 1.0
+        self.leg_control = self._add(c.LEG_CONTROL_CHANNEL, _leg_control_vector)
+        self.state_estimator = self._add(c.STATE_ESTIMATOR_CHANNEL, _state_estimator_vector)
+        self.rc_command = self._add(
+            c.RC_COMMAND_CHANNEL, _estop_vector(tuple(config.safety.rc_estop_fields)), sticky_max=True
+        )
+        self.last_look = -math.inf
+        self._timing = _Timing()
+        self._last_publish: float | None = None  # wall time of the loop's last publication [s]
+        self.guard_latched: str | None = None  # why the link itself put damping on the wire
+        self._guard_published = 0
+        self._shutdown_published = 0
+        self._message_id = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    @property
+    def config(self) -> Go1DriverConfig:
+        return self._config
+
+    @property
+    def transport(self):
+        """The bus itself (an `lcm.LCM`): for a replay on an in-process bus, which it shares."""
+        return self._transport
+
+    @staticmethod
+    def from_url(url: str, config: Go1DriverConfig, *, threaded: bool = True) -> "Go1Link":
+        return Go1Link(lcm_module.LCM(url), config, url=url, threaded=threaded)
+
+    def _add(self, channel: str, to_vector, sticky_max: bool = False) -> Inbox:
+        inbox = Inbox(channel, c.CHANNEL_TYPES[channel], to_vector, sticky_max=sticky_max, clock=self._clock)
+        subscription = self._transport.subscribe(channel, lambda _channel, data: inbox.handle(data))
+        if subscription is not None and hasattr(subscription, "set_queue_capacity"):
+            subscription.set_queue_capacity(QUEUE_CAPACITY)
+        return inbox
+
+    @property
+    def inboxes(self) -> tuple[Inbox, Inbox, Inbox]:
+        """In the order of constants.STATUS_CHANNELS."""
+        return self.leg_control, self.state_estimator, self.rc_command
+
+    # -- receiving ---------------------------------------------------------------------------
+
+    def start(self) -> None:
+        """Starts the receive thread (idempotent; without `threaded` nothing to start)."""
+        if not self._threaded or self._thread is not None:
+            return
+        self._stop.clear()
+        self._thread = threading.Thread(
+            target=_receive_loop, args=(weakref.ref(self), self._stop), name="go1_link_receive", daemon=True
+        )
+        self._thread.start()
+
+    def close(self) -> None:
+        """Stops the receive thread (the counts and timings stay readable)."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(1.0)
+        self._thread = None
+
+    def _drain(self) -> None:
+        while self._transport.handle_timeout(0) > 0:
+            pass
+
+    def _look(self, timeout: float) -> None:
+        """Waits up to `timeout` [s] for messages, handles every pending one, then stamps the look."""
+        ready, _, _ = select.select([self._transport.fileno()], [], [], timeout)
+        if ready:
+            self._drain()
+        self.last_look = self._clock()
+
+    def poll(self) -> None:
+        """Handles what is pending when there is no receive thread (called by the loop every tick)."""
+        if not self._threaded:
+            self._drain()
+            self.last_look = self._clock()
+
+    def silence(self, inbox: Inbox) -> float:
+        """How long `inbox`'s channel has been silent when the receiver last looked [s] (inf before any)."""
+        return max(0.0, self.last_look - inbox.receipt_time) if inbox.receipt_time > -math.inf else math.inf
+
+    def wait_for_first(self, inbox: Inbox, timeout: float) -> bool:
+        """Blocks until `inbox` has a valid message or `timeout` [s] passes; True when one came."""
+        self.start()
+        deadline = time.monotonic() + timeout
+        while not inbox.first.is_set():
+            remaining = deadline - time.monotonic()
+            if remaining <= 0.0:
+                return False
+            if self._threaded:
+                inbox.first.wait(min(remaining, 0.05))
+            else:
+                self._transport.handle_timeout(max(1, min(50, int(remaining * 1000))))
+        return True
+
+    # -- sending -----------------------------------------------------------------------------
+
+    def _publish(self, command: np.ndarray, t_us: int) -> None:
+        message = c.command_to_message(command, timestamp_us=t_us, message_id=self._message_id)
+        self._message_id += 1
+        self._transport.publish(c.COMMAND_CHANNEL, message.encode())
+
+    def _damping(self) -> np.ndarray:
+        values = self.leg_control.snapshot()[0]
+        q, qd = (values[0:12], values[12:24]) if values is not None else (np.zeros(12), np.zeros(12))
+        return damping_command(q, qd, self._limits, self._config.safety.damping_kd)
+
+    def publish_command(self, command: np.ndarray, t: float) -> None:
+        """Publishes the loop's (bounded) command of diagram time `t` [s] and stamps its lateness.
+
+        After the guard latched, damping goes out instead: the loop's command is no longer trusted.
+        """
+        now = self._clock()
+        timing = self._timing
+        scheduled_offset = t / self.realtime_rate
+        if timing.anchor is None or now - scheduled_offset < timing.anchor:
+            # The Simulator never runs ahead of its schedule: an earlier tick sets the anchor.
+            timing.anchor = now - scheduled_offset
+        timing.lateness.append(now - (timing.anchor + scheduled_offset))
+        if timing.last_departure is not None:
+            timing.interdeparture.append(now - timing.last_departure)
+        timing.last_departure = now
+        with self._publish_lock:
+            self._last_publish = now
+            if self.guard_latched is not None:
+                command = self._damping()
+            self._publish(command, int(round(t * 1e6)))
+
+    def _guard(self) -> None:
+        """Runs on the receive thread after every look: damping when the loop went silent."""
+        if self._last_publish is None or self._stop.is_set():
+            return
+        now = self._clock()
+        with self._publish_lock:
+            silent = now - self._last_publish
+            elapsed = self._message_id * self._period
+            if self.guard_latched is None and silent > command_timeout(self._config.safety, elapsed):
+                self.guard_latched = "controller_silence"
+                _log.error("Go1 driver: the control loop has not published for %.0f ms, damping", 1e3 * silent)
+            if self.guard_latched is not None and silent >= self._period:
+                self._publish(self._damping(), 0)
+                self._guard_published += 1
+                self._last_publish = now
+
+    def hold_damping(self, duration: float) -> int:
+        """Puts damping (kp 0, kd > 0, tau 0) on the wire every period for `duration` [s]; returns
+        the number sent. The loop's commands are refused from now on (the guard latches "shutdown")."""
+        with self._publish_lock:
+            if self.guard_latched is None:
+                self.guard_latched = "shutdown"
+        sent = 0
+        end = time.monotonic() + max(duration, 0.0)
+        while True:
+            with self._publish_lock:
+                self._publish(self._damping(), 0)
+                self._last_publish = self._clock()
+            sent += 1
+            if time.monotonic() >= end:
+                break
+            time.sleep(self._period)
+        self._shutdown_published += sent
+        return sent
+
+    # -- reporting ---------------------------------------------------------------------------
+
+    def report(self) -> dict:
+        """Messages by channel (received, dropped, rejected by reason), the loop's timing, the guard."""
+        lateness = np.asarray(self._timing.lateness)
+        misses = int(np.count_nonzero(lateness > self._period))
+        return {
+            "messages": {inbox.channel: inbox.counts() for inbox in self.inboxes},
+            "loop": {
+                "period_s": self._period,
+                "ticks": len(lateness),
+                "lateness_ms": _distribution_ms(lateness),
+                "deadline_misses": misses,
+                "deadline_misses_per_1000": 1000.0 * misses / len(lateness) if len(lateness) else 0.0,
+                "longest_miss_ms": float(1e3 * lateness.max()) if misses else 0.0,
+                "command_interdeparture_ms": _distribution_ms(self._timing.interdeparture),
+            },
+            "guard": {
+                "latched": self.guard_latched,
+                "damping_sent": self._guard_published,
+                "shutdown_damping_sent": self._shutdown_published,
+            },
+        }
+
+
+def _receive_loop(link_ref: "weakref.ref[Go1Link]", stop: threading.Event) -> None:
+    # Holds the link only while looking, so a link nobody uses any more is collected and the
+    # thread ends with it.
+    while not stop.is_set():
+        link = link_ref()
+        if link is None:
+            return
+        try:
+            link._look(RECEIVE_POLL_PERIOD)
+            link._guard()
+        except Exception:  # the thread must outlive anything a message or the transport does
+            _log.exception("Go1 link receive thread")
+        del link
+
+
+class DrakeLcmTransport:
+    """A DrakeLcm as a Go1Link transport, for a link polled by the loop (`threaded=False`).
+
+    For lock-step runs in one process, where the simulator bridge's diagram and the driver share
+    one in-process bus (`DrakeLcm("memq://")`); DrakeLcm dispatches only when polled, so it has
+    no file descriptor for a receive thread.
+    """
+
+    def __init__(self, lcm):
+        self.lcm = lcm
+
+    def subscribe(self, channel: str, handler: Callable[[str, bytes], None]) -> None:
+        self.lcm.Subscribe(channel, lambda data: handler(channel, data))
+
+    def publish(self, channel: str, data: bytes) -> None:
+        self.lcm.Publish(channel, data)
+
+    def handle_timeout(self, timeout_ms: int) -> int:
+        return self.lcm.HandleSubscriptions(timeout_ms)
