@@ -37,7 +37,7 @@ from pedi_drake.exceptions import ConfigError, LcmTimeout  # noqa: E402
 from pedi_drake.mission.spec import load_mission  # noqa: E402
 from pedi_drake.run import run  # noqa: E402
 from pedi_drake.run_checks import check_duration, check_out_dir, check_scene_geometry  # noqa: E402
-from pedi_drake.scenario import default_scenario_file, load_scenario  # noqa: E402
+from pedi_drake.scenario import MISSION_CONTROLLERS, default_scenario_file, load_scenario  # noqa: E402
 
 ERROR_FILE = "error.txt"
 
@@ -51,10 +51,12 @@ def _prepare(args):
     if args.mission is not None:
         overrides = yaml_load(data=args.scenario_text) if args.scenario_text.strip() else {}
         asked = overrides.get("controller") if isinstance(overrides, dict) else None
-        if asked not in (None, "whole_body"):
-            raise ConfigError(f"--scenario_text: controller: a mission runs under 'whole_body', got {asked!r}")
+        if asked not in (None, *MISSION_CONTROLLERS):
+            raise ConfigError(
+                f"--scenario_text: controller: a mission runs under one of {MISSION_CONTROLLERS}, got {asked!r}"
+            )
         mission = load_mission(args.mission)  # validate now: bad input exits 2 before anything runs
-        scenario.mission, scenario.controller = args.mission, "whole_body"
+        scenario.mission, scenario.controller = args.mission, asked or "whole_body"
     elif scenario.mission:
         mission = load_mission(scenario.mission)
     if mission is not None and args.duration is None:
@@ -82,7 +84,11 @@ def _prepare(args):
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--mission", default=None, help="Mission name (missions/) or YAML file; runs under whole_body.")
+    parser.add_argument(
+        "--mission",
+        default=None,
+        help="Mission name (missions/) or YAML file (controller: whole_body unless the scenario picks one).",
+    )
     parser.add_argument("--scenario_file", default=str(default_scenario_file()), help="YAML file of named scenarios.")
     parser.add_argument("--scenario_name", default="default", help="Scenario to run from --scenario_file.")
     parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto the scenario.")
@@ -163,4 +169,8 @@ def _internal_error(error: Exception, out_dir: Path) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    code = main()
+    # The run is over and written: a signal now has nothing to stop. Ignored rather than left to
+    # Python's shutdown, which puts the default handlers back and would die of it (exit -2).
+    STOP.ignore_from_now_on()
+    sys.exit(code)

@@ -7,11 +7,13 @@ their diagrams here.
 
 import dataclasses
 
+import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.geometry import Meshcat
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import ConstantValueSource, VectorLogSink
+from pydrake.systems.primitives import ConstantValueSource, MatrixGain, VectorLogSink
 
+from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.stand_controller import StandController
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
@@ -21,7 +23,7 @@ from pedi_drake.ik.leg_ik_system import LegIkSystem
 from pedi_drake.log_hold import LogHold
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
-from pedi_drake.scenario import Scenario
+from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
 from pedi_drake.station_interface import MakeStation
 from pedi_drake.wall_clock import WallClock
 
@@ -36,11 +38,11 @@ LOGGED_SIGNALS = (
     "base_state",
 )
 # Simulation ground truth for judging: the plant state, the torques the motors applied, the pushes.
-SIM_LOGGED_SIGNALS = ("sim.plant_state", "sim.motor_torque", "sim.push_force")
+SIM_LOGGED_SIGNALS = ("sim.plant_state", "sim.motor_torque", "sim.push_force", "sim.foot_contact_forces")
 # The tolerance of the mission's IK solves [m]: well inside every reach phase's tolerance.
 MISSION_IK_TOLERANCE = 5e-4
 # Simulated sensor signals that are costly to compute: logged through a sample-and-hold.
-SAMPLED_SENSOR_SIGNALS = ("go1.imu", "go1.foot_contact", "go1.torque_estimated")
+SAMPLED_SENSOR_SIGNALS = ("go1.imu", "go1.foot_contact", "go1.torque_estimated", "sim.foot_contact_forces")
 
 
 @dataclasses.dataclass
@@ -95,8 +97,8 @@ def MakePedipulationDiagram(
     of LOGGED_SIGNALS (and of the controller's diagnostics and the mission's outputs)."""
     mission = load_mission(scenario.mission) if scenario.mission else None
     if mission is not None:
-        if scenario.controller != "whole_body":
-            raise ScenarioError(f"mission: {scenario.mission!r} needs controller: whole_body")
+        if scenario.controller not in MISSION_CONTROLLERS:
+            raise ScenarioError(f"mission: {scenario.mission!r} needs controller: one of {MISSION_CONTROLLERS}")
         scenario = apply_mission(scenario, mission)
     builder = DiagramBuilder()
     station = builder.AddNamedSystem("station", MakeStation(scenario, meshcat, hardware=hardware))
@@ -120,24 +122,41 @@ def MakePedipulationDiagram(
         controller = builder.AddNamedSystem("controller", StandController(scenario.stand))
         builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
     else:
-        controller = builder.AddNamedSystem(
-            "controller", WholeBodyController(scenario.whole_body, scenario.robot.prongs)
-        )
+        if scenario.controller == "projected_impedance":
+            system = ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs)
+        else:
+            system = WholeBodyController(scenario.whole_body, scenario.robot.prongs)
+        controller = builder.AddNamedSystem("controller", system)
         builder.Connect(base_state, controller.base_state_port)
         builder.Connect(station.GetOutputPort("go1.position_measured"), controller.position_port)
         builder.Connect(station.GetOutputPort("go1.velocity_measured"), controller.velocity_port)
         extra_logs["controller.diagnostics"] = controller.diagnostics_port
         if mission is not None:
+            force_estimate = mission.force_estimate or scenario.force_estimate
+            if force_estimate == "impedance" and scenario.controller != "projected_impedance":
+                raise ScenarioError(
+                    f"mission: {scenario.mission!r} uses force_estimate: impedance, which needs "
+                    "controller: projected_impedance"
+                )
             manager = builder.AddNamedSystem(
                 "mission",
                 MissionManager(
                     mission,
                     prongs=scenario.robot.prongs,
                     friction=scenario.ground_friction,
+                    force_estimate=force_estimate,
                     safety_margin=scenario.whole_body.safety_margin,
                 ),
             )
             _add_leg_ik(builder, manager)
+            if isinstance(system, ProjectedImpedanceController):
+                # The Eq. 11 estimate, out of the controller's diagnostics.
+                where = system.diag["force_estimate"]
+                select = np.zeros((12, controller.diagnostics_port.size()))
+                select[np.arange(12), np.arange(where.start, where.stop)] = 1.0
+                estimate = builder.AddNamedSystem("foot_force_estimate", MatrixGain(select))
+                builder.Connect(controller.diagnostics_port, estimate.get_input_port())
+                builder.Connect(estimate.get_output_port(), manager.GetInputPort("foot_force_estimate"))
             builder.Connect(base_state, manager.GetInputPort("base_state"))
             for name in ("position_measured", "velocity_measured", "torque_estimated", "foot_contact"):
                 builder.Connect(station.GetOutputPort(f"go1.{name}"), manager.GetInputPort(name))

@@ -50,6 +50,13 @@ class StopRequest:
             signal.signal(signum, handler)
         self._previous = {}
 
+    def ignore_from_now_on(self) -> None:
+        """Ignores SIGINT and SIGTERM for the rest of the process (once its results are written)."""
+        if threading.current_thread() is threading.main_thread():
+            for signum in STOP_SIGNALS:
+                signal.signal(signum, signal.SIG_IGN)
+        self._previous = {}
+
     def __enter__(self) -> "StopRequest":
         return self.install()
 

@@ -33,7 +33,6 @@ NUM_JOINTS = 12
 FOOT_RADIUS = 0.02  # [m]
 # Half sizes of the trunk's collision box, centred on the trunk origin (models/go1/go1.urdf) [m].
 TRUNK_HALF_EXTENTS = (0.1881, 0.04675, 0.057)
-FOOT_FRICTION = 0.8  # [-] Coulomb friction of the foot spheres (rubber on floor).
 TOTAL_MASS = 13.100448  # [kg] without prongs, rotors and IMU included.
 
 # URDF limits in Unitree motor order.

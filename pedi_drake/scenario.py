@@ -17,9 +17,11 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import (
+    FORCE_ESTIMATES,
     HQP_MODES,
     QP_BACKENDS,
     STACKS,
+    ProjectedImpedanceConfig,
     StandControllerConfig,
     WholeBodyControllerConfig,
 )
@@ -33,7 +35,9 @@ from pedi_drake.resources import models_dir, scenarios_dir
 SCENE_OBJECT_KINDS = ("door", "box", "target_panel", "back_object", "fixed_obstacle", "soft_obstacle")
 INITIAL_POSES = ("lying", "standing")
 ESTIMATORS = ("ground_truth", "kalman")
-CONTROLLERS = ("stand_pd", "whole_body")
+CONTROLLERS = ("stand_pd", "whole_body", "projected_impedance")
+# The controllers that run missions (the same ports; see pedi_drake.control).
+MISSION_CONTROLLERS = ("whole_body", "projected_impedance")
 # MultibodyPlantConfig's allowed strings (Drake rejects others only when the plant is built).
 CONTACT_MODELS = ("point", "hydroelastic", "hydroelastic_with_fallback")
 DISCRETE_CONTACT_APPROXIMATIONS = ("", "tamsi", "sap", "similar", "lagged")
@@ -179,12 +183,19 @@ class Scenario:
     pushes: list[Push] = dataclasses.field(default_factory=list)
     # Simulated sensor noise.
     sensor_noise: SensorNoiseConfig = dataclasses.field(default_factory=SensorNoiseConfig)
-    # Which controller drives the robot: "stand_pd" or "whole_body".
+    # Which controller drives the robot: "stand_pd", "whole_body" (the HQP of papers 000 / 003) or
+    # "projected_impedance" (paper 002's projected inverse dynamics with foot impedance).
     controller: str = "stand_pd"
     # Settings of the stand controller.
     stand: StandControllerConfig = dataclasses.field(default_factory=StandControllerConfig)
     # Settings of the whole-body controller.
     whole_body: WholeBodyControllerConfig = dataclasses.field(default_factory=WholeBodyControllerConfig)
+    # Settings of paper 002's projected-impedance controller.
+    projected_impedance: ProjectedImpedanceConfig = dataclasses.field(default_factory=ProjectedImpedanceConfig)
+    # The foot force estimate of press phases (a mission file may set its own): "joint_torque"
+    # (quasi-static, from the estimated joint torques; any controller) or "impedance" (Eq. 11 of
+    # paper 002, from the foot's impedance error; controller: projected_impedance only).
+    force_estimate: str = "joint_torque"
     # The mission to run (a name in missions/ or a YAML path); empty for none.
     mission: str = ""
     # Floating-base estimate used by controllers: "kalman" (IMU + leg kinematics, simulation and
@@ -253,9 +264,9 @@ class Scenario:
             need(value in allowed, field, f"must be one of {allowed}, got {value!r}")
         need(self.whole_body.period > 0, "whole_body.period", f"must be > 0 s, got {self.whole_body.period}")
         need(
-            not self.mission or self.controller == "whole_body",
+            not self.mission or self.controller in MISSION_CONTROLLERS,
             "controller",
-            f"the mission {self.mission!r} runs under 'whole_body', got {self.controller!r}",
+            f"the mission {self.mission!r} runs under one of {MISSION_CONTROLLERS}, got {self.controller!r}",
         )
         for bus, params in self.lcm_buses.items():
             need(
@@ -295,6 +306,18 @@ class Scenario:
                 f"the control period must be the same everywhere, got {periods}",
             )
         for problem in self.kalman.validate(where="kalman"):
+            raise ScenarioError(f"{where}: {problem}")
+        need(
+            self.force_estimate in FORCE_ESTIMATES,
+            "force_estimate",
+            f"must be one of {FORCE_ESTIMATES}, got {self.force_estimate!r}",
+        )
+        need(
+            self.force_estimate != "impedance" or self.controller == "projected_impedance",
+            "force_estimate",
+            "'impedance' needs controller: projected_impedance (its Eq. 11 estimate)",
+        )
+        for problem in self.projected_impedance.validate(where="projected_impedance"):
             raise ScenarioError(f"{where}: {problem}")
 
 

@@ -203,3 +203,70 @@ class PiecewiseQuintic:
             if t < segment.t_end:
                 return segment.sample(t)
         return self.segments[-1].sample(t)
+
+
+@dataclasses.dataclass(frozen=True)
+class CircularPath:
+    """A closed circle in the world x-y plane through `start`, rest to rest.
+
+    The centre is `start - radius * (cos phase, sin phase, 0)`; the angle runs from `phase` by
+    2 pi `laps` along the quintic time law over `duration`, so the path starts and ends at `start`
+    at rest and peaks at 1.875 times the mean speed (2 pi radius laps / duration).
+    """
+
+    start: np.ndarray  # [m]
+    radius: float  # [m]
+    t0: float  # [s]
+    duration: float  # [s]
+    laps: int = 1
+    phase: float = 0.0  # angle of `start` seen from the centre [rad]
+
+    def __deepcopy__(self, memo) -> "CircularPath":
+        return self  # immutable
+
+    @property
+    def t_end(self) -> float:
+        return self.t0 + self.duration
+
+    @property
+    def centre(self) -> np.ndarray:
+        return np.asarray(self.start, float) - self.radius * np.array([np.cos(self.phase), np.sin(self.phase), 0.0])
+
+    def sample(self, t: float) -> TrajectorySample:
+        """Position [m], velocity [m/s] and acceleration [m/s^2] at `t` [s]."""
+        s, ds, dds = quintic_time_law(t, self.t0, self.duration)
+        sweep = 2.0 * np.pi * self.laps
+        angle, rate, rate_dot = self.phase + sweep * s, sweep * ds, sweep * dds
+        c, si = np.cos(angle), np.sin(angle)
+        r = self.radius
+        position = self.centre + r * np.array([c, si, 0.0])
+        velocity = r * rate * np.array([-si, c, 0.0])
+        acceleration = r * rate_dot * np.array([-si, c, 0.0]) - r * rate**2 * np.array([c, si, 0.0])
+        return TrajectorySample(position, velocity, acceleration)
+
+
+@dataclasses.dataclass(frozen=True)
+class PivotedPosition:
+    """The position of a point rigidly attached to a body that turns about a fixed `pivot` along
+    `orientation` (a QuinticOrientationSegment from R0): p(t) = c + R(t) R0^T (p0 - c).
+
+    Velocity w x r and acceleration alpha x r + w x (w x r), with r = p - c; so a trunk reference
+    made of this and `orientation` turns the trunk about the pivot (a loaded prong tip, say)."""
+
+    orientation: "QuinticOrientationSegment"
+    pivot: np.ndarray  # c [m]
+    start: np.ndarray  # p0 [m]
+
+    def __deepcopy__(self, memo) -> "PivotedPosition":
+        return self  # immutable
+
+    @property
+    def t_end(self) -> float:
+        return self.orientation.t_end
+
+    def sample(self, t: float) -> TrajectorySample:
+        o = self.orientation.sample(t)
+        lever_0 = self.orientation.start.inverse().multiply(np.asarray(self.start, float) - self.pivot)
+        r = o.rotation.multiply(lever_0)
+        w, alpha = o.angular_velocity, o.angular_acceleration
+        return TrajectorySample(self.pivot + r, np.cross(w, r), np.cross(alpha, r) + np.cross(w, np.cross(w, r)))

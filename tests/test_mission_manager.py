@@ -63,6 +63,24 @@ def test_phases_run_in_order_and_the_mission_succeeds(tmp_path):
     assert progress.records[2].metrics["error_m"] < 0.005
 
 
+def test_body_move_with_a_height_takes_the_trunk_to_that_height(tmp_path):
+    phases = """
+  - {kind: stand_up, height: 0.28, duration: 1.5, timeout: 3.0}
+  - {kind: body_move, offset: [0.02, 0.0, 0.05], height: 0.22, duration: 1.0, timeout: 3.0}
+"""
+    progress, station, station_context = _run_mission(tmp_path, phases, 6.0)
+    assert progress.status == SUCCEEDED, progress.reason
+    plant = station.GetSubsystemByName("plant")
+    trunk = plant.GetBodyByName("trunk").EvalPoseInWorld(station.GetSubsystemContext(plant, station_context))
+    stood, moved = (record.t_end for record in progress.records)
+    start = progress.references.body_position.sample(stood).position
+    goal = progress.references.body_position.sample(moved).position
+    # The height replaces the offset's z; its x and y still apply.
+    np.testing.assert_allclose(goal - start, [0.02, 0.0, 0.22 - start[2]], atol=1e-9)
+    assert goal[2] == pytest.approx(0.22)
+    assert np.linalg.norm(trunk.translation() - goal) < 0.01
+
+
 def test_unreachable_target_fails_cleanly_and_ends_on_four_legs(tmp_path):
     phases = (
         QUICK_START

@@ -76,6 +76,7 @@ def test_reach_takes_companion_legs(tmp_path):
         ("phases:\n  - {kind: wait, timeout: -1}\n", r"phases\[0\]\.timeout: must be > 0"),
         ("phases:\n  - {kind: reach, frame: hip}\n", r"phases\[0\]\.frame: must be one of"),
         ("phases:\n  - {kind: press, direction: [0, 0, 0]}\n", r"phases\[0\]\.direction: expected a unit"),
+        ("phases:\n  - {kind: body_move, height: -0.1}\n", r"phases\[0\]\.height: must be a finite number >= 0"),
         ("phases: []\n", r"phases: expected a non-empty list"),
         ("phases:\n  - {kind: wait, name: a}\n  - {kind: wait, name: a}\n", r"duplicate phase names \['a'\]"),
         ("scene:\n  - {kind: box, positon: [0, 0, 0]}\nphases:\n  - {kind: wait}\n", r"scene\[0\]\.positon: unknown"),
@@ -108,6 +109,14 @@ def test_reach_takes_companion_legs(tmp_path):
             r"phases\[0\]\.together\[0\]\.targt: unknown field; CompanionReach has",
         ),
         ("phases:\n  - {kind: reach, together: {leg: FL}}\n", r"phases\[0\]\.together: expected a list"),
+        ("phases:\n  - {kind: body_path, radius: -0.1}\n", r"phases\[0\]\.radius: must be >= 0 m"),
+        ("phases:\n  - {kind: body_path}\n", r"phases\[0\]\.via_points: give a circle radius > 0 or"),
+        ("phases:\n  - {kind: body_path, via_points: [[0.01, 0]]}\n", r"phases\[0\]\.via_points\[0\]: expected"),
+        ("phases:\n  - {kind: body_path, radius: 0.03, laps: 0}\n", r"phases\[0\]\.laps: must be at least 1"),
+        ("phases:\n  - {kind: hold_foot_pose, leg: XX}\n", r"phases\[0\]\.leg: must be one of"),
+        ("phases:\n  - {kind: lean_on_prongs, prongs: [front]}\n", r"phases\[0\]\.prongs\[0\]: expected a prong name"),
+        ("phases:\n  - {kind: body_rotate, pivot: tip}\n", r"phases\[0\]\.pivot: expected a prong name"),
+        ("force_estimate: sensor\nphases:\n  - {kind: wait}\n", r"force_estimate: must be one of"),
     ],
 )
 def test_mistakes_name_file_phase_and_field(tmp_path, body, pattern):

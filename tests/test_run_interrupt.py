@@ -54,7 +54,10 @@ def test_sigint_at_random_times_always_leaves_a_valid_result_json(tmp_path):
             assert result["success"] is False and "SIGINT" in result["reason"]
             assert result["interrupt_reason"] == "SIGINT received"
         else:
-            assert code in (0, 1), (delay, code, err)
+            # The run ended before the signal: 0 or 1 by its result. A signal that lands while the
+            # interpreter shuts down (its handlers already given back) ends the process as Ctrl-C
+            # does by default; by then result.json is complete and says what happened.
+            assert code in (0, 1, -signal.SIGINT), (delay, code, err)
         for name in ("logs.npz", "joint_positions.png", "foot_forces.png", "replay.html"):
             assert (out / name).stat().st_size > 0, name
     assert interrupted >= 1, f"no run was interrupted (delays {np.round(delays, 1).tolist()} s)"

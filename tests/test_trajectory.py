@@ -78,3 +78,48 @@ def test_invalid_segments_are_rejected():
         QuinticSegment([0.0], [np.nan], 0.0, 1.0)
     with pytest.raises(PediError):
         QuinticSegment([0.0, 1.0], [1.0], 0.0, 1.0)
+
+
+def test_circular_path_is_closed_at_rest_and_its_derivatives_match():
+    from pedi_drake.trajectory import CircularPath
+
+    start = np.array([0.1, -0.05, 0.28])
+    path = CircularPath(start, 0.03, 1.0, 6.0, laps=2, phase=0.4)
+    for t in (0.0, 1.0, 7.0, 9.0):
+        sample = path.sample(t)
+        np.testing.assert_allclose(sample.position, start, atol=1e-12)
+        np.testing.assert_allclose(sample.velocity, 0.0, atol=1e-12)
+    h = 1e-6
+    for t in np.linspace(1.2, 6.8, 9):
+        sample = path.sample(t)
+        assert np.linalg.norm(sample.position - path.centre) == pytest.approx(0.03, abs=1e-12)
+        assert sample.position[2] == pytest.approx(start[2])
+        np.testing.assert_allclose(
+            sample.velocity, (path.sample(t + h).position - path.sample(t - h).position) / (2 * h), atol=1e-6
+        )
+        np.testing.assert_allclose(
+            sample.acceleration, (path.sample(t + h).velocity - path.sample(t - h).velocity) / (2 * h), atol=1e-5
+        )
+
+
+def test_pivoted_position_turns_about_the_pivot_and_its_derivatives_match():
+    from pedi_drake.trajectory import PivotedPosition
+
+    R0 = RotationMatrix(RollPitchYaw(0.0, 0.12, 0.0))
+    R1 = RotationMatrix(RollPitchYaw(0.08, 0.2, -0.05))
+    orientation = QuinticOrientationSegment(R0, R1, 0.5, 1.5)
+    pivot, start = np.array([0.16, 0.0, 0.015]), np.array([0.0, 0.0, 0.17])
+    path = PivotedPosition(orientation, pivot, start)
+    np.testing.assert_allclose(path.sample(0.0).position, start, atol=1e-12)
+    h = 1e-6
+    for t in np.linspace(0.6, 1.9, 7):
+        sample = path.sample(t)
+        # A point of the turning body: its offset from the pivot is the start offset, turned.
+        lever = orientation.sample(t).rotation.multiply(R0.inverse().multiply(start - pivot))
+        np.testing.assert_allclose(sample.position, pivot + lever, atol=1e-12)
+        np.testing.assert_allclose(
+            sample.velocity, (path.sample(t + h).position - path.sample(t - h).position) / (2 * h), atol=1e-6
+        )
+        np.testing.assert_allclose(
+            sample.acceleration, (path.sample(t + h).velocity - path.sample(t - h).velocity) / (2 * h), atol=1e-5
+        )

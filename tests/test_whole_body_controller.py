@@ -7,8 +7,9 @@ import pytest
 
 from pedi_drake import robot
 from pedi_drake.benchmarks.demos import demo_scenario, run_demo
-from pedi_drake.control import references
+from pedi_drake.control import references, tasks
 from pedi_drake.control.config import WholeBodyControllerConfig
+from pedi_drake.control.stacks import ResolvedInputs
 from pedi_drake.control.whole_body_controller import (
     STATUS_BAD_INPUT,
     STATUS_CONTACTS_RELAXED,
@@ -172,6 +173,41 @@ def test_sliding_prongs_that_friction_cannot_stop_brake_at_the_limit_instead_of_
     mu = controller.config.friction / np.sqrt(2.0)
     assert np.all(np.abs(forces[:, 0]) <= mu * forces[:, 2] + 1e-6)
     assert np.sum(forces[:, 0]) < -0.9 * mu * np.sum(forces[:, 2])  # braking, at the friction limit
+
+
+def test_hqp_takes_the_optional_5d_foot_task():
+    controller, context = standing_controller()
+    tick(controller, context, 2)
+    controller.contact_set_port.FixValue(context, references.contact_set_vector(("FL", "RR", "RL")))
+    p_WF = controller.model.update(controller.base_state_port.Eval(context), robot.STANDING_Q, np.zeros(12)).p_contacts[
+        0
+    ]
+    R_WC, _, _ = controller.model.calf_orientation(0)
+    rotation = tasks.orientation_error_W(R_WC, np.eye(3)) + np.array([0.05, -0.05, 0.0])
+    legs = references.leg_reference_vector({"FR": (references.LEG_MODE_FOOT_POSE, p_WF, np.zeros(3), rotation)})
+    controller.leg_reference_port.FixValue(context, legs)
+    _, diag = tick(controller, context, 1)
+    assert diag[controller.diag["status"]][0] in (STATUS_OK, STATUS_CONTACTS_RELAXED)
+    snapshot = controller.model.update(controller.base_state_port.Eval(context), robot.STANDING_Q, np.zeros(12))
+    snapshot.calf_orientations[0] = controller.model.calf_orientation(0)
+    inputs = ResolvedInputs(
+        body=references.parse_body_reference(
+            references.body_reference_vector(
+                snapshot.p_WB, initial_trunk_pose(RobotConfig(initial_pose="standing")).rotation()
+            )
+        ),
+        legs=references.parse_leg_reference(legs),
+        ramp=np.array([0.0, 1.0, 1.0, 1.0]),
+        no_motion=np.array([False, True, True, True]),
+        polygon_N=np.zeros((0, 2)),
+        polygon_d=np.zeros(0),
+        friction=0.6,
+        ground_height=0.0,
+    )
+    names = [task.name for task in controller.builder.leg_tasks(snapshot, inputs)]
+    assert names == ["foot_FR", "calf_FR"]
+    calf = controller.builder.leg_tasks(snapshot, inputs)[1]
+    assert calf.A.shape[0] == 2  # roll and pitch only: the yaw is free
 
 
 def test_a_safety_polygon_with_two_vertices_is_rejected_as_bad_input():

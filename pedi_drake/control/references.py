@@ -11,9 +11,12 @@ Layouts (world frame W, Unitree leg order FR, FL, RR, RL):
     [0:3] p_WB_ref [m]   [3:7] quaternion of R_WB_ref (w, x, y, z)   [7:10] v_WB_ref [m/s]
     [10:13] a_WB_ref [m/s^2]   [13:16] w_WB_ref [rad/s]   [16:19] alpha_WB_ref [rad/s^2]
 `leg_reference` (40): per leg k (10 entries from 10 k):
-    [0] mode: 0 none (the leg is a stance or idle leg), 1 foot position in W, 2 joint angles
-    [1:4] position: foot p_WF_ref [m] (mode 1) or (hip, thigh, calf) [rad] (mode 2)
-    [4:7] velocity [m/s | rad/s]   [7:10] acceleration [m/s^2 | rad/s^2]
+    [0] mode: 0 none (the leg is a stance or idle leg), 1 foot position in W, 2 joint angles,
+        3 foot pose in W (the 5-D task: foot position, and the calf's roll and pitch; yaw free)
+    [1:4] position: foot p_WF_ref [m] (modes 1, 3) or (hip, thigh, calf) [rad] (mode 2)
+    [4:7] velocity [m/s | rad/s]
+    [7:10] acceleration [m/s^2 | rad/s^2] (modes 1, 2); mode 3: the rotation vector of the calf's
+        reference orientation R_WC_ref [rad] (the foot pose is held: no acceleration reference)
     A leg with mode != 0 is a pedipulation leg; it should not be in the contact set.
 `contact_set` (4 + number of prongs): 1 for a contact that should bear load (FR, FL, RR, RL,
     prong_0, ...), 0 otherwise. Changes are ramped over `contact_ramp_time`.
@@ -42,7 +45,7 @@ LEG_REFERENCE_SIZE = 40
 LEG_BLOCK = 10
 SAFETY_POLYGON_MAX_VERTICES = 8  # the four feet and up to four prong tips
 SAFETY_POLYGON_SIZE = 4 + 2 * SAFETY_POLYGON_MAX_VERTICES
-LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS = 0, 1, 2
+LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS, LEG_MODE_FOOT_POSE = 0, 1, 2, 3
 
 
 @dataclasses.dataclass
@@ -149,8 +152,3 @@ def contact_set_vector(
     if prongs:
         x[len(robot.LEG_NAMES) :] = 1.0
     return x
-
-
-def validate_reference(name: str, x: np.ndarray) -> bool:
-    """True when every entry is finite (non-finite references are rejected by the controller)."""
-    return bool(np.all(np.isfinite(x)))

@@ -54,6 +54,8 @@ class RobotSnapshot:
     v_com: np.ndarray  # (3,) centre-of-mass velocity in world [m/s]
     # (T, t0) of tasks.torque_map, filled on first use.
     torque_map: tuple[np.ndarray, np.ndarray] | None = None
+    # ControllerModel.calf_orientation of the legs with a 5-D foot task, by Unitree leg index.
+    calf_orientations: dict = dataclasses.field(default_factory=dict)
 
     @property
     def num_contacts(self) -> int:
@@ -81,6 +83,7 @@ class ControllerModel:
         for name in robot.prong_body_names(prongs):
             frames.append(plant.GetBodyByName(name, model).body_frame())
             points.append(np.array([0.0, 0.0, -prongs.length]))  # the tip sphere's centre
+        self.calf_frames = tuple(plant.GetBodyByName(f"{leg}_calf", model).body_frame() for leg in robot.LEG_NAMES)
         self.contact_frames = tuple(frames)
         self.contact_points = tuple(points)
         self._point_columns = tuple(p.reshape(3, 1) for p in points)
@@ -156,3 +159,14 @@ class ControllerModel:
             V_trunk=J_trunk @ v,
             v_com=J_com @ v,
         )
+
+    def calf_orientation(self, leg: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(R_WC (3, 3), J_w (3, nv), Jdot_w v (3,)) of the calf of leg `leg` (Unitree index) at
+        the state of the last `update`: its orientation, angular-velocity Jacobian (world) and
+        angular bias acceleration [rad/s^2]. On demand: only a 5-D foot task needs it."""
+        plant, context, frame, world = self.plant, self.context, self.calf_frames[leg], self.world
+        kV = JacobianWrtVariable.kV
+        J = plant.CalcJacobianSpatialVelocity(context, kV, frame, self._origin, world, world)
+        bias = plant.CalcBiasSpatialAcceleration(context, kV, frame, self._origin, world, world)
+        R = plant.CalcRelativeTransform(context, world, frame).rotation().matrix()
+        return R, J[:3], bias.rotational()

@@ -8,7 +8,8 @@ paper000 (Sec. III-B, two TSID levels, here strict):
     level 0 "physics" + "feasibility": floating-base dynamics, contact no-motion; contact force
         limits and friction pyramid, torque limits, joint limits (hard), capture point in the
         safety polygon (soft);
-    level 1 "pose": trunk position and attitude, pedipulation foot / leg joint reference, idle legs;
+    level 1 "pose": trunk position and attitude, pedipulation foot / leg joint reference (or the
+        optional 5-D foot pose: foot position and the calf's roll and pitch), idle legs;
     level 2 "regularisation" (added so the optimum is unique): posture, contact forces, torques.
 paper003 (Sec. VI, five levels):
     0 dynamic feasibility (as above; the capture point optionally, `paper003_balance`),
@@ -25,8 +26,15 @@ from pedi_drake import robot
 from pedi_drake.control import tasks
 from pedi_drake.control.config import WholeBodyControllerConfig
 from pedi_drake.control.hqp import EqualityTask, Level
-from pedi_drake.control.references import LEG_MODE_FOOT, LEG_MODE_JOINTS, BodyReference, LegReference
+from pedi_drake.control.references import (
+    LEG_MODE_FOOT,
+    LEG_MODE_FOOT_POSE,
+    LEG_MODE_JOINTS,
+    BodyReference,
+    LegReference,
+)
 from pedi_drake.control.robot_model import RobotSnapshot
+from pedi_drake.vector3 import axis_angle_matrix
 
 # A held contact moving faster than this along the ground is sliding [m/s] (well above the
 # estimator's velocity noise of a few mm/s).
@@ -64,6 +72,7 @@ class StackBuilder:
         self.trunk_orientation = tasks.TrunkOrientation(tasks.PdGains(c.trunk_orientation.kp, c.trunk_orientation.kd))
         self.trunk_position = tasks.TrunkPosition(tasks.PdGains(c.trunk_position.kp, c.trunk_position.kd))
         self.foot = tasks.FootPosition(tasks.PdGains(c.foot_position.kp, c.foot_position.kd))
+        self.calf = tasks.CalfOrientation(tasks.PdGains(c.foot_orientation.kp, c.foot_orientation.kd))
         self.leg_joints = tasks.JointPosture(tasks.PdGains(c.leg_joints.kp, c.leg_joints.kd), "leg_joints")
         self.posture = tasks.JointPosture(tasks.PdGains(c.posture.kp, c.posture.kd), "posture")
         self.force_regularization = tasks.ContactForceRegularization()
@@ -110,6 +119,12 @@ class StackBuilder:
             if ref.mode == LEG_MODE_FOOT:
                 rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, ref.acceleration))
                 rows[-1].name = f"foot_{leg}"
+            elif ref.mode == LEG_MODE_FOOT_POSE:
+                # The optional 5-D task: the foot held at a world pose (its calf's roll and pitch too).
+                rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, np.zeros(3)))
+                rows[-1].name = f"foot_{leg}"
+                rows.append(self.calf.rows(s, self.layout, i, axis_angle_matrix(ref.acceleration)))
+                rows[-1].name = f"calf_{leg}"
             elif ref.mode == LEG_MODE_JOINTS:
                 rows.append(self.leg_joints.rows(s, self.layout, joints, ref.position, ref.velocity, ref.acceleration))
                 rows[-1].name = f"joints_{leg}"

@@ -379,6 +379,28 @@ class FootPosition:
 
 
 @dataclasses.dataclass
+class CalfOrientation:
+    """The 5-D foot task's orientation rows: the calf's rotation about world x and y (roll and
+    pitch) towards R_ref (2 rows), Eq. 1 with a zero reference rate; the yaw is left free."""
+
+    gains: PdGains
+
+    def rows(
+        self,
+        s: RobotSnapshot,
+        layout: VariableLayout,
+        contact: int,
+        R_ref: np.ndarray,
+    ) -> EqualityTask:
+        R_WC, J_w, bias_w = s.calf_orientations[contact]
+        e = orientation_error_W(R_ref, R_WC)[:2]
+        a = self.gains.kp * e - self.gains.kd * (J_w @ s.v)[:2]
+        A = np.zeros((2, layout.size))
+        A[:, : layout.nv] = J_w[:2]
+        return EqualityTask("calf_orientation", A, a - bias_w[:2])
+
+
+@dataclasses.dataclass
 class JointPosture:
     """Joint-space tracking of selected joints (Unitree indices): qdd = qdd_ref + Kp (q_ref - q) + Kd (qd_ref - qd)."""
 

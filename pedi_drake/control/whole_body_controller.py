@@ -180,6 +180,10 @@ class WholeBodyController(LeafSystem):
             return
 
         snapshot = self.model.update(base, q, qd)
+        legs = references.parse_leg_reference(leg_x)
+        for i, leg in enumerate(legs):
+            if leg.mode == references.LEG_MODE_FOOT_POSE:
+                snapshot.calf_orientations[i] = self.model.calf_orientation(i)
         no_motion = (contact_set > 0.5) | (ramp > 0.0)
         loaded = contact_set > 0.5
         num_loaded = int(np.count_nonzero(loaded))
@@ -195,7 +199,7 @@ class WholeBodyController(LeafSystem):
             N, d = np.zeros((0, 2)), np.zeros(0)
         inputs = ResolvedInputs(
             body=references.parse_body_reference(body_x),
-            legs=references.parse_leg_reference(leg_x),
+            legs=legs,
             ramp=ramp,
             no_motion=no_motion,
             polygon_N=N,

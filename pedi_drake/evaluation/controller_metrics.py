@@ -3,7 +3,9 @@
 The controller benchmark and its tests read these figures (foot error over a hold, trunk drift,
 stance-foot slip, torques, tick times, the response to a push). Positions, slip and torques come
 from simulation ground truth (the logged plant state and motor torques), which no controller
-reads; tick times, QP failures and planned contact forces are the controller's own diagnostics.
+reads; the prong load from the simulated foot sensors (the true contact normal forces, when
+noise is off); tick times, QP failures and planned contact forces are the controller's own
+diagnostics.
 
 Which legs stand and when a leg manipulates come from the mission's logged status and leg
 references, so the same figures hold for any mission, not one script.

@@ -37,7 +37,10 @@ def judge_run(record) -> dict:
     """The result of `record` (a `pedi_drake.run.RunRecord`): success, phases, errors, timing."""
     scenario, logs, hardware = record.scenario, record.logs, record.hardware
     base = logs["base_state"].data
-    has_prongs = scenario.robot.prongs is not None
+    mission = record.built.mission
+    # A mission's robot variant replaces the scenario's (as the diagram applied it).
+    prongs = mission.robot.prongs if mission is not None and mission.robot is not None else scenario.robot.prongs
+    has_prongs = prongs is not None
     estimate_fell = fell_during(base[0:4], base[6], has_prongs=has_prongs) if base.shape[1] else False
     plant = states = t_state = None
     if hardware:
@@ -70,6 +73,9 @@ def judge_run(record) -> dict:
         "controller_tick_ms": None,
         "controller": scenario.controller,
         "estimator": scenario.estimator,
+        # The foot force estimate the press phases stopped on (every available one is in "presses").
+        "force_estimate": (record.built.mission.force_estimate if record.built.mission else "")
+        or scenario.force_estimate,
         "hardware": hardware,
         # Where foot errors, drift and falls come from: simulation ground truth, or the estimate.
         "judged_by": "state_estimate" if hardware else "ground_truth",

@@ -109,15 +109,25 @@ def press_results(progress: MissionProgress) -> list[dict]:
         if record.kind != "press" or "stiffness_n_per_m" not in record.metrics:
             continue
         stiffness = record.metrics["stiffness_n_per_m"]
-        rows.append(
-            {
-                "phase": record.name,
-                "force_n": record.metrics["force_n"],
-                "displacement_m": record.metrics["displacement_m"],
-                "stiffness_n_per_m": stiffness,
-                "classified_as": "rigid" if stiffness > RIGID_STIFFNESS else "soft",
+        row = {
+            "phase": record.name,
+            "force_n": record.metrics["force_n"],
+            "displacement_m": record.metrics["displacement_m"],
+            "stiffness_n_per_m": stiffness,
+            "classified_as": "rigid" if stiffness > RIGID_STIFFNESS else "soft",
+        }
+        if "force_estimate" in record.metrics:
+            # Which estimate stopped the press, and what each available estimate says.
+            row["force_estimate"] = record.metrics["force_estimate"]
+            row["by_estimate"] = {
+                source: {
+                    "force_n": record.metrics["forces_n"][source],
+                    "stiffness_n_per_m": value,
+                    "classified_as": "rigid" if value > RIGID_STIFFNESS else "soft",
+                }
+                for source, value in record.metrics["stiffness_by_estimate"].items()
             }
-        )
+        rows.append(row)
     return rows
 
 

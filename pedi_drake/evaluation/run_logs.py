@@ -1,11 +1,11 @@
 """The logged signals of a run, saved beside result.json as logs.npz and read back for analysis.
 
-`run()` writes every logged signal (the plots come from the same logs):
-the go1.* station signals, the command, the base-state estimate, the controller diagnostics,
-the mission status and references, and in simulation the plant state (ground truth, for
-evaluation only). Samples are stored as float32 (about 7 significant digits, plenty for plots
-and statistics; signals beyond 1e6, such as the wall clock, as float64) and compressed, so a
-25 s mission at 500 Hz takes a few megabytes.
+`run()` writes every logged signal (the plots come from the same logs): the go1.* station
+signals, the command, the base-state estimate, the controller diagnostics, the mission status
+and references, and in simulation the plant state, the applied motor torques and the pushes
+(`sim.*`: ground truth, for evaluation only). Samples are stored as float32 (about 7
+significant digits, plenty for plots and statistics; signals beyond 1e6, such as the wall
+clock, as float64) and compressed, so a 25 s mission at 500 Hz takes a few megabytes.
 
     logs = read_run_logs("out/hit_target_front")
     t, tau = logs["go1.command"].times, logs["go1.command"].data[48:60]

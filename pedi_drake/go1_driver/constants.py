@@ -53,9 +53,6 @@ REFERENCE_ENCODED_SIZE = {
     "rc_command_lcmt": 46,
 }
 
-# Raw foot force sensor value above which a foot counts as in contact on the real Go1.
-HARDWARE_CONTACT_THRESHOLD = 200.0
-
 # Remote (rc_command) E-stop: the walk-these-ways remote maps its buttons to these switch fields;
 # any of them non-zero latches damping. L2 + B on the Unitree remote sets right_lower_right_switch.
 RC_ESTOP_FIELDS = ("right_lower_right_switch",)

@@ -79,6 +79,7 @@ class MissionManager(LeafSystem):
         friction: float = 0.8,
         safety_margin: float = 0.03,
         period: float = 0.01,
+        force_estimate: str = "joint_torque",
     ):
         """
         Args:
@@ -90,7 +91,7 @@ class MissionManager(LeafSystem):
         """
         super().__init__()
         self._mission = mission
-        self._env = MissionEnvironment(prongs)
+        self._env = MissionEnvironment(prongs, force_estimate)
         self._friction = friction
         self._safety_margin = float(safety_margin)
         num_contacts = 4 + self._env.num_prongs
@@ -107,6 +108,9 @@ class MissionManager(LeafSystem):
         self._velocity = self.DeclareVectorInputPort("velocity_measured", 12)
         self._torque = self.DeclareVectorInputPort("torque_estimated", 12)
         self._foot_contact = self.DeclareVectorInputPort("foot_contact", 4)
+        # Eq. 11 of paper 002 per foot, world [N] (the projected-impedance controller's
+        # `force_estimate` diagnostic); unconnected: only the joint-torque estimate exists.
+        self._impedance_force = self.DeclareVectorInputPort("foot_force_estimate", 12)
         self._ik_answer_ports = {
             leg: (
                 self.DeclareVectorInputPort(f"ik_q_goal.{leg}", 3),
@@ -175,6 +179,11 @@ class MissionManager(LeafSystem):
             qd=np.asarray(self._velocity.Eval(context)),
             tau=np.asarray(self._torque.Eval(context)),
             foot_force=np.asarray(self._foot_contact.Eval(context)),
+            impedance_forces=(
+                np.asarray(self._impedance_force.Eval(context)).reshape(4, 3)
+                if self._impedance_force.HasValue(context)
+                else None
+            ),
         )
 
     def _initialize(self, context, state) -> None:
@@ -301,7 +310,8 @@ class MissionManager(LeafSystem):
         entries = {}
         for leg, leg_traj in refs.legs.items():
             sample = leg_traj.trajectory.sample(t)
-            entries[leg] = (leg_traj.mode, sample.position, sample.velocity, sample.acceleration)
+            last = sample.acceleration if leg_traj.calf_rotation is None else leg_traj.calf_rotation
+            entries[leg] = (leg_traj.mode, sample.position, sample.velocity, last)
         press = refs.press
         if press is not None and press["frozen_at"] is None:
             s = press["speed"] * max(t - press["t0"], 0.0)

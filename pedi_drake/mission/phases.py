@@ -14,7 +14,7 @@ from pydrake.math import RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
 from pedi_drake.control.references import safety_polygon_vector
-from pedi_drake.control.tasks import shrink_polygon
+from pedi_drake.control.tasks import orientation_error_W, shrink_polygon
 from pedi_drake.exceptions import UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
@@ -22,6 +22,7 @@ from pedi_drake.mission import spec
 from pedi_drake.mission.progress import (
     FAILED,
     LEG_MODE_FOOT,
+    LEG_MODE_FOOT_POSE,
     LEG_MODE_JOINTS,
     RUNNING,
     SUCCEEDED,
@@ -31,7 +32,13 @@ from pedi_drake.mission.progress import (
 )
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment
+from pedi_drake.trajectory import (
+    CircularPath,
+    PiecewiseQuintic,
+    PivotedPosition,
+    QuinticOrientationSegment,
+    QuinticSegment,
+)
 
 LYING_HEIGHT = 0.13  # [m] trunk height when lying down under control (legs folded, off the limits)
 CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
@@ -43,9 +50,11 @@ CONTACT_RAMP_WAIT = 0.3  # [s] wait for the controller to ramp a contact's force
 class MissionEnvironment:
     """Constant facts a phase needs: the robot variant and the controller's contact layout."""
 
-    def __init__(self, prongs: ProngDesign | None):
+    def __init__(self, prongs: ProngDesign | None, force_estimate: str = "joint_torque"):
         self.prongs = prongs
         self.num_prongs = 0 if prongs is None else prongs.num_prongs
+        # The foot force estimate press phases stop on: "joint_torque" or "impedance".
+        self.force_estimate = force_estimate
 
 
 def _fail(progress: MissionProgress, reason: str) -> str:
@@ -245,6 +254,12 @@ class BodyRotateRunner(PhaseRunner):
         roll, pitch, yaw = phase.rpy
         goal = RotationMatrix(RollPitchYaw(roll, pitch, yaw0 + yaw))
         _move_body(progress, view.time, None, goal, phase.duration)
+        if phase.pivot:
+            k = _loaded_prong(phase.name, phase.pivot, progress, env)
+            refs = progress.references
+            p_now, _ = _body_sample(progress, view.time)
+            tip_W = view.X_WB @ env.prongs.tip_positions_B()[k]
+            refs.body_position = PivotedPosition(refs.body_orientation, tip_W, p_now)
         progress.memo["goal"] = goal
 
     def step(self, phase, progress, view, env):
@@ -252,6 +267,59 @@ class BodyRotateRunner(PhaseRunner):
         error = view.X_WB.rotation().inverse().multiply(progress.memo["goal"])
         angle = abs(error.ToAngleAxis().angle())
         return SUCCEEDED if done and angle < phase.tolerance else RUNNING
+
+
+class BodyPathRunner(PhaseRunner):
+    """The trunk along a circle or through via poses, back to its start; orientation held."""
+
+    def start(self, phase, progress, view, env):
+        t = view.time
+        p_now, R_now = _body_sample(progress, t)
+        if phase.radius > 0.0:
+            path = CircularPath(p_now, phase.radius, t, phase.duration, phase.laps, phase.phase)
+        else:
+            points = [p_now] + [p_now + np.asarray(o, float) for o in phase.via_points] + [p_now]
+            n = len(points) - 1
+            path = PiecewiseQuintic.through(np.array(points), t, [phase.duration / n] * n)
+        refs = progress.references
+        refs.body_position = path
+        refs.body_orientation = QuinticOrientationSegment(R_now, R_now, t, 1e-3)
+        progress.memo.update(goal=p_now, squared_error=0.0, samples=0, max_error=0.0)
+
+    def step(self, phase, progress, view, env):
+        memo = progress.memo
+        error = float(np.linalg.norm(view.base.p_WB - progress.references.body_position.sample(view.time).position))
+        memo["squared_error"] += error**2
+        memo["samples"] += 1
+        memo["max_error"] = max(memo["max_error"], error)
+        # From the state estimate (what the mission sees); ground-truth figures come from the run's logs.
+        progress.records[-1].metrics.update(
+            tracking_rms_m=math.sqrt(memo["squared_error"] / memo["samples"]), tracking_max_m=memo["max_error"]
+        )
+        done = view.time >= progress.phase_start + phase.duration
+        if done and np.linalg.norm(view.base.p_WB - memo["goal"]) < phase.tolerance:
+            return SUCCEEDED
+        return RUNNING
+
+
+class HoldFootPoseRunner(PhaseRunner):
+    """The lifted foot held at its world position (and its calf's roll and pitch) from now on."""
+
+    def start(self, phase, progress, view, env):
+        if phase.leg not in progress.references.legs:
+            raise UnreachableTarget(f"{phase.name}: {phase.leg} is not in pedipulation mode")
+        p = view.foot_W(phase.leg)
+        hold = QuinticSegment(p, p, view.time, 1e-3)
+        if phase.orientation:
+            rotation = orientation_error_W(view.calf_rotation_W(phase.leg), np.eye(3))  # its rotation vector
+            leg_trajectory = LegTrajectory(LEG_MODE_FOOT_POSE, hold, calf_rotation=rotation)
+        else:
+            leg_trajectory = LegTrajectory(LEG_MODE_FOOT, hold)
+        progress.references.legs[phase.leg] = leg_trajectory
+        progress.records[-1].metrics.update(leg=phase.leg, p_WF=p.tolist())
+
+    def step(self, phase, progress, view, env):
+        return SUCCEEDED if view.time >= progress.phase_start + phase.duration else RUNNING
 
 
 def _on_prongs(refs) -> bool:
@@ -388,11 +456,19 @@ class ReachRunner(PhaseRunner):
 
 
 class PressRunner(PhaseRunner):
-    """Drives the foot along `direction` until the estimated force or the displacement is reached."""
+    """Drives the foot along `direction` until the estimated force or the displacement is reached.
+
+    The force is the mission's estimate (`MissionEnvironment.force_estimate`); every available
+    estimate is recorded beside it, each with its own bias and stiffness."""
 
     def start(self, phase, progress, view, env):
         if phase.leg not in progress.references.legs:
             raise UnreachableTarget(f"{phase.name}: {phase.leg} is not in pedipulation mode")
+        estimates = view.foot_force_estimates_W(phase.leg)
+        if env.force_estimate not in estimates:
+            raise UnreachableTarget(
+                f"{phase.name}: the {env.force_estimate} force estimate is not available from this controller"
+            )
         direction = np.asarray(phase.direction, float)
         direction /= np.linalg.norm(direction)
         start = view.foot_W(phase.leg)
@@ -401,19 +477,35 @@ class PressRunner(PhaseRunner):
         progress.references.press = dict(
             leg=phase.leg, start=start, direction=direction, speed=phase.speed, t0=view.time, frozen_at=None
         )
-        # The force estimate has a bias from model errors; measure it before touching anything.
-        progress.memo.update(start=start, force_bias=float(-view.foot_external_force_W(phase.leg) @ direction))
+        # Each estimate has a bias from model errors; measure it before touching anything.
+        biases = {source: float(-force @ direction) for source, force in estimates.items()}
+        progress.memo.update(start=start, force_bias=biases)
 
     def step(self, phase, progress, view, env):
         memo, press = progress.memo, progress.references.press
         direction = press["direction"]
-        force = float(-view.foot_external_force_W(phase.leg) @ direction) - memo["force_bias"]
+        estimates = view.foot_force_estimates_W(phase.leg)
+        forces = {
+            source: float(-force @ direction) - memo["force_bias"][source]
+            for source, force in estimates.items()
+            if source in memo["force_bias"]
+        }
+        force = forces[env.force_estimate]
         displacement = float((view.foot_W(phase.leg) - memo["start"]) @ direction)
         metrics = progress.records[-1].metrics
-        metrics.update(leg=phase.leg, force_n=force, displacement_m=displacement)
+        metrics.update(
+            leg=phase.leg,
+            force_n=force,
+            displacement_m=displacement,
+            force_estimate=env.force_estimate,
+            forces_n=forces,
+        )
         if force >= phase.force or displacement >= phase.max_displacement:
             press["frozen_at"] = view.time
             metrics["stiffness_n_per_m"] = force / max(displacement, 1e-4)
+            metrics["stiffness_by_estimate"] = {
+                source: value / max(displacement, 1e-4) for source, value in forces.items()
+            }
             metrics["stopped_by"] = "force" if force >= phase.force else "displacement"
             # Hold the foot where it is, in joint space, for whatever comes next.
             hold = PiecewiseQuintic.through(np.array([view.leg_q(phase.leg)] * 2), view.time, [1e-3])
@@ -476,22 +568,55 @@ class LegToSupportRunner(PhaseRunner):
         return RUNNING
 
 
+def _loaded_prong(what: str, name: str, progress: MissionProgress, env: MissionEnvironment) -> int:
+    """The index of prong `name`, which must exist and be loaded."""
+    if env.prongs is None or spec.prong_index(name) >= env.num_prongs:
+        raise UnreachableTarget(f"{what}: the robot has no {name} ({env.num_prongs} prongs)")
+    k = spec.prong_index(name)
+    if progress.references.contacts[4 + k] < 0.5:
+        raise UnreachableTarget(f"{what}: {name} is not loaded (lean on it first)")
+    return k
+
+
+def _lean_prongs(phase, env: MissionEnvironment) -> list[int]:
+    """Indices of the prongs a lean_on_prongs phase loads."""
+    names = phase.prongs or list(robot.prong_body_names(env.prongs))
+    for name in names:
+        if spec.prong_index(name) >= env.num_prongs:
+            raise UnreachableTarget(f"{phase.name}: the robot has no {name} ({env.num_prongs} prongs)")
+    return [spec.prong_index(name) for name in names]
+
+
 class LeanOnProngsRunner(PhaseRunner):
+    """Lowers the trunk at its attitude until the named prong tips touch, then loads them."""
+
     def start(self, phase, progress, view, env):
         if env.prongs is None:
             raise UnreachableTarget(f"{phase.name}: the robot has no prongs (set robot.prongs)")
-        p_now, _ = _body_sample(progress, view.time)
+        lean = _lean_prongs(phase, env)
+        p_now, R_now = _body_sample(progress, view.time)
+        # Trunk height at which each tip's sphere touches flat ground at the reference attitude.
+        drop = (R_now.matrix() @ env.prongs.tip_positions_B().T)[2]
+        touch = env.prongs.tip_radius - drop
         goal = p_now.copy()
-        # 5 mm below first touch so the tips carry load.
-        goal[2] = env.prongs.ground_contact_height() - 0.005
+        # 5 mm below the touch of the highest named tip, so that every named tip carries load.
+        goal[2] = float(np.min(touch[lean])) - 0.005
+        others = [k for k in range(env.num_prongs) if k not in lean]
+        if others and float(np.max(touch[others])) > goal[2] - 0.005:
+            raise UnreachableTarget(
+                f"{phase.name}: prongs {[f'prong_{k}' for k in others]} would touch the ground too "
+                "(tilt the trunk first, or lean on them as well)"
+            )
         _move_body(progress, view.time, goal, None, phase.duration)
-        progress.memo.update(goal=goal, loaded=False)
+        progress.memo.update(goal=goal, loaded=False, lean=lean)
 
     def step(self, phase, progress, view, env):
         t, memo = view.time, progress.memo
         if not memo["loaded"] and t >= progress.phase_start + phase.duration:
-            if view.base.p_WB[2] < env.prongs.ground_contact_height() + 0.01:
-                progress.references.contacts[4:] = 1.0
+            tips_z = np.array([(view.X_WB @ tip)[2] for tip in env.prongs.tip_positions_B()])
+            if np.all(tips_z[memo["lean"]] < env.prongs.tip_radius + 0.01):
+                for k in memo["lean"]:
+                    progress.references.contacts[4 + k] = 1.0
                 memo.update(loaded=True, t_loaded=t + CONTACT_RAMP_WAIT)
         if memo["loaded"] and t >= memo["t_loaded"]:
             return SUCCEEDED
@@ -525,6 +650,8 @@ RUNNERS: dict[type, PhaseRunner] = {
     spec.LieDown: LieDownRunner(),
     spec.BodyMove: BodyMoveRunner(),
     spec.BodyRotate: BodyRotateRunner(),
+    spec.BodyPath: BodyPathRunner(),
+    spec.HoldFootPose: HoldFootPoseRunner(),
     spec.LegToPedipulation: LegToPedipulationRunner(),
     spec.LegToSupport: LegToSupportRunner(),
     spec.Reach: ReachRunner(),
@@ -538,7 +665,3 @@ assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a
 
 def kind_name(phase) -> str:
     return next(name for name, cls in spec.PHASE_KINDS.items() if isinstance(phase, cls))
-
-
-def is_finite_reference(value) -> bool:
-    return all(math.isfinite(float(v)) for v in np.ravel(value))

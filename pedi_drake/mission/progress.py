@@ -11,26 +11,35 @@ import dataclasses
 import numpy as np
 from pydrake.math import RotationMatrix
 
-from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment
+from pedi_drake.trajectory import (
+    CircularPath,
+    PiecewiseQuintic,
+    PivotedPosition,
+    QuinticOrientationSegment,
+    QuinticSegment,
+)
 
 RUNNING, SUCCEEDED, FAILED, RECOVERING = "running", "succeeded", "failed", "recovering"
 STATUS_CODES = {RUNNING: 0, SUCCEEDED: 1, FAILED: 2, RECOVERING: 3}
-LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS = 0, 1, 2
+LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS, LEG_MODE_FOOT_POSE = 0, 1, 2, 3
 
 
 @dataclasses.dataclass
 class LegTrajectory:
-    """Reference of one pedipulation leg: joint angles (mode 2) or foot position in W (mode 1)."""
+    """Reference of one pedipulation leg: joint angles (mode 2), foot position in W (mode 1), or
+    a held foot pose in W (mode 3: the trajectory's position and the calf's orientation)."""
 
     mode: int
     trajectory: PiecewiseQuintic | QuinticSegment
+    # Mode 3: rotation vector of the calf's reference orientation R_WC_ref [rad].
+    calf_rotation: np.ndarray | None = None
 
 
 @dataclasses.dataclass
 class References:
     """What the controller is asked to do, as trajectories sampled at output time."""
 
-    body_position: QuinticSegment  # p_WB [m]
+    body_position: QuinticSegment | PiecewiseQuintic | CircularPath | PivotedPosition  # p_WB [m]
     body_orientation: QuinticOrientationSegment  # R_WB
     legs: dict[str, LegTrajectory]  # pedipulation legs only
     contacts: np.ndarray  # (4 + number of prongs,) 1 = loaded contact

@@ -12,7 +12,7 @@ from pydrake.math import RigidTransform
 
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BaseState
-from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
+from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B, joint_frames, leg_geometry
 
 
 @dataclasses.dataclass(frozen=True)
@@ -25,6 +25,9 @@ class RobotView:
     qd: np.ndarray  # (12,) joint rates [rad/s]
     tau: np.ndarray  # (12,) estimated joint torques [N m]
     foot_force: np.ndarray  # (4,) foot sensor values (normal force [N] in simulation)
+    # (4, 3) paper 002's impedance-based estimate of the force on each foot, world [N]; None
+    # when the controller does not make one.
+    impedance_forces: np.ndarray | None = None
 
     @functools.cached_property
     def X_WB(self) -> RigidTransform:
@@ -41,6 +44,11 @@ class RobotView:
     def foot_W(self, leg: str) -> np.ndarray:
         """Foot centre in the world [m]."""
         return self.X_WB @ self.foot_B(leg)
+
+    def calf_rotation_W(self, leg: str) -> np.ndarray:
+        """(3, 3) orientation of the calf of `leg` in the world, R_WC (estimate and joint angles)."""
+        _, rotations = joint_frames(leg_geometry(leg), self.leg_q(leg))
+        return self.X_WB.rotation().matrix() @ rotations[2]
 
     def feet_W(self) -> dict[str, np.ndarray]:
         return {leg: self.foot_W(leg) for leg in robot.LEG_NAMES}
@@ -68,12 +76,10 @@ class RobotView:
         tau = self.tau[robot.leg_slice(leg)]
         return -np.linalg.solve(J_W.T, tau + tau_g)
 
-
-def com_offset_from_trunk(view: RobotView) -> np.ndarray:
-    """p_BoCm_W: the CoM relative to the trunk origin, in the world [m]."""
-    return view.com_W() - view.base.p_WB
-
-
-def foot_jacobian_W(view: RobotView, leg: str) -> np.ndarray:
-    """(3, 3) world-frame Jacobian of the foot w.r.t. the leg's joints (trunk fixed)."""
-    return view.X_WB.rotation().matrix() @ foot_jacobian_B(leg, view.leg_q(leg))
+    def foot_force_estimates_W(self, leg: str) -> dict[str, np.ndarray]:
+        """Every available estimate of the environment's force on the foot of `leg`, world [N]:
+        "joint_torque" always, "impedance" when the controller makes one."""
+        estimates = {"joint_torque": self.foot_external_force_W(leg)}
+        if self.impedance_forces is not None:
+            estimates["impedance"] = self.impedance_forces[robot.LEG_NAMES.index(leg)]
+        return estimates

@@ -25,6 +25,7 @@ from pathlib import Path
 from pydrake.common.yaml import yaml_load
 
 from pedi_drake.config_validation import check_against_schema
+from pedi_drake.control.config import FORCE_ESTIMATES
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.resources import missions_dir
 from pedi_drake.robot import FOOT_RADIUS, LEG_NAMES
@@ -75,12 +76,50 @@ class BodyMove(PhaseBase):
 
 @dataclasses.dataclass
 class BodyRotate(PhaseBase):
-    """Rotates the trunk to roll, pitch, yaw [rad] relative to its heading at the phase start."""
+    """Rotates the trunk to roll, pitch, yaw [rad] relative to its heading at the phase start,
+    about its own origin or, with `pivot`, about the tip of a loaded prong (the trunk origin then
+    moves on the sphere about the tip)."""
 
     rpy: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
     duration: float = 1.0
     # Success when the orientation error is below this angle [rad].
     tolerance: float = 0.02
+    # A loaded prong ("prong_0", ...) to turn about; empty: the trunk origin.
+    pivot: str = ""
+
+
+@dataclasses.dataclass
+class BodyPath(PhaseBase):
+    """Moves the trunk along a closed path at its current orientation and back to its start pose:
+    a circle of `radius` in the world x-y plane at constant height (`laps` times), or, with
+    `radius` 0, through the world-frame offsets `via_points` from the start (then back to it).
+    The circle starts at rest and ends at rest (one quintic time law over `duration`); the via
+    points get one rest-to-rest quintic each, `duration` split evenly over the segments."""
+
+    # Circle radius [m]; 0 follows `via_points` instead.
+    radius: float = 0.0
+    # Number of times round the circle [-].
+    laps: int = 1
+    # Angle of the start point seen from the circle's centre [rad] (0: the centre lies behind, -x).
+    phase: float = 0.0
+    # Offsets of the via poses from the start position, world frame [m].
+    via_points: list[list[float]] = dataclasses.field(default_factory=list)
+    # Time for the whole path [s].
+    duration: float = 10.0
+    # Success when, at the end, the trunk is within this distance of its start [m].
+    tolerance: float = 0.01
+
+
+@dataclasses.dataclass
+class HoldFootPose(PhaseBase):
+    """Holds the lifted foot of `leg` at its current world position and, with `orientation`, its
+    calf's roll and pitch (the 5-D foot task; yaw free) for whatever comes next."""
+
+    leg: str = "FL"
+    # Also hold the calf's roll and pitch (5-D), not just the foot position (3-D).
+    orientation: bool = True
+    # Time the phase lasts before the next starts [s].
+    duration: float = 0.5
 
 
 @dataclasses.dataclass
@@ -157,9 +196,13 @@ class Press(PhaseBase):
 
 @dataclasses.dataclass
 class LeanOnProngs(PhaseBase):
-    """Lowers the trunk until the prongs touch and carry load, then adds them as contacts."""
+    """Lowers the trunk (at its current attitude) until the prongs touch and carry load, then adds
+    them as contacts. `prongs` names the prongs to lean on ("prong_0", ...); empty: every prong.
+    A prong that is not named must stay clear of the ground at that height (tilt the trunk first)."""
 
     duration: float = 2.0
+    # The prongs to load, by name; empty: all of them.
+    prongs: list[str] = dataclasses.field(default_factory=list)
 
 
 @dataclasses.dataclass
@@ -182,6 +225,8 @@ PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "lie_down": LieDown,
     "body_move": BodyMove,
     "body_rotate": BodyRotate,
+    "body_path": BodyPath,
+    "hold_foot_pose": HoldFootPose,
     "leg_to_pedipulation": LegToPedipulation,
     "leg_to_support": LegToSupport,
     "reach": Reach,
@@ -202,6 +247,7 @@ class MissionSpec:
     scene: list[SceneObject]
     robot: RobotConfig | None
     source: str  # the file it came from
+    force_estimate: str = ""  # "joint_torque" or "impedance"; empty: the scenario's
     # Disturbances of the simulated world during the mission (added to the scenario's).
     pushes: list[Push] = dataclasses.field(default_factory=list)
 
@@ -218,6 +264,8 @@ class _MissionFile:
     description: str = ""
     scene: list[SceneObject] = dataclasses.field(default_factory=list)
     robot: RobotConfig | None = None
+    # The foot force estimate press phases use: "joint_torque" or "impedance"; empty: the scenario's.
+    force_estimate: str = ""
     pushes: list[Push] = dataclasses.field(default_factory=list)
     phases: list[dict] = dataclasses.field(default_factory=list)
 
@@ -305,6 +353,10 @@ def load_mission(name_or_path: str) -> MissionSpec:
         raise MissionFileError(f"{where}: expected a mapping with 'phases'")
     top = {key: value for key, value in raw.items() if key != "phases"}
     header = _object(top, _MissionFile, "", where)
+    if header.force_estimate not in ("", *FORCE_ESTIMATES):
+        raise MissionFileError(
+            f"{where}: force_estimate: must be one of {FORCE_ESTIMATES} (or absent), got {header.force_estimate!r}"
+        )
     for problem in scene_problems(header.scene, path.parent):
         raise MissionFileError(f"{where}: {problem}")
     for obj in header.scene:
@@ -343,6 +395,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
         scene=header.scene,
         robot=header.robot,
         source=where,
+        force_estimate=header.force_estimate,
         pushes=header.pushes,
     )
 
@@ -403,6 +456,18 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
             )
             for j, point in enumerate(companion.via_points):
                 need(len(point) == 3, f"{field}.via_points[{j}]", f"expected [x, y, z] in metres, got {point}")
+    for k, name in enumerate(getattr(phase, "prongs", None) or []):
+        need(_is_prong_name(name), f"prongs[{k}]", f"expected a prong name like 'prong_0', got {name!r}")
+    pivot = getattr(phase, "pivot", "")
+    if pivot:
+        need(_is_prong_name(pivot), "pivot", f"expected a prong name like 'prong_0' (or empty), got {pivot!r}")
+    if isinstance(phase, BodyPath):
+        need(math.isfinite(phase.radius) and phase.radius >= 0, "radius", f"must be >= 0 m, got {phase.radius}")
+        need(phase.laps >= 1, "laps", f"must be at least 1, got {phase.laps}")
+        need(phase.radius > 0 or phase.via_points, "via_points", "give a circle radius > 0 or at least one via point")
+        for k, point in enumerate(phase.via_points):
+            need(len(point) == 3, f"via_points[{k}]", f"expected [x, y, z] offsets in metres, got {point}")
+        need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
     if isinstance(phase, Press):
         norm = math.sqrt(sum(v * v for v in phase.direction)) if len(phase.direction) == 3 else 0.0
         need(norm > 0.5, "direction", f"expected a unit [x, y, z] vector, got {phase.direction}")
@@ -410,3 +475,13 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         value = getattr(phase, field, None)
         if value is not None:
             need(len(value) == 3, field, f"expected 3 numbers, got {value}")
+
+
+def _is_prong_name(name) -> bool:
+    """Whether `name` has the form of a prong body's name, "prong_<index>"."""
+    return isinstance(name, str) and name.startswith("prong_") and name[len("prong_") :].isdigit()
+
+
+def prong_index(name: str) -> int:
+    """The index of prong `name` ("prong_3" -> 3) in the contact set, after the four feet."""
+    return int(name[len("prong_") :])

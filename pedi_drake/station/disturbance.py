@@ -54,10 +54,16 @@ class PushDisturbance(LeafSystem):
         super().__init__()
         self._pushes = list(pushes)
         self._bodies = [_body_index(plant, push, f"pushes[{i}]") for i, push in enumerate(self._pushes)]
+        # Functions of time alone: recomputed when the time changes, not when the state does.
         self.forces_port = self.DeclareAbstractOutputPort(
-            "forces", lambda: Value([ExternallyAppliedSpatialForce()]), self._calc_forces
+            "forces",
+            lambda: Value([ExternallyAppliedSpatialForce()]),
+            self._calc_forces,
+            prerequisites_of_calc={self.time_ticket()},
         )
-        self.push_force_port = self.DeclareVectorOutputPort("push_force", PUSH_FORCE_SIZE, self._calc_push_force)
+        self.push_force_port = self.DeclareVectorOutputPort(
+            "push_force", PUSH_FORCE_SIZE, self._calc_push_force, prerequisites_of_calc={self.time_ticket()}
+        )
 
     def _calc_forces(self, context: Context, output) -> None:
         t = context.get_time()

@@ -6,6 +6,7 @@ deterministic and the sensors keep no hidden state.
 """
 
 import numpy as np
+from pydrake.common.value import AbstractValue
 from pydrake.math import RotationMatrix
 from pydrake.multibody.plant import ContactResults, MultibodyPlant
 from pydrake.systems.framework import BasicVector, LeafSystem
@@ -152,3 +153,32 @@ def foot_normal_forces(contact_results: ContactResults, foot_of_body: dict[int, 
             if k is not None:
                 forces[k] += force
     return np.array(forces)
+
+
+def foot_contact_forces_W(contact_results: ContactResults, foot_of_body: dict[int, int]) -> np.ndarray:
+    """(k, 3) total contact force on each foot, world frame [N] (summed over its point contacts)."""
+    forces = np.zeros((len(foot_of_body), 3))
+    for i in range(contact_results.num_point_pair_contacts()):
+        info = contact_results.point_pair_contact_info(i)
+        a, b = foot_of_body.get(int(info.bodyA_index())), foot_of_body.get(int(info.bodyB_index()))
+        # contact_force() acts on body B; body A feels its opposite.
+        if b is not None:
+            forces[b] += info.contact_force()
+        if a is not None:
+            forces[a] -= info.contact_force()
+    return forces
+
+
+class FootContactForces(LeafSystem):
+    """Simulation only (`sim.foot_contact_forces`): the true contact force on each foot, world
+    frame [N], FR, FL, RR, RL x (x, y, z). For judging force estimates; controllers never read it."""
+
+    def __init__(self, plant, plant_map) -> None:
+        super().__init__()
+        feet = [plant.GetBodyByName(name, plant_map.model).index() for name in robot.FOOT_BODY_NAMES]
+        self._foot_of_body = foot_index_of_body(feet)
+        self._contacts = self.DeclareAbstractInputPort("contact_results", AbstractValue.Make(ContactResults()))
+        self.DeclareVectorOutputPort("foot_contact_forces", 12, self._calc)
+
+    def _calc(self, context, output: BasicVector) -> None:
+        output.SetFromVector(foot_contact_forces_W(self._contacts.Eval(context), self._foot_of_body).ravel())

@@ -14,7 +14,7 @@ from pedi_drake.station.disturbance import PushDisturbance
 from pedi_drake.station.initial_state import initial_trunk_pose, set_default_go1_state
 from pedi_drake.station.motor_model import Go1MotorModel
 from pedi_drake.station.scene import add_ground, add_scene_object
-from pedi_drake.station.sensors import Go1SensorModel
+from pedi_drake.station.sensors import FootContactForces, Go1SensorModel
 
 GO1_OUTPUT_PORTS = (
     "go1.position_measured",
@@ -60,6 +60,9 @@ def MakeSimulationStation(scenario: Scenario, meshcat: Meshcat | None = None) ->
     pushes = builder.AddNamedSystem("pushes", PushDisturbance(plant, scenario.pushes))
     builder.Connect(pushes.forces_port, plant.get_applied_spatial_force_input_port())
 
+    feet = builder.AddNamedSystem("foot_contact_forces", FootContactForces(plant, plant_map))
+    builder.Connect(plant.get_contact_results_output_port(), feet.GetInputPort("contact_results"))
+    builder.ExportOutput(feet.GetOutputPort("foot_contact_forces"), "sim.foot_contact_forces")
     builder.ExportOutput(plant.get_state_output_port(), "sim.plant_state")
     builder.ExportOutput(plant.get_contact_results_output_port(), "sim.contact_results")
     builder.ExportOutput(plant.get_body_poses_output_port(), "sim.body_poses")

@@ -1,0 +1,295 @@
+"""Paper 002's controller against the HQP: one comparison table from one run of each case.
+
+    python -m pedi_drake.benchmarks.paper002 [--out benchmarks/results/paper002.json]
+        [--missions torso_circle_foot_hold hit_target_front ...] [--controllers ...]
+        [--obstacle-seeds 0,1,2] [--skip-demos] [--reuse]
+
+Cases, each on both controllers (`whole_body`, the paper-000 HQP, and `projected_impedance`):
+
+* the scripted demos (ground-truth estimator, the controller alone): `three_leg_hold` for the
+  controller tick on three stance feet (median and p99 of the `tick_time` diagnostic), foot
+  error, trunk drift and stance slip; `push_foot` for the measured foot stiffness (a known force
+  on the lifted foot) and the Eq. 11 force estimate's error against that force;
+* the missions (Kalman estimate, as shipped): success, foot errors, trunk drift, tick; for
+  `torso_circle_foot_hold` (evaluation IV-A) the held foot's position and orientation errors and
+  the torso's circle tracking, with the plots of Figs. 3 to 5 in `--plots`;
+* `prong_pivot_rotations` (evaluation IV-B): the trunk's rotation about the prong reached in
+  roll, pitch and yaw, the lifted front feet's drift and the prong tip's slip; once more on the
+  ground-truth estimator (the controller alone: on one prong the Kalman estimate's height
+  drifts by centimetres, and a foot held in the estimated world drifts with it);
+* obstacle_sensing on paper 002's controller over `--obstacle-seeds` (seed 0 without sensor
+  noise, the others with), the presses stopped by the impedance estimate: the RMS error of both
+  foot force estimates against the simulated contact force at the foot during the presses, and
+  each estimate's rigid/soft call.
+
+The figures come from simulation ground truth, for evaluation only.
+"""
+
+import argparse
+import json
+import platform
+from pathlib import Path
+
+import numpy as np
+
+from pedi_drake.benchmarks.demos import demo_scenario, simulate_demo
+from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS
+from pedi_drake.diagram import apply_mission
+from pedi_drake.evaluation import paper002 as evaluation
+from pedi_drake.evaluation.controller_metrics import controller_metrics
+from pedi_drake.evaluation.run_logs import read_run_logs
+from pedi_drake.mission.spec import load_mission
+from pedi_drake.run import run
+from pedi_drake.scenario import Scenario, load_scenario
+from pedi_drake.station_interface import MakeStation
+from pedi_drake.viz.paper002_plots import plot_foot_hold
+
+CONTROLLERS = ("whole_body", "projected_impedance")
+MISSIONS = (
+    "torso_circle_foot_hold",
+    "prong_pivot_rotations",
+    "hit_target_front",
+    "obstacle_sensing",
+    "open_door",
+    "prong_push_box",
+)
+TICK_MEDIAN_FLOOR_MS = 0.5
+FOOT_STIFFNESS_TOLERANCE = 0.10
+FORCE_ESTIMATE_RMS_FLOOR_N = 2.0
+
+
+def demo_rows() -> list[dict]:
+    """three_leg_hold and push_foot (missions/demos/) on both controllers."""
+    rows = []
+    for name in ("three_leg_hold", "push_foot"):
+        for controller in CONTROLLERS:
+            scenario = demo_scenario(name)
+            scenario.controller = controller
+            record, judged = simulate_demo(name, scenario)
+            r = controller_metrics(record, judged)
+            row = {
+                "case": f"demo {name}",
+                "controller": controller,
+                "success": judged["success"],
+                "fell": r.fell,
+                "qp_failures": r.qp_failures,
+                "tick_median_ms": r.tick_median_ms,
+                "tick_p99_ms": r.tick_p99_ms,
+                "foot_error_max_m": max(r.foot_errors) if r.foot_errors else float("nan"),
+                "trunk_drift_m": r.trunk_drift,
+                "stance_slip_m": r.stance_slip,
+                "real_time_factor": r.real_time_factor,
+            }
+            if name == "push_foot":
+                plant = record.built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
+                push = apply_mission(record.scenario, record.built.mission).pushes[0]
+                response = evaluation.foot_push_response(plant, record.logs, push)
+                row["foot_stiffness_n_per_m"] = response.stiffness_n_per_m
+                row["force_estimate_rms_n"] = response.force_estimate_rms_n
+                if controller == "projected_impedance":
+                    row["commanded_stiffness_n_per_m"] = scenario.projected_impedance.foot_stiffness[0]
+            rows.append(row)
+    return rows
+
+
+def _station_plant(scenario: Scenario):
+    """A plant with the state layout of the run's simulation (for reading its logged states)."""
+    return MakeStation(scenario).GetSubsystemByName("plant")
+
+
+def mission_row(
+    mission: str, controller: str, out_dir: Path, plots: Path | None, estimator: str = "kalman", reuse: bool = False
+) -> dict:
+    """One mission on one controller (default scenario; the Kalman estimate unless told).
+    `reuse`: judge the run already in `out_dir` (its result.json and logs.npz) instead of
+    simulating it again."""
+    scenario = load_scenario(scenario_text=f"{{mission: {mission}, controller: {controller}, estimator: {estimator}}}")
+    spec = load_mission(mission)
+    scenario.simulation_duration = max(scenario.simulation_duration, spec.longest_duration())
+    if reuse and (out_dir / "result.json").exists() and (out_dir / "logs.npz").exists():
+        result = json.loads((out_dir / "result.json").read_text())
+    else:
+        result = run(scenario=scenario, name=mission, out_dir=out_dir, quiet=True, replay=False)
+    row = {
+        "case": f"mission {mission}" + ("" if estimator == "kalman" else f" ({estimator})"),
+        "controller": controller,
+        "success": result["success"],
+        "reason": result["reason"],
+        "fell": result["fell"],
+        "foot_error_max_m": max((r["error"] for r in result["foot_errors_m"]), default=float("nan")),
+        "trunk_drift_m": result["max_base_drift_m"],
+        "tick_median_ms": result["controller_tick_ms"]["median"],
+        "tick_p99_ms": result["controller_tick_ms"]["p99"],
+        "real_time_factor": result["real_time_factor"],
+    }
+    turns = [p for p in result["phases"] if p["kind"] == "body_rotate" and p["name"] in ("pitch_up", "yaw_back")]
+    if len(turns) == 2 and all(p["status"] == "succeeded" for p in turns):
+        plant = _station_plant(apply_mission(scenario, spec))
+        tip = [0.0, 0.0, -apply_mission(scenario, spec).robot.prongs.length]
+        pivot = evaluation.evaluate_pivot_rotations(
+            plant, read_run_logs(out_dir), turns[0]["t_start"], turns[1]["t_end"], "prong_0", tip
+        )
+        row.update(pivot.summary())
+    circle = [p for p in result["phases"] if p["kind"] == "body_path" and p["status"] == "succeeded"]
+    if circle:
+        plant = _station_plant(apply_mission(scenario, spec))
+        hold = evaluation.evaluate_foot_hold(plant, read_run_logs(out_dir), circle[0]["t_start"], circle[0]["t_end"])
+        row.update(hold.summary())
+        if plots is not None:
+            plot_foot_hold(hold, plots / controller, title=controller)
+    return row
+
+
+def obstacle_row(seed: int, out_dir: Path) -> dict:
+    """obstacle_sensing on paper 002's controller, presses stopped by the impedance estimate
+    (seed 0 without sensor noise, others with): both estimates against the true contact force,
+    and each estimate's rigid/soft call."""
+    noise = "true" if seed else "false"
+    scenario = load_scenario(
+        scenario_text=f"{{mission: obstacle_sensing, controller: projected_impedance, force_estimate: impedance, "
+        f"random_seed: {seed}, sensor_noise: {{enabled: {noise}}}}}"
+    )
+    spec = load_mission("obstacle_sensing")
+    scenario.simulation_duration = max(scenario.simulation_duration, spec.longest_duration())
+    result = run(scenario=scenario, name="obstacle_sensing", out_dir=out_dir, quiet=True, replay=False)
+    errors = evaluation.press_force_errors(read_run_logs(out_dir), result["phases"])
+    calls = {source: {} for source in ("impedance", "joint_torque")}
+    for press in result["presses"]:
+        for source, figures in press.get("by_estimate", {}).items():
+            calls[source][press["phase"]] = figures["classified_as"]
+    return {
+        "case": f"obstacle_sensing seed {seed}",
+        "controller": "projected_impedance",
+        "success": result["success"],
+        "sensor_noise": bool(seed),
+        "force_estimate_rms_impedance_n": errors["rms_n"].get("impedance", float("nan")),
+        "force_estimate_rms_joint_torque_n": errors["rms_n"]["joint_torque"],
+        "true_force_max_n": errors["true_force_max_n"],
+        "classified_right_impedance": calls["impedance"] == EXPECTED_OBSTACLE_CLASS,
+        "classified_right_joint_torque": calls["joint_torque"] == EXPECTED_OBSTACLE_CLASS,
+        "tick_median_ms": result["controller_tick_ms"]["median"],
+    }
+
+
+def floors(rows: list[dict]) -> dict:
+    """Which of the issue's floors each measured row meets (paper 002's controller)."""
+    checks = {}
+    for row in rows:
+        if row["controller"] != "projected_impedance":
+            continue
+        if row["case"] == "demo three_leg_hold":
+            checks["tick_median_below_0.5_ms"] = row["tick_median_ms"] < TICK_MEDIAN_FLOOR_MS
+        if row["case"] == "demo push_foot":
+            commanded = row["commanded_stiffness_n_per_m"]
+            checks["foot_stiffness_within_10_percent"] = (
+                abs(row["foot_stiffness_n_per_m"] - commanded) <= FOOT_STIFFNESS_TOLERANCE * commanded
+            )
+            checks["force_estimate_rms_below_2_n"] = row["force_estimate_rms_n"] < FORCE_ESTIMATE_RMS_FLOOR_N
+        if row["case"] == "mission torso_circle_foot_hold" and "torso_tracking_rms_m" in row:
+            checks["iva_foot_position_below_5_mm"] = row["foot_position_error_max_m"] < evaluation.FOOT_POSITION_FLOOR_M
+            checks["iva_foot_orientation_below_2_deg"] = row["foot_orientation_error_max_deg"] < 2.0
+            checks["iva_torso_rms_below_1_cm"] = row["torso_tracking_rms_m"] < evaluation.TORSO_TRACKING_RMS_FLOOR_M
+        if row["case"].startswith("mission prong_pivot_rotations") and "rotation_reached_deg" in row:
+            tag = "" if row["case"] == "mission prong_pivot_rotations" else "_ground_truth_estimate"
+            checks[f"ivb_rotations_reach_5_deg_each_way{tag}"] = all(
+                lo <= -5.0 and hi >= 5.0 for lo, hi in row["rotation_reached_deg"].values()
+            )
+            checks[f"ivb_front_feet_within_5_mm{tag}"] = row["front_feet_drift_max_m"] < 0.005
+        if row["case"].startswith("mission"):
+            checks[f"{row['case']}_succeeds"] = bool(row["success"])
+    obstacle = [row for row in rows if row["case"].startswith("obstacle_sensing seed")]
+    if obstacle:
+        no_noise = [row for row in obstacle if not row["sensor_noise"]]
+        for row in no_noise:
+            checks["force_estimate_rms_below_2_n_in_presses"] = row["force_estimate_rms_impedance_n"] < 2.0
+            checks["impedance_estimate_beats_joint_torque"] = (
+                row["force_estimate_rms_impedance_n"] < row["force_estimate_rms_joint_torque_n"]
+            )
+        checks["obstacles_classified_right_all_seeds_impedance"] = all(
+            r["classified_right_impedance"] for r in obstacle
+        )
+        checks["obstacles_classified_right_all_seeds_joint_torque"] = all(
+            r["classified_right_joint_torque"] for r in obstacle
+        )
+    return checks
+
+
+def print_table(rows: list[dict]) -> None:
+    columns = [
+        ("case", "{}"),
+        ("controller", "{}"),
+        ("success", "{}"),
+        ("tick_median_ms", "{:.3f}"),
+        ("tick_p99_ms", "{:.3f}"),
+        ("foot_error_max_m", "{:.4f}"),
+        ("trunk_drift_m", "{:.4f}"),
+        ("foot_stiffness_n_per_m", "{:.0f}"),
+        ("force_estimate_rms_n", "{:.2f}"),
+        ("foot_position_error_max_m", "{:.4f}"),
+        ("foot_orientation_error_max_deg", "{:.2f}"),
+        ("torso_tracking_rms_m", "{:.4f}"),
+        ("front_feet_drift_max_m", "{:.4f}"),
+        ("force_estimate_rms_impedance_n", "{:.2f}"),
+        ("force_estimate_rms_joint_torque_n", "{:.2f}"),
+        ("classified_right_impedance", "{}"),
+        ("classified_right_joint_torque", "{}"),
+    ]
+    print(" | ".join(name for name, _ in columns))
+    for row in rows:
+        cells = []
+        for name, fmt in columns:
+            value = row.get(name, "")
+            if isinstance(value, float) and not np.isfinite(value):
+                value = "nan"
+            cells.append(fmt.format(value) if value not in ("", "nan") and not isinstance(value, bool) else str(value))
+        print(" | ".join(cells))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--out", default="benchmarks/results/paper002.json", help="JSON file of the rows.")
+    parser.add_argument("--runs", default="out/paper002_benchmark", help="Folder of the mission runs.")
+    parser.add_argument("--plots", default="out/paper002_benchmark/plots", help="Folder of the IV-A plots.")
+    parser.add_argument("--missions", nargs="*", default=list(MISSIONS), help="Missions to run on both controllers.")
+    parser.add_argument(
+        "--obstacle-seeds",
+        default="0,1,2,3,4,5",
+        help="obstacle_sensing seeds on paper 002's controller (0 without sensor noise, others with; '' for none)",
+    )
+    parser.add_argument("--skip-demos", action="store_true", help="Leave out the scripted demos.")
+    parser.add_argument("--controllers", nargs="*", default=list(CONTROLLERS), help="Controllers the missions run on.")
+    parser.add_argument(
+        "--reuse", action="store_true", help="Judge mission runs already in --runs instead of simulating them again."
+    )
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    rows: list[dict] = []
+
+    def record(new_rows: list[dict]) -> None:
+        # Written after every case: a long benchmark stopped early keeps what it measured.
+        rows.extend(new_rows)
+        report = {"machine": platform.processor() or platform.machine(), "rows": rows, "floors": floors(rows)}
+        out.write_text(json.dumps(report, indent=2, default=float))
+
+    if not args.skip_demos:
+        record(demo_rows())
+    for seed in [int(s) for s in args.obstacle_seeds.split(",") if s]:
+        record([obstacle_row(seed, Path(args.runs) / "obstacle_seeds" / str(seed))])
+    runs, plots = Path(args.runs), Path(args.plots)
+    for mission in args.missions:
+        for controller in args.controllers:
+            record([mission_row(mission, controller, runs / controller / mission, plots, reuse=args.reuse)])
+        if mission == "prong_pivot_rotations":
+            # IV-B again on the true state: the controller alone, without the estimate's drift on one prong.
+            for controller in args.controllers:
+                folder = runs / controller / "prong_pivot_rotations_ground_truth"
+                record([mission_row(mission, controller, folder, None, estimator="ground_truth", reuse=args.reuse)])
+    print_table(rows)
+    for name, ok in floors(rows).items():
+        print(f"{'ok  ' if ok else 'MISS'} {name}")
+    print(f"written {out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,434 @@
+"""ProjectedImpedanceController: paper 002's whole-body controller as a Drake LeafSystem.
+
+The maths (projector, constrained dynamics, prioritised impedance, contact-force QP, force
+estimate) lives in `projected_dynamics.py`; this adapter turns the controller's ports into its
+tasks every `period` [s] and stores the next `go1.command` in the Context. It has exactly the
+ports of `WholeBodyController`, so missions, the estimator and the LCM driver use it unchanged.
+
+Tasks at one instant (world frame):
+    constraint Jacobian: the feet and prong tips in the contact set, or still ramping out;
+    first priority (impedance, Eq. 10): every lifted leg with a reference. A world foot
+    reference (leg mode 1, or mode 3 with the calf's roll and pitch: the 5-D task) is used as is:
+    the foot is held in the world and the trunk yields to it. A joint reference (mode 2, the
+    mission's IK answer in the trunk frame) is turned into the foot position it means on the
+    trunk as estimated now, so it moves with the trunk (a trunk tracking error, such as the
+    deliberate one of a trunk pressed onto its prongs, does not become a foot error). A lifted
+    leg without a reference is a joint impedance towards the nominal posture;
+    second priority: the trunk pose, in the feet's dynamically consistent null space: its position
+    first, then its attitude in the position's null space (`torso_position_first`; else the six
+    rows together). When the feet leave the trunk fewer than six directions (a 5-D foot task
+    on three stance legs leaves four), the trunk keeps its path and gives up attitude. On loaded
+    prongs the order turns round: a prong tip pins the trunk's position, and its attitude (the
+    turn about the tip) is what is left to control;
+    last priority: the joint posture, in the null space of all the above;
+    constrained space: the contact-force QP (Eq. 7), tau = tau_m + tau_c (Eq. 8).
+The `safety_polygon` input is read for the capture-point diagnostic only: paper 002's law has
+no balance task, the mission keeps the centre of mass over the support.
+
+Commands: tau_ff is the total torque; q_des, qd_des integrate the planned joint accelerations
+(kept near the measurement) under the configured joint PD (no stiffness by default, so the foot
+stiffness is the commanded one). A failed QP or a non-finite input never emits NaN: the last good
+command is held with zero velocity target and `failure_kd` damping, and reported.
+
+Diagnostics: the layout of `WholeBodyController` (same names and places, so the run's judging
+reads either), then `force_estimate` (12: Eq. 11 per leg, world frame [N], zero for legs without
+a foot impedance) and `constraint_rank` (rank of the held contacts' Jacobian).
+"""
+
+import time
+
+import numpy as np
+from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
+
+from pedi_drake import robot
+from pedi_drake.control import projected_dynamics as pd
+from pedi_drake.control import references, tasks
+from pedi_drake.control.config import ProjectedImpedanceConfig
+from pedi_drake.control.robot_model import ControllerModel, RobotSnapshot
+from pedi_drake.control.whole_body_controller import (
+    COMMAND_SIZE,
+    STATUS_BAD_INPUT,
+    STATUS_OK,
+    STATUS_QP_FAILED,
+    diagnostics_layout,
+)
+from pedi_drake.estimation.base_state import BASE_STATE_SIZE
+from pedi_drake.exceptions import ConfigError, QpInfeasible
+from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
+from pedi_drake.prongs import ProngDesign
+from pedi_drake.vector3 import axis_angle_matrix, cross3
+
+# Force-estimate filter state: per leg, the last impedance error rate (3), the filtered error
+# acceleration (3), and whether the leg had a foot impedance at the last tick (1).
+_ESTIMATE_STATE_SIZE = 4 * 7
+
+
+def projected_diagnostics_layout(num_contacts: int) -> dict[str, slice]:
+    """WholeBodyController's diagnostics layout, then force_estimate (12) and constraint_rank (1)."""
+    layout = diagnostics_layout(num_contacts)
+    start = layout["contact_ramp"].stop
+    layout["force_estimate"] = slice(start, start + 12)  # [N], world, per leg FR, FL, RR, RL
+    layout["constraint_rank"] = slice(start + 12, start + 13)
+    return layout
+
+
+def _all_finite(*arrays: np.ndarray) -> bool:
+    return bool(np.isfinite(np.concatenate(arrays)).all())
+
+
+def _clip(x: np.ndarray, lower, upper) -> np.ndarray:
+    return np.minimum(np.maximum(x, lower), upper)
+
+
+def _skew(w: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+
+
+def joint_reference_in_world(
+    leg: str, s: RobotSnapshot, leg_ref: references.LegReference
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(p, v, a) of the foot a joint reference means on the trunk as it is [m, m/s, m/s^2].
+
+    p = p_WB + R p_BF(q), v = v_WB + w x R p_BF + R J(q) qd, a = a_WB + R J(q) qdd with the
+    estimated trunk pose and velocity (the terms quadratic in the rates, and the trunk's
+    acceleration, are left out: they only feed forward). A joint reference is the mission's IK
+    answer in the trunk frame, so it moves with the trunk: the foot error is the leg's own.
+    """
+    p_B = foot_position_B(leg, leg_ref.position)
+    J_B = foot_jacobian_B(leg, leg_ref.position)
+    r_W = s.R_WB @ p_B
+    w, v = s.V_trunk[:3], s.V_trunk[3:]
+    p = s.p_WB + r_W
+    velocity = v + cross3(w, r_W) + s.R_WB @ (J_B @ leg_ref.velocity)
+    a = s.R_WB @ (J_B @ leg_ref.acceleration)
+    return p, velocity, a
+
+
+class ProjectedImpedanceController(LeafSystem):
+    """Paper 002's projected-inverse-dynamics impedance controller for the Go1 (and its prongs)."""
+
+    def __init__(self, config: ProjectedImpedanceConfig, prongs: ProngDesign | None = None) -> None:
+        super().__init__()
+        problems = config.validate()
+        if problems:
+            raise ConfigError("; ".join(problems))
+        self.config = config
+        self.model = ControllerModel(prongs, com_bias=False)
+        nc = self.model.num_contacts
+        self.num_contacts = nc
+        nv = self.model.nv
+        self.v_index = np.asarray(self.model.plant_map.v_index)
+        mask = np.ones(nv, dtype=bool)
+        mask[self.v_index] = False
+        self.unactuated = np.flatnonzero(mask)
+        self.S = np.zeros((12, nv))  # tau -> generalised force: S^T tau
+        self.S[np.arange(12), self.v_index] = 1.0
+        self.total_weight = self.model.total_mass * tasks.GRAVITY
+        self.nominal_q = np.tile(np.asarray(config.nominal_leg_posture, float), 4)
+        self.foot_stiffness = np.asarray(config.foot_stiffness, float)
+        self.foot_damping = np.asarray(config.foot_damping, float)
+        self.balance = tasks.CapturePointBalance()
+        self.diag = projected_diagnostics_layout(nc)
+        self.command_gains = np.concatenate([np.full(12, config.joint_kp), np.full(12, config.joint_kd)])
+        self.default_contact_set = references.contact_set_vector(num_prongs=nc - 4)
+
+        self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
+        self.position_port = self.DeclareVectorInputPort("position_measured", 12)
+        self.velocity_port = self.DeclareVectorInputPort("velocity_measured", 12)
+        self.body_reference_port = self.DeclareVectorInputPort("body_reference", references.BODY_REFERENCE_SIZE)
+        self.leg_reference_port = self.DeclareVectorInputPort("leg_reference", references.LEG_REFERENCE_SIZE)
+        self.contact_set_port = self.DeclareVectorInputPort("contact_set", nc)
+        self.safety_polygon_port = self.DeclareVectorInputPort("safety_polygon", references.SAFETY_POLYGON_SIZE)
+        self.friction_port = self.DeclareVectorInputPort("friction", 1)
+
+        self.command_state = self.DeclareDiscreteState(COMMAND_SIZE)
+        self.reference_state = self.DeclareDiscreteState(24)  # q_ref (12), qd_ref (12)
+        self.ramp_state = self.DeclareDiscreteState(nc)
+        self.hold_state = self.DeclareDiscreteState(8)  # initialised flag, p_WB (3), quat (4)
+        self.estimate_state = self.DeclareDiscreteState(_ESTIMATE_STATE_SIZE)
+        self.diagnostics_state = self.DeclareDiscreteState(self.diag["constraint_rank"].stop)
+        self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
+        self.DeclareForcedDiscreteUpdateEvent(self._update)
+        self.command_port = self.DeclareStateOutputPort("command", self.command_state)
+        self.diagnostics_port = self.DeclareStateOutputPort("diagnostics", self.diagnostics_state)
+
+    # ---------------------------------------------------------------------------------------------
+    def _optional(self, port, context: Context, default: np.ndarray) -> np.ndarray:
+        return np.asarray(port.Eval(context), float) if port.HasValue(context) else default
+
+    def _impedance_tasks(
+        self, s: RobotSnapshot, legs: list[references.LegReference], held: np.ndarray
+    ) -> tuple[list[pd.ImpedanceTask], dict[int, slice]]:
+        """The first-priority tasks and, per leg with a foot impedance, its rows in the stack."""
+        c = self.config
+        impedance, foot_rows, row = [], {}, 0
+        for i, (leg, ref) in enumerate(zip(robot.LEG_NAMES, legs, strict=True)):
+            if held[i]:
+                continue
+            if ref.mode in (references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, references.LEG_MODE_FOOT_POSE):
+                if ref.mode == references.LEG_MODE_JOINTS:
+                    p_ref, v_ref, a_ref = joint_reference_in_world(leg, s, ref)
+                elif ref.mode == references.LEG_MODE_FOOT:
+                    p_ref, v_ref, a_ref = ref.position, ref.velocity, ref.acceleration
+                else:
+                    p_ref, v_ref, a_ref = ref.position, ref.velocity, np.zeros(3)
+                rows = slice(3 * i, 3 * i + 3)
+                J = s.J_contacts[rows]
+                task = pd.ImpedanceTask(
+                    f"foot_{leg}",
+                    J,
+                    s.Jdot_v_contacts[rows],
+                    s.p_contacts[i] - p_ref,
+                    J @ s.v - v_ref,
+                    a_ref,
+                    self.foot_stiffness,
+                    self.foot_damping,
+                )
+                if ref.mode == references.LEG_MODE_FOOT_POSE:
+                    task = pd.stack_impedance_tasks([task, self._calf_task(s, i, leg, ref)], self.model.nv)
+                impedance.append(task)
+                foot_rows[i] = slice(row, row + 3)
+                row += task.J.shape[0]
+                continue
+            # A lifted leg without a reference: a joint impedance to the nominal posture.
+            joints = np.arange(3 * i, 3 * i + 3)
+            J = self.S[joints]
+            impedance.append(
+                pd.ImpedanceTask(
+                    f"idle_{leg}",
+                    J,
+                    np.zeros(3),
+                    s.q_joints[joints] - self.nominal_q[joints],
+                    s.v_joints[joints],
+                    np.zeros(3),
+                    np.full(3, c.idle_leg_stiffness),
+                    np.full(3, c.idle_leg_damping),
+                )
+            )
+            row += 3
+        return impedance, foot_rows
+
+    def _calf_task(self, s: RobotSnapshot, i: int, leg: str, ref: references.LegReference) -> pd.ImpedanceTask:
+        """The 2 orientation rows of the 5-D foot task: the calf's rotation about world x and y
+        (roll and pitch) towards the reference, the rotation about world z (yaw) left free."""
+        c = self.config
+        R_WC, J_w, bias_w = self.model.calf_orientation(i)
+        R_ref = axis_angle_matrix(ref.acceleration)
+        error = -tasks.orientation_error_W(R_ref, R_WC)  # e = x - x_ref, as a rotation vector
+        return pd.ImpedanceTask(
+            f"calf_{leg}",
+            J_w[:2],
+            bias_w[:2],
+            error[:2],
+            (J_w @ s.v)[:2],
+            np.zeros(2),
+            np.full(2, c.foot_orientation_stiffness),
+            np.full(2, c.foot_orientation_damping),
+        )
+
+    def _lower_tasks(
+        self, s: RobotSnapshot, body: references.BodyReference, on_prongs: bool
+    ) -> list[pd.AccelerationTask]:
+        c = self.config
+        w, v = s.V_trunk[:3], s.V_trunk[3:]
+        angular = (
+            body.alpha
+            + c.trunk_orientation.kp * tasks.orientation_error_W(body.R, s.R_WB)
+            + c.trunk_orientation.kd * (body.w - w)
+        )
+        linear = body.a + c.trunk_position.kp * (body.p - s.p_WB) + c.trunk_position.kd * (body.v - v)
+        if c.torso_position_first and not on_prongs:
+            torso = [
+                pd.AccelerationTask("torso_position", s.J_trunk[3:], s.Jdot_v_trunk[3:], linear),
+                pd.AccelerationTask("torso_orientation", s.J_trunk[:3], s.Jdot_v_trunk[:3], angular),
+            ]
+        else:
+            torso = [pd.AccelerationTask("torso", s.J_trunk, s.Jdot_v_trunk, np.concatenate([angular, linear]))]
+        if on_prongs:
+            # A loaded prong pins the trunk: its attitude is what is left to control, so it
+            # comes first; its position (nearly fixed by the tip) takes what remains.
+            torso = [
+                pd.AccelerationTask("torso_orientation", s.J_trunk[:3], s.Jdot_v_trunk[:3], angular),
+                pd.AccelerationTask("torso_position", s.J_trunk[3:], s.Jdot_v_trunk[3:], linear),
+            ]
+        posture = pd.AccelerationTask(
+            "posture",
+            self.S,
+            np.zeros(12),
+            c.posture.kp * (self.nominal_q - s.q_joints) - c.posture.kd * s.v_joints,
+        )
+        return [*torso, posture]
+
+    def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        start = time.perf_counter()
+        c = self.config
+        base = np.asarray(self.base_state_port.Eval(context), float)
+        q = np.asarray(self.position_port.Eval(context), float)
+        qd = np.asarray(self.velocity_port.Eval(context), float)
+        hold = context.get_discrete_state(self.hold_state).value().copy()
+        ramp = context.get_discrete_state(self.ramp_state).value().copy()
+        q_ref = context.get_discrete_state(self.reference_state).value()[:12].copy()
+        qd_ref = context.get_discrete_state(self.reference_state).value()[12:].copy()
+        estimate = context.get_discrete_state(self.estimate_state).value().copy().reshape(4, 7)
+        last_command = context.get_discrete_state(self.command_state).value().copy()
+        diag = context.get_discrete_state(self.diagnostics_state).value().copy()
+
+        contact_set = _clip(self._optional(self.contact_set_port, context, self.default_contact_set), 0.0, 1.0)
+        if not _all_finite(base, q, qd, contact_set):
+            self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
+            return
+        if hold[0] == 0.0:
+            hold = np.concatenate([[1.0], base[4:7], base[0:4]])
+            q_ref, qd_ref = q.copy(), qd.copy()
+            ramp = contact_set.copy()
+        step = c.period / c.contact_ramp_time
+        ramp = _clip(ramp + _clip(contact_set - ramp, -step, step), 0.0, 1.0)
+
+        default_body = np.concatenate([hold[1:4], hold[4:8], np.zeros(12)])
+        body_x = self._optional(self.body_reference_port, context, default_body)
+        leg_x = self._optional(self.leg_reference_port, context, np.zeros(references.LEG_REFERENCE_SIZE))
+        polygon_x = self._optional(self.safety_polygon_port, context, np.zeros(references.SAFETY_POLYGON_SIZE))
+        mu_x = self._optional(self.friction_port, context, np.array([c.friction]))
+        if not _all_finite(body_x, leg_x, polygon_x, mu_x) or mu_x[0] <= 0.0:
+            self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
+            return
+        body = references.parse_body_reference(body_x)
+        legs = references.parse_leg_reference(leg_x)
+
+        s = self.model.update(base, q, qd)
+        held = (contact_set > 0.5) | (ramp > 0.0)
+        held_idx = np.flatnonzero(held)
+        rows = tasks.contact_rows(held)
+        Jc = s.J_contacts[rows]
+        try:
+            dynamics = pd.constrained_dynamics(
+                s.M, s.h, Jc, s.Jdot_v_contacts[rows], s.v, c.contact_damping, c.rank_tolerance
+            )
+            impedance, foot_rows = self._impedance_tasks(s, legs, held)
+            stacked = pd.stack_impedance_tasks(impedance, self.model.nv)
+            lower = self._lower_tasks(s, body, bool(held[4:].any()))
+            law = pd.prioritized_force(dynamics, s.v, stacked, lower, c.rank_tolerance)
+            free = pd.constraint_free_torque(dynamics, law.u, self.S, c.rank_tolerance)
+            share = self.total_weight / max(float(ramp[held_idx].sum()), 1e-6)
+            force_share = np.zeros(3 * len(held_idx))
+            force_share[2::3] = ramp[held_idx] * share
+            mu = float(mu_x[0]) / np.sqrt(2.0) if c.friction_pyramid_inscribed else float(mu_x[0])
+            problem = pd.ContactForceProblem(
+                Jc=Jc,
+                r=s.M @ free.vdot + s.h,
+                unactuated=self.unactuated,
+                actuated=self.v_index,
+                ramp=ramp[held_idx],
+                friction=mu,
+                f_min=c.min_normal_force,
+                f_max=c.max_normal_force,
+                torque_limit=c.torque_limit_scale * robot.EFFORT_LIMIT,
+                force_share=force_share,
+                torque_weight=c.torque_weight,
+                force_weight=c.force_regularization_weight,
+                rank_tolerance=c.rank_tolerance,
+            )
+            solution = pd.solve_contact_forces(problem)
+            if not _all_finite(solution.tau, free.vdot):
+                raise QpInfeasible("non-finite torque")
+        except (QpInfeasible, np.linalg.LinAlgError):
+            self._fail(discrete_state, last_command, q, diag, STATUS_QP_FAILED, start, ramp=ramp, hold=hold)
+            return
+        tau = solution.tau
+
+        qdd = free.vdot[self.v_index]
+        qd_ref = _clip(
+            qd_ref + qdd * c.period, qd - c.max_reference_rate_deviation, qd + c.max_reference_rate_deviation
+        )
+        q_ref = _clip(q_ref + qd_ref * c.period, q - c.max_reference_deviation, q + c.max_reference_deviation)
+        command = np.concatenate([q_ref, qd_ref, self.command_gains, tau])
+
+        # Eq. 11 per foot impedance: Lambda eddot + D edot + K e, eddot a filtered difference.
+        forces_estimated = np.zeros((4, 3))
+        alpha = c.period / (c.period + c.force_estimate_filter_time)
+        eddot_stack = np.zeros(stacked.J.shape[0])
+        active = np.zeros(4, dtype=bool)
+        for i, r in foot_rows.items():
+            active[i] = True
+            rate = stacked.error_rate[r]
+            if estimate[i, 6] > 0.5:
+                raw = (rate - estimate[i, 0:3]) / c.period
+                estimate[i, 3:6] += alpha * (raw - estimate[i, 3:6])
+            else:
+                estimate[i, 3:6] = 0.0
+            estimate[i, 0:3] = rate
+            eddot_stack[r] = estimate[i, 3:6]
+        for i, r in foot_rows.items():
+            forces_estimated[i] = pd.impedance_force_estimate(
+                law.impedance_inertia[r],
+                stacked.stiffness[r],
+                stacked.damping[r],
+                stacked.error[r],
+                stacked.error_rate[r],
+                eddot_stack,
+            )
+        estimate[~active] = 0.0
+        estimate[active, 6] = 1.0
+
+        ground = float(s.p_contacts[held_idx, 2].mean()) - robot.FOOT_RADIUS if len(held_idx) else 0.0
+        forces = np.zeros((self.num_contacts, 3))
+        forces[held_idx] = solution.lam.reshape(-1, 3)
+        diag[self.diag["status"]] = STATUS_OK
+        diag[self.diag["solve_time"]] = solution.solve_time
+        diag[self.diag["consecutive_failures"]] = 0.0
+        diag[self.diag["capture_point"]] = self.balance.capture_point(s, ground)[0]
+        diag[self.diag["trunk_position_error"]] = body.p - s.p_WB
+        diag[self.diag["trunk_orientation_error"]] = tasks.orientation_error_W(body.R, s.R_WB)
+        foot_errors = np.zeros(4)
+        for i, r in foot_rows.items():
+            foot_errors[i] = np.linalg.norm(stacked.error[r])
+        diag[self.diag["foot_errors"]] = foot_errors
+        residuals = np.zeros(self.diag["level_residuals"].stop - self.diag["level_residuals"].start)
+        figures = [*law.residuals, solution.equality_residual][: len(residuals)]
+        residuals[: len(figures)] = figures
+        diag[self.diag["level_residuals"]] = residuals
+        diag[self.diag["contact_forces"]] = forces.ravel()
+        diag[self.diag["tau_ff"]] = tau
+        diag[self.diag["contact_ramp"]] = ramp
+        diag[self.diag["force_estimate"]] = forces_estimated.ravel()
+        diag[self.diag["constraint_rank"]] = dynamics.projection.rank
+        diag[self.diag["tick_time"]] = time.perf_counter() - start
+
+        discrete_state.get_mutable_vector(self.command_state).SetFromVector(command)
+        discrete_state.get_mutable_vector(self.reference_state).SetFromVector(np.concatenate([q_ref, qd_ref]))
+        discrete_state.get_mutable_vector(self.ramp_state).SetFromVector(ramp)
+        discrete_state.get_mutable_vector(self.hold_state).SetFromVector(hold)
+        discrete_state.get_mutable_vector(self.estimate_state).SetFromVector(estimate.ravel())
+        discrete_state.get_mutable_vector(self.diagnostics_state).SetFromVector(diag)
+
+    def _fail(
+        self,
+        discrete_state: DiscreteValues,
+        last_command: np.ndarray,
+        q: np.ndarray,
+        diag: np.ndarray,
+        status: float,
+        start: float,
+        ramp: np.ndarray | None = None,
+        hold: np.ndarray | None = None,
+    ) -> None:
+        """Holds the last good command with zero velocity target and damping; records the failure."""
+        c = self.config
+        command = last_command.copy()
+        if not np.any(command[48:60]) and np.all(np.isfinite(q)):
+            command[0:12] = q  # no good command yet: hold where the joints are
+        command[12:24] = 0.0
+        command[36:48] = np.maximum(command[36:48], c.failure_kd)
+        command = np.nan_to_num(command, nan=0.0, posinf=0.0, neginf=0.0)
+        diag[self.diag["status"]] = status
+        if ramp is not None:
+            diag[self.diag["contact_ramp"]] = ramp  # the ramps advance through failures too
+        diag[self.diag["consecutive_failures"]] += 1.0
+        diag[self.diag["total_failures"]] += 1.0
+        diag[self.diag["tick_time"]] = time.perf_counter() - start
+        discrete_state.get_mutable_vector(self.command_state).SetFromVector(command)
+        discrete_state.get_mutable_vector(self.diagnostics_state).SetFromVector(diag)
+        if ramp is not None:
+            discrete_state.get_mutable_vector(self.ramp_state).SetFromVector(ramp)
+        if hold is not None:
+            discrete_state.get_mutable_vector(self.hold_state).SetFromVector(hold)
