@@ -31,3 +31,18 @@ def pd_torque(command: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """tau_ff + kp (q_des - q) + kd (qd_des - qd) [N m], before the motors' saturation."""
     q_des, qd_des, kp, kd, tau_ff = split_command(command)
     return tau_ff + kp * (q_des - q) + kd * (qd_des - qd)
+
+
+def held_command(last_command: np.ndarray, q_measured: np.ndarray, kd_min: float) -> np.ndarray:
+    """The command a controller sends on a tick it cannot compute one (failed QP, bad input).
+
+    The last good command, with zero velocity targets and at least `kd_min` [N m s/rad] of joint
+    damping. Before any good command (no position gain and no torque in `last_command`) the
+    position targets are the measured joints. Non-finite entries become 0, so this never sends NaN.
+    """
+    command = np.array(last_command, dtype=float)
+    if not np.any(command[24:36]) and not np.any(command[48:60]) and np.all(np.isfinite(q_measured)):
+        command[0:12] = q_measured
+    command[12:24] = 0.0
+    command[36:48] = np.maximum(command[36:48], kd_min)
+    return np.nan_to_num(command, nan=0.0, posinf=0.0, neginf=0.0)

@@ -54,6 +54,7 @@ from pedi_drake.control.whole_body_controller import (
 )
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, QpInfeasible
+from pedi_drake.go1_command import held_command
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.vector3 import axis_angle_matrix, cross3
@@ -413,13 +414,7 @@ class ProjectedImpedanceController(LeafSystem):
         hold: np.ndarray | None = None,
     ) -> None:
         """Holds the last good command with zero velocity target and damping; records the failure."""
-        c = self.config
-        command = last_command.copy()
-        if not np.any(command[48:60]) and np.all(np.isfinite(q)):
-            command[0:12] = q  # no good command yet: hold where the joints are
-        command[12:24] = 0.0
-        command[36:48] = np.maximum(command[36:48], c.failure_kd)
-        command = np.nan_to_num(command, nan=0.0, posinf=0.0, neginf=0.0)
+        command = held_command(last_command, q, self.config.failure_kd)
         diag[self.diag["status"]] = status
         if ramp is not None:
             diag[self.diag["contact_ramp"]] = ramp  # the ramps advance through failures too

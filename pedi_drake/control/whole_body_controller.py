@@ -41,7 +41,7 @@ from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, PediError, QpInfeasible
-from pedi_drake.go1_command import COMMAND_SIZE
+from pedi_drake.go1_command import COMMAND_SIZE, held_command
 from pedi_drake.prongs import ProngDesign
 
 STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0
@@ -288,13 +288,7 @@ class WholeBodyController(LeafSystem):
         hold: np.ndarray | None = None,
     ) -> None:
         """Holds the last good command with zero velocity target and damping; records the failure."""
-        c = self.config
-        command = last_command.copy()
-        if not np.any(command[24:36]) and np.all(np.isfinite(q)):
-            command[0:12] = q  # no good command yet: hold where the joints are
-        command[12:24] = 0.0
-        command[36:48] = np.maximum(command[36:48], c.failure_kd)
-        command = np.nan_to_num(command, nan=0.0, posinf=0.0, neginf=0.0)
+        command = held_command(last_command, q, self.config.failure_kd)
         diag[self.diag["status"]] = status
         diag[self.diag["consecutive_failures"]] += 1.0
         diag[self.diag["total_failures"]] += 1.0
