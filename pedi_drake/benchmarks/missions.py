@@ -18,6 +18,7 @@ import tempfile
 from pathlib import Path
 
 from pedi_drake.batch.engines import ENGINES, make_engine
+from pedi_drake.batch.results_file import read_rows
 from pedi_drake.batch.runner import run_study
 from pedi_drake.batch.study import study_from_dict
 from pedi_drake.mission.spec import load_mission, shipped_missions
@@ -100,6 +101,11 @@ def main() -> None:
     parser.add_argument("--noise-seeds", default="1,2,3,4,5", help="seeds run with sensor noise ('' for none)")
     parser.add_argument("--engine", choices=ENGINES, default="ray", help="ray (every core) or serial")
     parser.add_argument("--out", default="benchmarks/results/missions.json")
+    parser.add_argument(
+        "--study-results",
+        default=None,
+        help="summarise the rows a run of studies/missions_benchmark.yaml wrote to this folder instead of running",
+    )
     args = parser.parse_args()
     missions = [m for m in args.missions.split(",") if m]
     for mission in missions:
@@ -107,14 +113,22 @@ def main() -> None:
     seeds = [int(s) for s in args.noise_seeds.split(",") if s]
     study = mission_study(missions, seeds)
     results: dict[str, list[dict]] = {m: [] for m in missions}
-    with tempfile.TemporaryDirectory() as folder:
-        rows = run_study(study, Path(folder), make_engine(args.engine)).rows
+    if args.study_results:
+        wanted = {task.task_id for task in study.tasks}
+        rows = [row for row in read_rows(Path(args.study_results)) if row["task_id"] in wanted]
+        # Same tasks as the shipped study file: their ids come from the same settings.
+        missing = len(wanted) - len(rows)
+        if missing:
+            print(f"note: {missing} of the {len(wanted)} runs have no row in {args.study_results}")
+    else:
+        with tempfile.TemporaryDirectory() as folder:
+            rows = run_study(study, Path(folder), make_engine(args.engine)).rows
     for row in sorted(rows, key=lambda r: r["index"]):
         result = result_of(row)
         noise = row["factor.noise"]
         result["seed"], result["noise"] = noise["random_seed"], noise["sensor_noise.enabled"]
         results[row["factor.mission"]].append(result)
-    summary = {m: summarise(m, runs) for m, runs in results.items()}
+    summary = {m: summarise(m, runs) for m, runs in results.items() if runs}
     print(
         f"\n{'mission':<24} {'ok':>5} {'err med':>8} {'err max':>8} {'drift':>7} {'RTF':>5} "
         f"{'est pos':>8} {'est vel':>8} {'est ori':>8} {'cp marg':>8}  extra"
