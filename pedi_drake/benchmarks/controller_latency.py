@@ -19,6 +19,12 @@
 
 Prints a table and writes JSON. The run is open loop (the replayed status ignores the commands),
 which is what a latency measurement needs: the same inputs for every pass.
+
+    python -m pedi_drake.benchmarks.controller_latency --record-reference FILE.npz [--reference-ticks N]
+
+records the first N replayed ticks' status and the commands the controller side sent for them
+(float32, as on the wire): the reference that `tests/test_controller_side_reference.py` replays
+to show that a faster controller side sends the same commands.
 """
 
 import argparse
@@ -112,13 +118,24 @@ class Replay:
         received = self.link.leg_control.received, self.link.state_estimator.received
         self.bus.publish(c.LEG_CONTROL_CHANNEL, leg.encode())
         self.bus.publish(c.STATE_ESTIMATOR_CHANNEL, estimator.encode())
-        # The receive thread takes them in; the tick is timed from when they are in the inbox.
+        # The receive thread takes them in; the tick is timed from when both are in the inbox
+        # (a tick run after only one of them would see the other's previous message).
         deadline = time.monotonic() + 1.0
-        while (self.link.leg_control.received, self.link.state_estimator.received) == received:
+        while any(
+            now == before
+            for now, before in zip(
+                (self.link.leg_control.received, self.link.state_estimator.received), received, strict=True
+            )
+        ):
             if time.monotonic() > deadline:
                 counts = {inbox.channel: inbox.counts() for inbox in self.link.inboxes}
                 raise RuntimeError(f"replayed status of tick {k} was not received: {counts}")
             time.sleep(0.00005)
+
+    def sent_commands(self) -> np.ndarray:
+        """(n, 60) the commands published so far, decoded from the wire."""
+        decode = c.CHANNEL_TYPES[c.COMMAND_CHANNEL].decode
+        return np.array([c.message_to_command(decode(data)) for data in self.commands])
 
     def run(self, ticks: int, profile: cProfile.Profile | None = None) -> dict:
         """Times `ticks` ticks; returns tick times [ms] and what happened in each."""
@@ -207,13 +224,30 @@ def stage_costs(profile: cProfile.Profile, ticks: int) -> dict:
     return {stage: 1e3 * total / ticks for stage, total in costs.items()}
 
 
+def record_reference(mission: str, period: float, ticks: int, path: Path) -> None:
+    """Writes the status of the first `ticks` replayed ticks and the commands sent for them."""
+    samples, _ = record_status(mission, period)
+    samples = samples[: ticks + 1].astype(np.float32)
+    replay = Replay(mission, period, samples.astype(float))
+    replay.run(ticks)
+    commands = replay.sent_commands().astype(np.float32)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, mission=mission, period=period, status=samples, commands=commands)
+    print(f"wrote {path}: {ticks} ticks, {len(commands)} commands")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--mission", default="hit_target_front")
     parser.add_argument("--period", type=float, default=0.002, help="control period [s]")
     parser.add_argument("--baseline_duration", type=float, default=4.0, help="simulated seconds of the bare plant")
     parser.add_argument("--out", default="benchmarks/results/controller_latency.json")
+    parser.add_argument("--record-reference", type=Path, help="write the reference ticks here and stop")
+    parser.add_argument("--reference-ticks", type=int, default=4000)
     args = parser.parse_args()
+    if args.record_reference:
+        record_reference(args.mission, args.period, args.reference_ticks, args.record_reference)
+        return
     load_start = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
 
     baseline_rtf = real_time_factor("station_fixed_cmd", args.baseline_duration)
