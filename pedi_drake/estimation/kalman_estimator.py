@@ -24,14 +24,14 @@ import math
 import numpy as np
 from pydrake.math import RotationMatrix
 from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
-from scipy.linalg import lapack
 
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
+from pedi_drake.jit import kernel
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.vector3 import cross3, rotation_matrix_wxyz
+from pedi_drake.vector3 import rotation_matrix_wxyz
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
 NUM_STATES = 18
@@ -54,11 +54,6 @@ for _i in range(4):
     _FOOT_POSITION_ROWS[3 * _i : 3 * _i + 3, _P] = -_I3
     _FOOT_POSITION_ROWS[3 * _i : 3 * _i + 3, _foot(_i)] = _I3
 _FOOT_POSITION_ROWS.flags.writeable = False
-
-
-def _skew(w: np.ndarray) -> np.ndarray:
-    """[w]x, with [w]x p = w x p."""
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
 def imu_offset_B() -> np.ndarray:
@@ -104,23 +99,149 @@ def rolling_velocities_W(R_WB: np.ndarray, w_B: np.ndarray, q: np.ndarray, qd: n
     (trunk frame), and its centre moves at w_calf x (radius z) above the contact point on flat
     ground. Standing up turns the calves by about a radian: 2 cm of travel the filter must expect.
     """
-    q, qd = np.asarray(q, float).reshape(4, 3), np.asarray(qd, float).reshape(4, 3)
-    hip, rate_sagittal = q[:, 0], qd[:, 1] + qd[:, 2]
-    w_calf_B = np.empty((4, 3))
-    w_calf_B[:, 0] = qd[:, 0]
-    w_calf_B[:, 1] = np.cos(hip) * rate_sagittal
-    w_calf_B[:, 2] = np.sin(hip) * rate_sagittal
-    w_calf_W = (w_calf_B + w_B) @ R_WB.T
-    # w x (0, 0, radius) = radius (w_y, -w_x, 0)
+    return _rolling_kernel(
+        np.asarray(R_WB, dtype=float),
+        np.asarray(w_B, dtype=float),
+        np.asarray(q, dtype=float),
+        np.asarray(qd, dtype=float),
+        float(radius),
+    )
+
+
+@kernel
+def _rolling_kernel(R_WB, w_B, q, qd, radius):
     rolling = np.zeros((4, 3))
-    rolling[:, 0] = radius * w_calf_W[:, 1]
-    rolling[:, 1] = -radius * w_calf_W[:, 0]
+    for i in range(4):
+        rate_sagittal = qd[3 * i + 1] + qd[3 * i + 2]
+        w0 = qd[3 * i] + w_B[0]
+        w1 = math.cos(q[3 * i]) * rate_sagittal + w_B[1]
+        w2 = math.sin(q[3 * i]) * rate_sagittal + w_B[2]
+        # w_W = R_WB w_B; w x (0, 0, radius) = radius (w_y, -w_x, 0)
+        rolling[i, 0] = radius * (R_WB[1, 0] * w0 + R_WB[1, 1] * w1 + R_WB[1, 2] * w2)
+        rolling[i, 1] = -radius * (R_WB[0, 0] * w0 + R_WB[0, 1] * w1 + R_WB[0, 2] * w2)
     return rolling
 
 
 def _plausible_joint_angles(q: np.ndarray, slack: float = 0.2) -> bool:
     """Whether q lies within the joint limits (+- slack [rad]); all zeros (the calf cannot be at 0) is not."""
     return bool(np.all(q >= robot.Q_LOWER - slack) and np.all(q <= robot.Q_UPPER + slack))
+
+
+_NO_ROLLING = np.zeros((4, 3))
+_NO_ROLLING.flags.writeable = False
+
+
+@kernel
+def _predict_kernel(x, P, R_WB, w_B, f_B, p_BI, gravity_W, dt, rolling, in_contact, process_noise):
+    """`FloatingBaseKalmanFilter.predict` on plain arrays: the new (x, P)."""
+    # Specific force at the trunk origin: f - w x (w x p_BI).
+    wp = np.array(
+        [w_B[1] * p_BI[2] - w_B[2] * p_BI[1], w_B[2] * p_BI[0] - w_B[0] * p_BI[2], w_B[0] * p_BI[1] - w_B[1] * p_BI[0]]
+    )
+    wwp = np.array([w_B[1] * wp[2] - w_B[2] * wp[1], w_B[2] * wp[0] - w_B[0] * wp[2], w_B[0] * wp[1] - w_B[1] * wp[0]])
+    x = x.copy()
+    for r in range(3):
+        a_W = gravity_W[r]
+        for k in range(3):
+            a_W += R_WB[r, k] * (f_B[k] - wwp[k])
+        x[r] += x[3 + r] * dt + 0.5 * a_W * dt * dt
+        x[3 + r] += a_W * dt
+    for i in range(4):
+        if in_contact[i]:
+            for k in range(3):
+                x[6 + 3 * i + k] += rolling[i, k] * dt
+    # F = I + dt E_pv: P <- F P F^T + Q, written out instead of two 18x18 products.
+    n = P.shape[0]
+    P = P.copy()
+    for r in range(3):
+        for c in range(n):
+            P[r, c] += dt * P[3 + r, c]
+    for r in range(n):
+        for c in range(3):
+            P[r, c] += dt * P[r, 3 + c]
+    for i in range(n):
+        P[i, i] += process_noise[i]
+    return x, P
+
+
+@kernel
+def _measurements_kernel(
+    R, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, use_height, foot_radius, tips_B, tip_radius, m
+):
+    """The measurement vector y (m,) of `FloatingBaseKalmanFilter.update`, in the row order of its
+    `_measurement_model`: every foot's R p_BF, the stance feet's trunk velocities (and heights),
+    the loaded prong tips' trunk velocity and height, or the resting trunk's zero velocity."""
+    y = np.zeros(m)
+    row = 0
+    for i in range(4):  # every foot: p_WF - p_WB = R p_BF
+        for r in range(3):
+            y[row + r] = R[r, 0] * p_BF[i, 0] + R[r, 1] * p_BF[i, 1] + R[r, 2] * p_BF[i, 2]
+        row += 3
+    stance = 0
+    for i in range(4):  # feet in contact do not slip: v_WB = -R (J qd + w x p_BF) + rolling
+        if not in_contact[i]:
+            continue
+        stance += 1
+        p = p_BF[i]
+        v_B = np.array([w_B[1] * p[2] - w_B[2] * p[1], w_B[2] * p[0] - w_B[0] * p[2], w_B[0] * p[1] - w_B[1] * p[0]])
+        for r in range(3):
+            for k in range(3):
+                v_B[r] += J[i, r, k] * qd[3 * i + k]
+        for r in range(3):
+            y[row + r] = -(R[r, 0] * v_B[0] + R[r, 1] * v_B[1] + R[r, 2] * v_B[2])
+            if use_rolling:
+                y[row + r] += rolling[i, r]
+        row += 3
+    if use_height:  # flat ground under the feet in contact
+        for i in range(stance):
+            y[row + i] = foot_radius
+        row += stance
+    for t in range(tips_B.shape[0]):
+        # A loaded prong tip does not move and touches the ground: v_WB = -R (w x p_BT) and
+        # p_WB,z = tip radius - (R p_BT)_z.
+        p = tips_B[t]
+        v_B = np.array([w_B[1] * p[2] - w_B[2] * p[1], w_B[2] * p[0] - w_B[0] * p[2], w_B[0] * p[1] - w_B[1] * p[0]])
+        for r in range(3):
+            y[row + r] = -(R[r, 0] * v_B[0] + R[r, 1] * v_B[1] + R[r, 2] * v_B[2])
+        y[row + 3] = tip_radius - (R[2, 0] * p[0] + R[2, 1] * p[1] + R[2, 2] * p[2])
+        row += 4
+    # With nothing loaded the trunk rests on the ground: the remaining rows (zero velocity) stay 0.
+    return y
+
+
+@kernel
+def _correct_kernel(x, P, H, noise, y):
+    """The Kalman correction of (x, P) by measurements y = H x + noise (variances `noise`)."""
+    innovation = y - H @ x
+    PHt = P @ np.ascontiguousarray(H.T)
+    S = H @ PHt
+    for i in range(len(y)):
+        S[i, i] += noise[i]
+    # S is symmetric positive definite: by Cholesky, S = L L^T, K^T = S^-1 (P H^T)^T.
+    L = np.linalg.cholesky(S)
+    KT = _cholesky_solve(L, np.ascontiguousarray(PHt.T))
+    x = x + KT.T @ innovation
+    P = P - KT.T @ np.ascontiguousarray(PHt.T)
+    return x, 0.5 * (P + P.T)
+
+
+@kernel
+def _cholesky_solve(L, B):
+    """X with L L^T X = B, L lower triangular (forward then back substitution)."""
+    n, k = B.shape
+    X = B.copy()
+    for c in range(k):
+        for i in range(n):
+            value = X[i, c]
+            for j in range(i):
+                value -= L[i, j] * X[j, c]
+            X[i, c] = value / L[i, i]
+        for i in range(n - 1, -1, -1):
+            value = X[i, c]
+            for j in range(i + 1, n):
+                value -= L[j, i] * X[j, c]
+            X[i, c] = value / L[i, i]
+    return X
 
 
 class FloatingBaseKalmanFilter:
@@ -143,6 +264,16 @@ class FloatingBaseKalmanFilter:
         self._process_noise_cache: dict[tuple, np.ndarray] = {}
         self._measurement_models: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
 
+    def warm_up(self) -> None:
+        """Runs one predict and update of every kind, so the compiled kernels are compiled (or
+        loaded from numba's cache) now, not in the first control tick."""
+        imu = ImuSample(np.eye(3), np.zeros(3), -GRAVITY_W)
+        x, P = self.initial_state(imu, robot.STANDING_Q, np.zeros(2))
+        rolling = rolling_velocities_W(imu.R_WB, imu.w_B, robot.STANDING_Q, np.zeros(12), self.foot_radius)
+        for contact in (np.ones(4, bool), np.zeros(4, bool)):
+            x, P = self.predict(x, P, imu, contact, 0.002, rolling)
+            self.update(x, P, imu, robot.STANDING_Q, np.zeros(12), contact, rolling, len(self.prong_tips_B) > 0)
+
     def initial_state(self, imu: ImuSample, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(x, P) for a robot at rest with its lowest foot on the ground, trunk at `xy` [m]."""
         p_BF, _ = foot_kinematics_B(q)
@@ -163,21 +294,20 @@ class FloatingBaseKalmanFilter:
     ):
         """Propagates (x, P) over dt [s] with the IMU acceleration; feet in contact move by their
         `rolling` velocities (4, 3) [m/s] (see rolling_velocities_W), when given."""
-        w = imu.w_B
-        a_B = imu.f_B - cross3(w, cross3(w, self.p_BI))  # specific force at the trunk origin
-        a_W = imu.R_WB @ a_B + GRAVITY_W
-        x = x.copy()
-        x[_P] += x[_V] * dt + 0.5 * a_W * dt * dt
-        x[_V] += a_W * dt
         in_contact = np.asarray(contact[:4], bool)
-        if rolling is not None:
-            x[_FEET] += (rolling * (dt * in_contact)[:, None]).ravel()
-        # F = I + dt E_pv: P <- F P F^T + Q, written out to skip two 18x18 products.
-        P = P.copy()
-        P[_P, :] += dt * P[_V, :]
-        P[:, _P] += dt * P[:, _V]
-        P[_DIAGONAL] += self._process_noise(tuple(in_contact.tolist()), dt)
-        return x, P
+        return _predict_kernel(
+            x,
+            P,
+            imu.R_WB,
+            imu.w_B,
+            imu.f_B,
+            self.p_BI,
+            GRAVITY_W,
+            dt,
+            _NO_ROLLING if rolling is None else np.asarray(rolling, dtype=float),
+            in_contact,
+            self._process_noise(tuple(in_contact.tolist()), dt),
+        )
 
     def _process_noise(self, contact: tuple[bool, ...], dt: float) -> np.ndarray:
         """Diagonal of Q over dt [s] for the feet in `contact` (one of 16 patterns: kept once made)."""
@@ -257,48 +387,26 @@ class FloatingBaseKalmanFilter:
         """Corrects (x, P) with the leg kinematics of all feet and the no-slip of the feet in contact
         (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with the
         prong tips when `prongs_loaded` (they do not move, and touch the ground)."""
-        R = imu.R_WB
         p_BF, J = foot_kinematics_B(q)
         in_contact = np.asarray(contact[:4], bool)
-        stance = np.flatnonzero(in_contact)
-        ns = len(stance)
         num_tips = len(self.prong_tips_B) if prongs_loaded else 0
         H, noise = self._measurement_model(tuple(in_contact.tolist()), num_tips)
-        # Every foot: p_WF - p_WB = R p_BF.
-        parts = [(p_BF @ R.T).ravel()]
-        if ns:
-            # Feet in contact do not slip: v_WB = -R (J qd + w x p_BF) + rolling.
-            legs_qd = np.asarray(qd, float).reshape(4, 3)[stance]
-            v_BF = (J[stance] @ legs_qd[:, :, None])[:, :, 0] + p_BF[stance] @ _skew(imu.w_B).T
-            v_WB = -(v_BF @ R.T)
-            if rolling is not None:
-                v_WB += rolling[stance]
-            parts.append(v_WB.ravel())
-            if self.config.ground_height_measurement:
-                parts.append(np.full(ns, self.foot_radius))
-        if num_tips:
-            # Loaded prong tips do not move and touch the ground: per tip, v_WB = -R (w x p_BT)
-            # and p_WB,z = tip radius - (R p_BT)_z.
-            tips = self.prong_tips_B
-            rows = np.empty((num_tips, 4))
-            rows[:, :3] = -((tips @ _skew(imu.w_B).T) @ R.T)
-            rows[:, 3] = self.prong_tip_radius - tips @ R[2]
-            parts.append(rows.ravel())
-        if ns == 0 and not num_tips:
-            parts.append(np.zeros(2))  # resting on the ground: no horizontal velocity
-        y = np.concatenate(parts)
-        innovation = y - H @ x
-        PHt = P @ H.T
-        S = H @ PHt
-        S[np.diag_indices(len(y))] += noise
-        # S is symmetric positive definite: a Cholesky solve, at a third of numpy.linalg.solve's cost.
-        _, KT, info = lapack.dposv(S, PHt.T)
-        if info != 0:
-            KT = np.linalg.solve(S, PHt.T)
-        x = x + KT.T @ innovation
-        P = P - KT.T @ PHt.T
-        P = 0.5 * (P + P.T)
-        return x, P
+        y = _measurements_kernel(
+            imu.R_WB,
+            imu.w_B,
+            p_BF,
+            J,
+            np.asarray(qd, dtype=float),
+            in_contact,
+            _NO_ROLLING if rolling is None else np.asarray(rolling, dtype=float),
+            rolling is not None,
+            self.config.ground_height_measurement,
+            self.foot_radius,
+            self.prong_tips_B[:num_tips],
+            self.prong_tip_radius,
+            len(noise),
+        )
+        return _correct_kernel(x, P, H, noise, y)
 
     @staticmethod
     def contact_flags(foot_sensor: np.ndarray, schedule: np.ndarray | None, threshold: float) -> np.ndarray:
@@ -323,6 +431,7 @@ class KalmanEstimator(LeafSystem):
         tips = None if prongs is None else prongs.tip_positions_B()
         radius = 0.0 if prongs is None else prongs.tip_radius
         self.filter = FloatingBaseKalmanFilter(config, imu_offset_B(), prong_tips_B=tips, prong_tip_radius=radius)
+        self.filter.warm_up()
         num_contacts = 4 + (0 if prongs is None else prongs.num_prongs)
         self.imu_port = self.DeclareVectorInputPort("imu", 10)
         self.position_port = self.DeclareVectorInputPort("position_measured", 12)
@@ -351,7 +460,7 @@ class KalmanEstimator(LeafSystem):
         qd = np.asarray(self.velocity_port.Eval(context), dtype=float)
         force = np.asarray(self.foot_contact_port.Eval(context), dtype=float)
         schedule = self.contact_set_port.Eval(context) if self.contact_set_port.HasValue(context) else None
-        finite = bool(np.isfinite(np.concatenate([q, qd, force])).all())
+        finite = bool(np.isfinite(q).all() and np.isfinite(qd).all() and np.isfinite(force).all())
         return imu, q, qd, force, schedule, finite
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:

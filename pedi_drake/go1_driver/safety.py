@@ -27,6 +27,7 @@ from pedi_drake import robot
 from pedi_drake.go1_command import COMMAND_SIZE, pack_command, split_command
 from pedi_drake.go1_driver.config import Go1SafetyConfig
 from pedi_drake.go1_driver.constants import STATUS_CHANNELS
+from pedi_drake.jit import kernel
 from pedi_drake.trajectory import min_jerk
 
 _log = logging.getLogger(__name__)
@@ -122,6 +123,94 @@ def damping_command(q_hold: np.ndarray, qd: np.ndarray, limits: SafetyLimits, kd
     return pack_command(limits.clip_position(q_hold), 0.0, 0.0, kd_vec, 0.0)
 
 
+# Bits of `_bound_command_kernel`'s flags, named as in INTERVENTIONS.
+_BOUND_FLAGS = (
+    "gain_clamped",
+    "position_clamped",
+    "rate_limited",
+    "velocity_clamped",
+    "feedforward_clamped",
+    "torque_bounded",
+)
+
+
+@kernel
+def _bound_command_kernel(command, q, qd, q_lower, q_upper, qd_max, effort, kp_max, kd_max, step, q_prev, rate_limit):
+    """The maths of `bound_command` on plain arrays: (bounded command (60,), flag bits of _BOUND_FLAGS).
+
+    Element by element in the order numpy would apply them, so the compiled and the plain-Python
+    runs agree to the last bit: clip = min(max(x, lower), upper).
+    """
+    out = command.copy()
+    flags = 0
+    bound = np.empty(12)
+    aim = np.empty(12)
+    pd = np.empty(12)
+    over = np.zeros(12, dtype=np.bool_)
+    any_over = False
+    for j in range(12):
+        iq, iqd, ikp, ikd, itau = j, 12 + j, 24 + j, 36 + j, 48 + j
+        kp = min(max(command[ikp], 0.0), kp_max)
+        kd = min(max(command[ikd], 0.0), kd_max)
+        if kp != command[ikp] or kd != command[ikd]:
+            flags |= 1
+        q_des = min(max(command[iq], q_lower[j]), q_upper[j])
+        if q_des != command[iq]:
+            flags |= 2
+        if rate_limit:
+            limited = min(max(q_des, q_prev[j] - step), q_prev[j] + step)
+            if limited != q_des:
+                flags |= 4
+            # The previous target is inside the limits, so this keeps both bounds.
+            q_des = min(max(limited, q_lower[j]), q_upper[j])
+        qd_des = min(max(command[iqd], -qd_max[j]), qd_max[j])
+        if qd_des != command[iqd]:
+            flags |= 8
+        tau = min(max(command[itau], -effort[j]), effort[j])
+        if tau != command[itau]:
+            flags |= 16
+        # Resulting torque at the measured state, aimed a hair inside the bound so that rounding
+        # in the move below does not cross it.
+        bound[j] = effort[j] * _EFFORT_MARGIN
+        aim[j] = bound[j] * _EFFORT_MARGIN
+        tau = min(max(tau, -aim[j]), aim[j])
+        pd[j] = kp * (q_des - q[j]) + kd * (qd_des - qd[j])
+        over[j] = abs(tau + pd[j]) > aim[j]
+        any_over = any_over or over[j]
+        out[iq], out[iqd], out[ikp], out[ikd], out[itau] = q_des, qd_des, kp, kd, tau
+    if any_over:
+        # Where the torque exceeds the effort limit, pull the targets toward the measured state
+        # (same stiffness, smaller error) until it sits on the limit.
+        flags |= 32
+        any_still = False
+        still = np.zeros(12, dtype=np.bool_)
+        for j in range(12):
+            iq, iqd, ikp, ikd, itau = j, 12 + j, 24 + j, 36 + j, 48 + j
+            tau = out[itau]
+            scale = 1.0
+            if over[j]:
+                target = min(max(tau + pd[j], -aim[j]), aim[j])
+                scale = (target - tau) / pd[j]
+            out[iq] = min(max(q[j] + scale * (out[iq] - q[j]), q_lower[j]), q_upper[j])
+            out[iqd] = min(max(qd[j] + scale * (out[iqd] - qd[j]), -qd_max[j]), qd_max[j])
+            pd[j] = out[ikp] * (out[iq] - q[j]) + out[ikd] * (out[iqd] - qd[j])
+            still[j] = abs(tau + pd[j]) > bound[j]
+            any_still = any_still or still[j]
+        if any_still:
+            # The re-clip can only matter when the measured state is itself outside the limits:
+            # then soften both gains on that joint, which always reaches the bound (|tau_ff| <= it).
+            for j in range(12):
+                ikp, ikd, itau = 24 + j, 36 + j, 48 + j
+                gain_scale = 1.0
+                if still[j]:
+                    tau = out[itau]
+                    target = min(max(tau + pd[j], -bound[j]), bound[j])
+                    gain_scale = min(max((target - tau) / pd[j], 0.0), 1.0)
+                out[ikp] = out[ikp] * gain_scale
+                out[ikd] = out[ikd] * gain_scale
+    return out, flags
+
+
 def bound_command(
     command: np.ndarray,
     q: np.ndarray,
@@ -134,52 +223,31 @@ def bound_command(
     `command` must be finite and q [rad], qd [rad/s] (the measured state) finite: the caller
     replaces anything else by `damping_command`. `q_des_previous` is the last published target
     [rad] for the rate limit (None: no rate limit).
+
+    In order: gains into [0, max], q_des into the joint limits, then within `max_target_step` of
+    the previous target, qd_des and tau_ff into their limits; then, where the torque the motors
+    would apply at the measured state exceeds the effort limit, the targets are pulled toward the
+    measured state (and, if that is not enough, both gains softened) until it sits on the limit.
     """
-    q_des, qd_des, kp, kd, tau_ff = (x.copy() for x in split_command(command))
-    flags: set[str] = set()
+    rate_limit = q_des_previous is not None
+    safe, bits = _bound_command_kernel(
+        np.asarray(command, dtype=float),
+        np.asarray(q, dtype=float),
+        np.asarray(qd, dtype=float),
+        limits.q_lower,
+        limits.q_upper,
+        limits.qd_max,
+        limits.effort,
+        limits.kp_max,
+        limits.kd_max,
+        limits.max_target_step,
+        np.asarray(q_des_previous, dtype=float) if rate_limit else _NO_PREVIOUS,
+        rate_limit,
+    )
+    return safe, {name for k, name in enumerate(_BOUND_FLAGS) if bits >> k & 1}
 
-    def clip(x: np.ndarray, lower, upper, flag: str) -> np.ndarray:
-        y = np.clip(x, lower, upper)
-        if np.any(y != x):
-            flags.add(flag)
-        return y
 
-    kp = clip(kp, 0.0, limits.kp_max, "gain_clamped")
-    kd = clip(kd, 0.0, limits.kd_max, "gain_clamped")
-    q_des = clip(q_des, limits.q_lower, limits.q_upper, "position_clamped")
-    if q_des_previous is not None:
-        step = limits.max_target_step
-        q_des = clip(q_des, q_des_previous - step, q_des_previous + step, "rate_limited")
-        # The previous target is inside the limits, so this keeps both bounds.
-        q_des = np.clip(q_des, limits.q_lower, limits.q_upper)
-    qd_des = clip(qd_des, -limits.qd_max, limits.qd_max, "velocity_clamped")
-    tau_ff = clip(tau_ff, -limits.effort, limits.effort, "feedforward_clamped")
-
-    # Resulting torque at the measured state: where it exceeds the effort limit, pull the targets
-    # toward the measured state (same stiffness, smaller error) until it sits on the limit.
-    bound = limits.effort * _EFFORT_MARGIN
-    # Aim a hair inside the bound so that rounding in the move below does not cross it.
-    aim = bound * _EFFORT_MARGIN
-    tau_ff = np.clip(tau_ff, -aim, aim)
-    pd = kp * (q_des - q) + kd * (qd_des - qd)
-    over = np.abs(tau_ff + pd) > aim
-    if np.any(over):
-        flags.add("torque_bounded")
-        target = np.clip(tau_ff + pd, -aim, aim)
-        scale = np.where(over, (target - tau_ff) / np.where(over, pd, 1.0), 1.0)
-        q_des = np.clip(q + scale * (q_des - q), limits.q_lower, limits.q_upper)
-        qd_des = np.clip(qd + scale * (qd_des - qd), -limits.qd_max, limits.qd_max)
-        # The re-clip can only matter when the measured state is itself outside the limits:
-        # then soften both gains on that joint, which always reaches the bound (|tau_ff| <= it).
-        pd = kp * (q_des - q) + kd * (qd_des - qd)
-        still = np.abs(tau_ff + pd) > bound
-        if np.any(still):
-            target = np.clip(tau_ff + pd, -bound, bound)
-            gain_scale = np.where(still, (target - tau_ff) / np.where(still, pd, 1.0), 1.0)
-            gain_scale = np.clip(gain_scale, 0.0, 1.0)
-            kp = kp * gain_scale
-            kd = kd * gain_scale
-    return pack_command(q_des, qd_des, kp, kd, tau_ff), flags
+_NO_PREVIOUS = np.zeros(12)
 
 
 def command_timeout(config: Go1SafetyConfig, elapsed: float) -> float:
@@ -257,6 +325,8 @@ class Go1SafetyFilter(LeafSystem):
         initial = np.zeros(_STATE_SIZE)
         initial[_CMD] = damping_command(robot.STANDING_Q, np.zeros(12), self._limits, config.damping_kd)
         self._state = self.DeclareDiscreteState(initial)
+        # Compiled here (or loaded from numba's cache), not in the first control tick.
+        bound_command(initial[_CMD], robot.STANDING_Q, np.zeros(12), self._limits, robot.STANDING_Q)
         self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
         self.DeclareVectorOutputPort("command", COMMAND_SIZE, self._calc_command, {self.xd_ticket()})
         self.DeclareVectorOutputPort("status", 1 + len(INTERVENTIONS), self._calc_status, {self.xd_ticket()})
@@ -274,7 +344,7 @@ class Go1SafetyFilter(LeafSystem):
         now = self._clock()
         fired: set[str] = set()
         q, qd = self._q.Eval(context), self._qd.Eval(context)
-        status_ok = bool(np.all(np.isfinite(q)) and np.all(np.isfinite(qd)))
+        status_ok = bool(np.isfinite(q).all() and np.isfinite(qd).all())
         if x[_STARTED] == 0.0:
             x[_Q_START] = limits.clip_position(q)
             x[_T_START] = context.get_time()
@@ -287,7 +357,7 @@ class Go1SafetyFilter(LeafSystem):
         # The receive thread's judgement, not `now - receipt`: a late tick does not make the robot
         # look silent, and the robot's real silence trips within status_timeout + one look.
         silence = self._status_silence.Eval(context)
-        if not float(np.max(silence)) <= config.status_timeout:  # NaN counts as silent
+        if not float(silence.max()) <= config.status_timeout:  # NaN counts as silent
             fired.add("status_timeout")
         if self._flag(self._estop, context):
             fired.add("estop_port")
@@ -304,7 +374,7 @@ class Go1SafetyFilter(LeafSystem):
         q_des_previous = x[_CMD][0:12].copy()
         if not status_ok:
             fired.add("nonfinite_status")
-        if not np.all(np.isfinite(command)):
+        if not np.isfinite(command).all():
             fired.add("nonfinite_command")
         if x[_LATCH] != 0.0 or not status_ok or "nonfinite_command" in fired:
             fired.add("damping")

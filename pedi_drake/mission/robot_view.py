@@ -12,7 +12,8 @@ from pydrake.math import RigidTransform
 
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BaseState
-from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B, joint_frames, leg_geometry
+from pedi_drake.estimation.leg_odometry import foot_kinematics_B
+from pedi_drake.leg_kinematics import foot_jacobian_B, joint_frames, leg_geometry
 
 
 @dataclasses.dataclass(frozen=True)
@@ -37,9 +38,17 @@ class RobotView:
     def leg_q(self, leg: str) -> np.ndarray:
         return self.q[robot.leg_slice(leg)]
 
+    @functools.cached_property
+    def _feet_B(self) -> np.ndarray:
+        """(4, 3) every foot centre in the trunk frame [m], Unitree leg order (made once per view:
+        the stance polygon alone reads three or four of them every mission tick)."""
+        feet, _ = foot_kinematics_B(self.q)
+        feet.flags.writeable = False
+        return feet
+
     def foot_B(self, leg: str) -> np.ndarray:
         """Foot centre in the trunk frame [m]."""
-        return foot_position_B(leg, self.leg_q(leg))
+        return self._feet_B[robot.LEG_NAMES.index(leg)].copy()
 
     def foot_W(self, leg: str) -> np.ndarray:
         """Foot centre in the world [m]."""
