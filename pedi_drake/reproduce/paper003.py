@@ -135,6 +135,10 @@ def _push_recovery(folder: Path, section: Section, quick: bool) -> None:
         series[label] = push_series(plant, record.logs, spec)
         rows[label] = {**result["pushes"][0], **{key: result[key] for key in ("success", "reason", "stack")}}
     plot_push_response(series, folder / "fig6_push.png", knee_leg=FIG6_KNEE)
+    section.notes.append(
+        "Figs. 5-6 of paper 003 are images (ANYmal pushed by hand through a force-torque sensor); the text "
+        "gives no numbers for them, so the published column quotes Section VII-A's statements."
+    )
     push = rows["with prongs"]
     section.figures.append(
         (
@@ -206,8 +210,8 @@ def _push_recovery(folder: Path, section: Section, quick: bool) -> None:
             "lower with prongs (the paper's amplification from force to torque)",
             " / ".join(f"{added[label]:.2f}" for label in PUSH_MISSIONS),
             "mean at full force minus mean before the push. The default prongs sit on the trunk's centre line: "
-            f"they took {_pair(rows, lambda r: r['prong_share_of_push'], 0, 100)} % of the sideways force and "
-            f"{_pair(rows, lambda r: r['prong_load_N'], 0)} N of the weight, but no roll moment, which the feet "
+            f"they took {_pair(rows, lambda r: abs(r['prong_share_of_push']), 0, 100)} % of the sideways force and "
+            f"{_pair(rows, lambda r: abs(r['prong_load_N']), 0)} N of the weight, but no roll moment, which the feet "
             "must carry as a load shift from one side's legs to the other's. "
             + (
                 "Here the push adds less knee torque with prongs."
