@@ -58,12 +58,15 @@ class PedipulationDiagram:
 
 
 def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
-    """The scenario with the mission's scene objects and pushes added and its robot variant applied."""
+    """The scenario with the mission's scene objects and pushes added, its robot variant and its
+    whole-body task stack applied."""
     merged = dataclasses.replace(
         scenario, scene=list(scenario.scene) + list(mission.scene), pushes=list(scenario.pushes) + list(mission.pushes)
     )
     if mission.robot is not None:
         merged.robot = dataclasses.replace(scenario.robot, prongs=mission.robot.prongs)
+    if mission.stack:
+        merged.whole_body = dataclasses.replace(scenario.whole_body, stack=mission.stack)
     return merged
 
 

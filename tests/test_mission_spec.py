@@ -5,10 +5,11 @@ from pathlib import Path
 import pytest
 from pydrake.common.yaml import yaml_load
 
+from pedi_drake.diagram import apply_mission
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.mission.spec import PHASE_KINDS, LegToSupport, Reach, load_mission, shipped_demos, shipped_missions
 from pedi_drake.resources import scenarios_dir
-from pedi_drake.scenario import load_scenario
+from pedi_drake.scenario import Scenario, load_scenario
 
 PAPER_MISSIONS = {
     "hit_target_front",
@@ -149,3 +150,15 @@ def test_the_longest_duration_lets_every_phase_time_out_then_recover(tmp_path):
     )
     recovery = 2 * LegToSupport().timeout  # both front legs put back after a failure
     assert load_mission(str(path)).longest_duration() == pytest.approx(4.0 + 2.5 + recovery)
+
+
+def test_a_mission_names_the_task_stack_it_runs_on(tmp_path):
+    mission = load_mission(_write(tmp_path, "stack: paper003\nphases:\n  - {kind: wait}\n"))
+    assert apply_mission(Scenario(controller="whole_body"), mission).whole_body.stack == "paper003"
+    unnamed = load_mission(_write(tmp_path, "phases:\n  - {kind: wait}\n"))
+    assert apply_mission(Scenario(controller="whole_body"), unnamed).whole_body.stack == "paper000"
+
+
+def test_an_unknown_task_stack_names_the_file_and_field(tmp_path):
+    with pytest.raises(MissionFileError, match=r"m\.yaml: stack: must be one of \('paper000', 'paper003'\)"):
+        load_mission(_write(tmp_path, "stack: paper004\nphases:\n  - {kind: wait}\n"))

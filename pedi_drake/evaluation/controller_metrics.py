@@ -19,6 +19,7 @@ from pedi_drake import robot
 from pedi_drake.control.references import LEG_BLOCK, LEG_MODE_NONE
 from pedi_drake.control.whole_body_controller import diagnostics_layout
 from pedi_drake.diagram import apply_mission
+from pedi_drake.evaluation.push_response import push_response
 from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.exceptions import PediError
 from pedi_drake.mission import spec
@@ -57,7 +58,7 @@ class ControllerMetrics:
     min_trunk_height: float  # [m]
     # Weight not carried by the feet, mean over the last 0.5 s [N]: the prongs' load (0 without).
     prong_load: float = 0.0
-    # With a push: max trunk displacement from the push's start until it is gone [m] ...
+    # With pushes: max trunk displacement under a push (pedi_drake.evaluation.push_response) [m] ...
     push_displacement: float = float("nan")
     # ... the largest |calf torque| of a stance leg meanwhile [N m] ...
     peak_knee_torque: float = float("nan")
@@ -186,13 +187,10 @@ def controller_metrics(record, judged: dict) -> ControllerMetrics:
         model = plant.GetBodyByName(robot.TRUNK_BODY_NAME).model_instance()
         weight = plant.CalcTotalMass(plant.CreateDefaultContext(), [model]) * GRAVITY
         result.prong_load = float(weight - np.mean(np.sum(feet.data[:, last], axis=0)))
-    if pushes:
-        start, end = first_push, max(push.end() for push in pushes)
-        window = (times >= start) & (times <= end)
-        before = trunk_p[times < start][-1] if np.any(times < start) else trunk_p[0]
-        result.push_displacement = _max_norm(trunk_p[window] - before)
-        calves = [3 * i + 2 for i in stance]
-        torque_window = (torque_log.times >= start) & (torque_log.times <= end)
-        result.peak_knee_torque = float(np.max(np.abs(torque[torque_window][:, calves])))
+    responses = [r for r in (push_response(plant, logs, push) for push in pushes) if r is not None]
+    if responses:
+        result.push_displacement = max(r.trunk_displacement for r in responses)
+        result.peak_knee_torque = max(r.knee_torque_peak[leg] for r in responses for leg in r.stance_legs)
+        window = (times >= first_push) & (times <= max(push.end() for push in pushes))
         result.push_while_manipulating = bool(np.any(window) and np.all(manipulating[window]))
     return result

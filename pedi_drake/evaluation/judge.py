@@ -9,8 +9,10 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake import robot
+from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import capture_point, mission_results
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
+from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_response
 from pedi_drake.evaluation.result_file import write_result
 from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
 from pedi_drake.fall import fell_during
@@ -38,6 +40,8 @@ def judge_run(record) -> dict:
     scenario, logs, hardware = record.scenario, record.logs, record.hardware
     base = logs["base_state"].data
     mission = record.built.mission
+    # The scenario as run: with the mission's pushes, robot variant and task stack.
+    simulated = apply_mission(scenario, mission) if mission is not None else scenario
     # A mission's robot variant replaces the scenario's (as the diagram applied it).
     prongs = mission.robot.prongs if mission is not None and mission.robot is not None else scenario.robot.prongs
     has_prongs = prongs is not None
@@ -72,6 +76,7 @@ def judge_run(record) -> dict:
         "real_time_factor": sim_time / wall_time if wall_time > 0 else None,
         "controller_tick_ms": None,
         "controller": scenario.controller,
+        "stack": simulated.whole_body.stack if scenario.controller == "whole_body" else None,
         "estimator": scenario.estimator,
         # The foot force estimate the press phases stopped on (every available one is in "presses").
         "force_estimate": (record.built.mission.force_estimate if record.built.mission else "")
@@ -154,6 +159,9 @@ def judge_run(record) -> dict:
                     f"friction too low to stand: the feet slid {100 * slip:.0f} cm on the ground "
                     f"(ground_friction {scenario.ground_friction}); " + reason
                 )
+        if simulated.pushes:
+            result["pushes"], slid = judge_pushes(plant, logs, simulated.pushes)
+            reason = "; ".join(filter(None, [reason, slid]))
     elif fell and not reason:
         reason = "the trunk fell (state estimate)"
     if not hardware and scenario.estimator == "kalman" and base.shape[1]:
@@ -170,6 +178,23 @@ def judge_run(record) -> dict:
     result["reason"] = reason
     result["success"] = not reason
     return result
+
+
+def judge_pushes(plant, logs, pushes) -> tuple[list[dict], str]:
+    """result.json's `pushes` rows (None for a push the run ended before) and why a stance foot
+    failed to hold (empty when every one slid at most STANCE_FOOT_SLIDE_LIMIT)."""
+    rows, problems = [], []
+    for i, push in enumerate(pushes):
+        response = push_response(plant, logs, push)
+        rows.append(None if response is None else response.row())
+        if response is not None and response.foot_slide:
+            leg, slide = response.max_foot_slide()
+            if slide > STANCE_FOOT_SLIDE_LIMIT:
+                problems.append(
+                    f"the {leg} foot slid {100 * slide:.1f} cm under pushes[{i}] "
+                    f"(a stance foot may slide at most {100 * STANCE_FOOT_SLIDE_LIMIT:.0f} cm)"
+                )
+    return rows, "; ".join(problems)
 
 
 def _stand_reason(scenario, final_height: float | None, sim_time: float) -> str:

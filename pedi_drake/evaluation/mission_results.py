@@ -158,23 +158,38 @@ def pedipulation_leg(leg_reference_log: np.ndarray) -> str | None:
     return None
 
 
-def max_foot_slip(plant, states: np.ndarray, t_state: np.ndarray, t_end: float) -> float:
-    """Largest horizontal distance any foot moved on the ground from the first sample to `t_end` [m].
-
-    Only samples where the foot is low enough to touch the ground count, so a foot lifted on
-    purpose is not taken for one that slid.
-    """
+def foot_positions_W(plant, states: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """True foot centres (len(indices), 4, 3) at the logged plant states `states[:, indices]` [m]."""
     context = plant.CreateDefaultContext()
+    feet = [plant.GetBodyByName(name) for name in robot.FOOT_BODY_NAMES]
+    nq = plant.num_positions()
+    positions = np.zeros((len(indices), len(feet), 3))
+    for row, k in enumerate(indices):
+        plant.SetPositions(context, states[:nq, k])
+        for i, foot in enumerate(feet):
+            positions[row, i] = foot.EvalPoseInWorld(context).translation()
+    return positions
+
+
+def foot_slides(feet_W: np.ndarray) -> dict[str, float]:
+    """Per foot of `feet_W` (N, 4, 3) [m]: the largest horizontal distance from its first sample at
+    the samples where it touches the ground [m] (0 if it never does).
+
+    A foot lifted on purpose is not taken for one that slid; the figure is an upper bound of the
+    slip, as it also counts the foot sphere rolling when the calf turns.
+    """
+    on_ground = feet_W[:, :, 2] < robot.FOOT_RADIUS + FOOT_ON_GROUND
+    moved = np.linalg.norm(feet_W[:, :, :2] - feet_W[:1, :, :2], axis=-1)
+    return {leg: float(np.max(moved[on_ground[:, i], i], initial=0.0)) for i, leg in enumerate(robot.LEG_NAMES)}
+
+
+def max_foot_slip(plant, states: np.ndarray, t_state: np.ndarray, t_end: float) -> float:
+    """Largest horizontal distance any foot moved on the ground from the first sample to `t_end` [m]
+    (see `foot_slides`)."""
     last = _sample_index(t_state, t_end)
     step = max(1, last // 200)  # a few hundred samples are enough to see a slide of centimetres
-    slip = 0.0
-    for leg in robot.LEG_NAMES:
-        start = _foot_W(plant, context, states[:, 0], leg)
-        for k in range(0, last + 1, step):
-            p = _foot_W(plant, context, states[:, k], leg)
-            if p[2] < robot.FOOT_RADIUS + FOOT_ON_GROUND:
-                slip = max(slip, float(np.linalg.norm((p - start)[:2])))
-    return slip
+    feet_W = foot_positions_W(plant, states, np.arange(0, last + 1, step))
+    return max(foot_slides(feet_W).values())
 
 
 def trunk_height_at(p_WB: np.ndarray, times: np.ndarray, t: float) -> float:

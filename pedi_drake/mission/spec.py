@@ -6,6 +6,7 @@ A mission file is YAML:
     scene:                       # scene objects (pedi_drake.scenario.SceneObject)
       - {kind: target_panel, position: [0.46, -0.13, 0.0], yaw: 3.14159}
     robot: {prongs: null}        # optional: the robot variant the mission needs
+    stack: paper003              # optional: the whole-body controller's task stack it needs
     pushes:                      # optional: disturbances (pedi_drake.scenario.Push), simulation only
       - {force: 30.0, direction: [0.0, -1.0, 0.0], start: 6.0, ramp: 0.5, duration: 5.0}
     phases:
@@ -25,7 +26,7 @@ from pathlib import Path
 from pydrake.common.yaml import yaml_load
 
 from pedi_drake.config_validation import check_against_schema
-from pedi_drake.control.config import FORCE_ESTIMATES
+from pedi_drake.control.config import FORCE_ESTIMATES, STACKS
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.resources import missions_dir
 from pedi_drake.robot import FOOT_RADIUS, LEG_NAMES
@@ -248,6 +249,8 @@ class MissionSpec:
     robot: RobotConfig | None
     source: str  # the file it came from
     force_estimate: str = ""  # "joint_torque" or "impedance"; empty: the scenario's
+    # The whole-body controller's task stack ("paper000" or "paper003"); empty: the scenario's.
+    stack: str = ""
     # Disturbances of the simulated world during the mission (added to the scenario's).
     pushes: list[Push] = dataclasses.field(default_factory=list)
 
@@ -266,6 +269,9 @@ class _MissionFile:
     robot: RobotConfig | None = None
     # The foot force estimate press phases use: "joint_torque" or "impedance"; empty: the scenario's.
     force_estimate: str = ""
+    # The task stack the whole-body controller runs the mission on (pedi_drake.control.stacks):
+    # "paper000" or "paper003"; empty: the scenario's. Ignored by the other controllers.
+    stack: str = ""
     pushes: list[Push] = dataclasses.field(default_factory=list)
     phases: list[dict] = dataclasses.field(default_factory=list)
 
@@ -357,6 +363,8 @@ def load_mission(name_or_path: str) -> MissionSpec:
         raise MissionFileError(
             f"{where}: force_estimate: must be one of {FORCE_ESTIMATES} (or absent), got {header.force_estimate!r}"
         )
+    if header.stack not in ("", *STACKS):
+        raise MissionFileError(f"{where}: stack: must be one of {STACKS} (or absent), got {header.stack!r}")
     for problem in scene_problems(header.scene, path.parent):
         raise MissionFileError(f"{where}: {problem}")
     for obj in header.scene:
@@ -396,6 +404,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
         robot=header.robot,
         source=where,
         force_estimate=header.force_estimate,
+        stack=header.stack,
         pushes=header.pushes,
     )
 
