@@ -127,9 +127,13 @@ class MissionProgress:
     ik: IkPlan | None = None
 
     def copy(self) -> "MissionProgress":
-        """An independent deep copy: the one to change (a progress in a Context is never changed)."""
+        """A copy that is safe to change (a progress in a Context is never changed): deep, except
+        for the records of finished phases, which nothing changes."""
         clone = copy.copy(self)
-        clone.__dict__.update(copy.deepcopy(self.__dict__))
+        clone.__dict__.update(copy.deepcopy({k: v for k, v in self.__dict__.items() if k != "records"}))
+        # Only the current phase's record (the last) is ever changed: the finished phases'
+        # records are shared, so a tick's copy does not grow with the mission.
+        clone.records = self.records[:-1] + copy.deepcopy(self.records[-1:])
         return clone
 
     def __deepcopy__(self, memo) -> "MissionProgress":
