@@ -15,7 +15,7 @@ import pytest
 from pedi_drake.batch.engines import RayEngine, SerialEngine
 from pedi_drake.batch.results_file import read_rows
 from pedi_drake.batch.runner import run_study
-from pedi_drake.batch.study import StudyError, load_study, study_from_dict
+from pedi_drake.batch.study import StudyError, load_study, scenario_for, study_from_dict
 from pedi_drake.batch.summary import wilson_interval
 from pedi_drake.batch.tasks import TIMING_COLUMNS, run_task
 from pedi_drake.benchmarks.suf import height_sweep_rows
@@ -60,6 +60,8 @@ def _write(tmp_path: Path, text: str) -> Path:
         ("kind: mission\nfactors:\n  - {name: ground_friction, values: []}\n", "values"),
         ("kind: bogus\nfactors:\n  - {name: ground_friction, values: [1]}\n", "kind"),
         ("kind: suf\nfactors:\n  - {name: method, values: [magic]}\n", "method"),
+        ("kind: mission\nfactors:\n  - {name: ground_friction, values: [0.5, 0.9], labels: [low]}\n", "labels"),
+        ("kind: mission\nfactors:\n  - {name: push, field: pushes, values: [[{force: -3.0}]]}\n", "pushes"),
     ],
 )
 def test_a_bad_study_file_names_the_file_and_the_field(tmp_path, body, field):
@@ -67,6 +69,23 @@ def test_a_bad_study_file_names_the_file_and_the_field(tmp_path, body, field):
     with pytest.raises(StudyError, match=field) as error:
         load_study(path)
     assert str(path) in str(error.value)
+
+
+def test_a_push_factor_sets_the_scenario_pushes_and_rows_carry_its_labels(tmp_path):
+    push = "{force: 30.0, body: trunk, direction: [0.0, -1.0, 0.0], start: 5.0, ramp: 0.5, duration: 2.0}"
+    path = _write(
+        tmp_path,
+        f"""
+        kind: mission
+        factors:
+          - {{name: mission, values: [hit_target_front]}}
+          - {{name: push, field: pushes, values: [[], [{push}]], labels: [none, 30 N]}}
+        """,
+    )
+    study = load_study(path)
+    assert [task.factors["push"] for task in study.tasks] == ["none", "30 N"]
+    pushes = [scenario_for(task).pushes for task in study.tasks]
+    assert pushes[0] == [] and pushes[1][0].force == 30.0 and pushes[1][0].direction == [0.0, -1.0, 0.0]
 
 
 def test_a_bad_study_file_exits_2_before_any_task_runs(tmp_path):

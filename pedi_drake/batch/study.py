@@ -15,6 +15,7 @@
         values:
           - {random_seed: 0, sensor_noise.enabled: false}
           - {random_seed: 1, sensor_noise.enabled: true}
+        labels: [clean, noisy]         # optional: how the rows and the summary name the values
 
 A factor sets the scenario field `field` (default: its name; dotted for nested fields, e.g.
 `sensor_noise.enabled`, `whole_body.stack`, `robot.prongs`), or, when a value is a mapping,
@@ -234,7 +235,7 @@ def study_from_dict(raw, where: str) -> Study:
         at = f"{where}: factors[{i}]"
         if not isinstance(factor, dict) or "name" not in factor:
             raise StudyError(f"{at}: a mapping with a name")
-        unknown = set(factor) - {"name", "field", "values", "range", "random"}
+        unknown = set(factor) - {"name", "field", "values", "range", "random", "labels"}
         if unknown:
             raise StudyError(f"{at}: unknown field(s) {sorted(unknown)}")
         fname = factor["name"]
@@ -242,6 +243,13 @@ def study_from_dict(raw, where: str) -> Study:
             raise StudyError(f"{at}.name: duplicate factor {fname!r}")
         field = factor.get("field", fname)
         values = _values(factor, at, missions_ok=(field == "mission"))
+        labels = factor.get("labels", values)
+        if "labels" in factor and (
+            not isinstance(labels, list)
+            or len(labels) != len(values)
+            or not all(isinstance(label, str | int | float) for label in labels)
+        ):
+            raise StudyError(f"{at}.labels: a list of {len(values)} names (one per value), got {labels!r}")
         settings = []
         for k, value in enumerate(values):
             if isinstance(value, dict):
@@ -252,7 +260,7 @@ def study_from_dict(raw, where: str) -> Study:
                 _check_field(field, kind, f"{at}.field")
                 settings.append({field: value})
         names.append(fname)
-        columns.append(list(zip(values, settings, strict=True)))
+        columns.append(list(zip(labels, settings, strict=True)))
     if design == "list" and len({len(c) for c in columns}) != 1:
         raise StudyError(f"{where}: design list: every factor needs the same number of values")
     combos = itertools.product(*columns) if design == "grid" else zip(*columns, strict=True)
