@@ -11,8 +11,11 @@
    Two passes: with the garbage collector as Python leaves it, and as a hardware run runs
    (go1_driver.hardware_run: the heap frozen at the start). Each tick is attributed to what ran
    in it: a garbage collection (gc.callbacks), a mission phase transition, or nothing special.
-3. A profiled pass gives each stage's mean cost per tick (by package: go1_driver, estimation,
-   mission, ik, control), from cProfile's own time of the functions in each.
+3. A timed pass gives each stage's CPU time: the event handlers of every system of the
+   controller side (status receivers, estimator, mission manager and its reference outputs, leg
+   IK, whole-body controller, safety filter, command sender) are wrapped, while that pass's
+   diagram is built, in a timer of the loop thread's CPU time; what the tick costs beyond them is
+   Drake's framework (event dispatch, port evaluation, the log sinks).
 4. The same mission in simulation: the whole-body controller's own tick (its diagnostics).
 5. The bare plant's cost in the same run (`station_fixed_cmd` of the station benchmark: the
    simulated Go1 with a constant command), the baseline for machines of different speed.
@@ -28,11 +31,10 @@ to show that a faster controller side sends the same commands.
 """
 
 import argparse
-import cProfile
+import contextlib
 import gc
 import json
 import platform
-import pstats
 import time
 from pathlib import Path
 
@@ -41,14 +43,31 @@ from pydrake.systems.analysis import Simulator
 
 from pedi_drake.apps.sim_bridge import status_messages
 from pedi_drake.benchmarks.station import real_time_factor
+from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.diagram import MakePedipulationDiagram
+from pedi_drake.estimation.kalman_estimator import KalmanEstimator
 from pedi_drake.go1_driver import constants as c
+from pedi_drake.go1_driver.command_sender import Go1CommandSender
 from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.go1_driver.hardware_station import hardware_link
+from pedi_drake.go1_driver.safety import Go1SafetyFilter
+from pedi_drake.go1_driver.status_receiver import Go1LcmReceiver
+from pedi_drake.ik.leg_ik_system import LegIkSystem
+from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.run import simulate
 from pedi_drake.scenario import load_scenario
 
-STAGES = ("go1_driver", "estimation", "mission", "ik", "control")
+# The controller side's stages in the order of a tick, each with the event handlers (and the
+# outputs computed every tick) of its systems.
+STAGES = (
+    ("receive", Go1LcmReceiver, ("_latch",)),
+    ("estimate", KalmanEstimator, ("_update", "_calc_base_state")),
+    ("mission", MissionManager, ("_update", "_calc_body", "_calc_legs")),
+    ("ik", LegIkSystem, ("_update",)),
+    ("control", WholeBodyController, ("_update",)),
+    ("safety", Go1SafetyFilter, ("_update", "_calc_command")),
+    ("send", Go1CommandSender, ("_publish",)),
+)
 
 
 def _scenario(mission: str, period: float, lcm_url: str = ""):
@@ -137,7 +156,7 @@ class Replay:
         decode = c.CHANNEL_TYPES[c.COMMAND_CHANNEL].decode
         return np.array([c.message_to_command(decode(data)) for data in self.commands])
 
-    def run(self, ticks: int, profile: cProfile.Profile | None = None) -> dict:
+    def run(self, ticks: int, stage_times: dict | None = None) -> dict:
         """Times `ticks` ticks; returns tick times [ms] and what happened in each."""
         collections: list[float] = []
 
@@ -160,14 +179,12 @@ class Replay:
             for k in range(ticks):
                 self._publish(k + 1)
                 collections.clear()
-                if profile is not None:
-                    profile.enable()
+                if stage_times is not None:
+                    stage_times["tick"] = k
                 start, cpu_start = time.perf_counter(), time.thread_time()
                 self.simulator.AdvanceTo((k + 1) * self.period)
                 tick_ms[k] = 1e3 * (time.perf_counter() - start)
                 cpu_ms[k] = 1e3 * (time.thread_time() - cpu_start)
-                if profile is not None:
-                    profile.disable()
                 phase_index[k] = self.manager.progress(manager_context).index
                 starts = [g for _, p, g in collections if p == "start"]
                 if starts:
@@ -213,15 +230,46 @@ def _summary(run: dict, period_ms: float) -> dict:
     }
 
 
-def stage_costs(profile: cProfile.Profile, ticks: int) -> dict:
-    """Mean own time per tick [ms] of the functions in each stage's package."""
-    stats = pstats.Stats(profile).stats
-    costs = dict.fromkeys(STAGES, 0.0)
-    costs["other"] = 0.0
-    for (filename, _, _), (_, _, own, _, _) in stats.items():
-        stage = next((s for s in STAGES if f"/pedi_drake/{s}/" in filename), "other")
-        costs[stage] += own
-    return {stage: 1e3 * total / ticks for stage, total in costs.items()}
+@contextlib.contextmanager
+def stage_timers(ticks: int):
+    """While active, systems built get their handlers timed: yields {stage: (ticks,) CPU ms}.
+
+    The handlers are bound when a system declares its events and ports, so the classes' methods
+    are wrapped for the block (the diagram must be built inside it) and restored after it.
+    """
+    times = {name: np.zeros(ticks) for name, _, _ in STAGES}
+    times["tick"] = -1
+    originals = []
+    # Stages of the handlers running now: one that evaluates another's output (the controller
+    # reading the mission's reference) is charged its own time only.
+    running: list[str] = []
+
+    def timed(stage: str, method):
+        def wrapper(*args, **kwargs):
+            start = time.thread_time()
+            running.append(stage)
+            try:
+                return method(*args, **kwargs)
+            finally:
+                running.pop()
+                k = times["tick"]
+                if 0 <= k < ticks:
+                    elapsed = 1e3 * (time.thread_time() - start)
+                    times[stage][k] += elapsed
+                    if running:
+                        times[running[-1]][k] -= elapsed
+
+        return wrapper
+
+    for stage, cls, names in STAGES:
+        for name in names:
+            originals.append((cls, name, getattr(cls, name)))
+            setattr(cls, name, timed(stage, getattr(cls, name)))
+    try:
+        yield times
+    finally:
+        for cls, name, method in originals:
+            setattr(cls, name, method)
 
 
 def record_reference(mission: str, period: float, ticks: int, path: Path) -> None:
@@ -261,10 +309,15 @@ def main() -> None:
     replay = Replay(args.mission, args.period, samples)
     with hardware_run(replay.diagram, shutdown_damping_duration=0.0):
         frozen_gc = replay.run(ticks)
-    profile = cProfile.Profile()
-    profiled = Replay(args.mission, args.period, samples)
-    profiled.run(ticks, profile)
-    stages = stage_costs(profile, ticks)
+    with stage_timers(ticks) as stage_times:
+        timed = Replay(args.mission, args.period, samples)
+    timed_run = timed.run(ticks, stage_times)
+    stages = {}
+    for name, _, _ in STAGES:
+        per_tick = stage_times[name]
+        stages[name] = {"mean_ms": float(per_tick.mean()), **_distribution(per_tick)}
+    framework = timed_run["cpu_ms"] - sum(stage_times[name] for name, _, _ in STAGES)
+    stages["framework"] = {"mean_ms": float(framework.mean()), **_distribution(framework)}
 
     rows = {"python_gc": _summary(default_gc, period_ms), "hardware_run_gc": _summary(frozen_gc, period_ms)}
     load_end = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
@@ -285,10 +338,14 @@ def main() -> None:
         )
         cpu = row["tick_cpu_ms"]
         print(f"{'  CPU time':<18}{cpu['median']:8.3f}{cpu['p99']:8.3f}{cpu['p99_9']:8.3f}{cpu['max']:9.2f}")
-    total = sum(stages.values())
-    print("mean own time per tick by stage (profiled pass, cProfile inflates Python calls):")
-    for stage, ms in stages.items():
-        print(f"  {stage:<12}{ms:8.3f} ms  {100 * ms / total:5.1f} %")
+    total = sum(stage["mean_ms"] for stage in stages.values())
+    print("CPU time per tick by stage (timed pass) [ms]:")
+    print(f"  {'stage':<12}{'mean':>8}{'median':>8}{'p99':>8}{'max':>8}{'share':>8}")
+    for name, stage in stages.items():
+        print(
+            f"  {name:<12}{stage['mean_ms']:8.3f}{stage['median']:8.3f}{stage['p99']:8.3f}{stage['max']:8.2f}"
+            f"{100 * stage['mean_ms'] / total:7.1f}%"
+        )
     sim_tick = sim["controller_tick_ms"]
     print(
         f"simulation: real-time factor {sim['real_time_factor']:.2f}; whole-body controller tick median "
@@ -308,7 +365,7 @@ def main() -> None:
                 "loadavg_end": load_end,
                 "bare_plant": {"real_time_factor": baseline_rtf, "ms_per_period": baseline_ms},
                 "replay": rows,
-                "stage_ms_per_tick_profiled": stages,
+                "stage_cpu_ms_per_tick": stages,
                 "simulation": sim,
             },
             indent=2,
