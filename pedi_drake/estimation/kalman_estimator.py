@@ -10,11 +10,14 @@ orientation R_WB (its quaternion) and the angular velocity (gyro); the filter es
   a small random walk in contact and a large one in the air;
 * update, every foot: p_WF - p_WB = R_WB p_BF(q) (leg kinematics);
   every foot in contact: v_WB = -R_WB (J(q) qd + w_B x p_BF) + (its rolling velocity) (the
-  contact point does not move), and, on flat ground, p_WF,z = foot radius; with no foot in
-  contact the trunk rests on the ground (lying, or on prongs): v_WB = 0.
+  contact point does not move), and, on flat ground, p_WF,z = foot radius; every loaded prong
+  tip likewise (it does not move and touches the ground); with no foot and no prong loaded the
+  trunk rests on the ground (lying): v_WB = 0.
 
 A foot is in contact when the mission's contact schedule (if connected) loads it and its sensor
-reads above a threshold.
+reads above a threshold; a prong tip when the schedule loads that prong. Each prong counts on
+its own: a trunk turning about one tip lifts the others, and pinning those to the ground too
+would pull the height estimate between contradicting measurements.
 Only go1.* signals are read, in simulation and on hardware alike.
 """
 
@@ -198,7 +201,8 @@ class FloatingBaseKalmanFilter:
 
     def _measurement_model(self, contact: tuple[bool, ...], num_tips: int) -> tuple[np.ndarray, np.ndarray]:
         """(H, measurement noise variances) for the feet in `contact` and `num_tips` loaded prong
-        tips, in the row order of `update`. Constant for a contact pattern: made once each."""
+        tips, in the row order of `update`. Constant for a contact pattern: made once each (the
+        tip rows depend on how many tips are loaded, not which: their values carry the geometry)."""
         key = (contact, num_tips)
         model = self._measurement_models.get(key)
         if model is not None:
@@ -252,17 +256,19 @@ class FloatingBaseKalmanFilter:
         qd: np.ndarray,
         contact: np.ndarray,
         rolling: np.ndarray | None = None,
-        prongs_loaded: bool = False,
+        tips_loaded: np.ndarray | None = None,
     ):
         """Corrects (x, P) with the leg kinematics of all feet and the no-slip of the feet in contact
-        (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with the
-        prong tips when `prongs_loaded` (they do not move, and touch the ground)."""
+        (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with each
+        prong tip flagged in `tips_loaded` (one bool per prong; None: none loaded): it does not
+        move, and touches the ground."""
         R = imu.R_WB
         p_BF, J = foot_kinematics_B(q)
         in_contact = np.asarray(contact[:4], bool)
         stance = np.flatnonzero(in_contact)
         ns = len(stance)
-        num_tips = len(self.prong_tips_B) if prongs_loaded else 0
+        tips = self.prong_tips_B[np.asarray(tips_loaded, bool)] if tips_loaded is not None else self.prong_tips_B[:0]
+        num_tips = len(tips)
         H, noise = self._measurement_model(tuple(in_contact.tolist()), num_tips)
         # Every foot: p_WF - p_WB = R p_BF.
         parts = [(p_BF @ R.T).ravel()]
@@ -279,7 +285,6 @@ class FloatingBaseKalmanFilter:
         if num_tips:
             # Loaded prong tips do not move and touch the ground: per tip, v_WB = -R (w x p_BT)
             # and p_WB,z = tip radius - (R p_BT)_z.
-            tips = self.prong_tips_B
             rows = np.empty((num_tips, 4))
             rows[:, :3] = -((tips @ _skew(imu.w_B).T) @ R.T)
             rows[:, 3] = self.prong_tip_radius - tips @ R[2]
@@ -369,8 +374,8 @@ class KalmanEstimator(LeafSystem):
         else:
             x, P = s[self._layout["x"]], s[self._layout["P"]].reshape(n, n)
             x, P = self.filter.predict(x, P, imu, contact, self.config.period, rolling)
-        prongs_loaded = schedule is not None and len(schedule) > 4 and bool(np.any(np.asarray(schedule[4:]) > 0.5))
-        x, P = self.filter.update(x, P, imu, q, qd, contact, rolling, prongs_loaded)
+        tips_loaded = None if schedule is None else np.asarray(schedule[4:]) > 0.5
+        x, P = self.filter.update(x, P, imu, q, qd, contact, rolling, tips_loaded)
         if not (np.isfinite(x).all() and np.isfinite(P).all()):
             return
         s[0] = 1.0
