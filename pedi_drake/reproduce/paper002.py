@@ -81,7 +81,12 @@ def _iv_a(row: dict) -> list[Comparison]:
             "not as good as the foot's",
             f"{torso_mm:.2f} mm",
             f"{torso_mm / max(foot_mm, 1e-9):.1f} times the foot's largest error"
-            + (" (the torso yields to the foot, as in the paper)" if torso_mm > foot_mm else ", unlike the paper")
+            + (", as in the paper" if torso_mm > foot_mm else ", unlike the paper")
+            + (
+                " (the torso is in the foot's null space)"
+                if controller == "projected_impedance"
+                else " (the HQP weighs torso and foot in one level: both give)"
+            )
             + "; a 1.5 cm circle: with the foot's position, roll and pitch held, the Go1's three leg joints leave "
             "the trunk one translation at fixed attitude (see the mission's description)",
         ),
