@@ -24,8 +24,9 @@ setup(
     package_data={
         "pedi_drake.models": ["*.xml", "**/*.urdf", "**/*.sdf", "**/*.obj", "**/*.py"],
         "pedi_drake.scenarios": ["*.yaml"],
-        # The controller demonstrations (pedi_drake.benchmarks.demos) in their subfolder.
-        "pedi_drake.missions": ["*.yaml", "demos/*.yaml"],
+        # The controller demonstrations (pedi_drake.benchmarks.demos) and the short paper-002
+        # evaluations (pedi_drake.reproduce --quick, tests) in their subfolders.
+        "pedi_drake.missions": ["*.yaml", "demos/*.yaml", "quick/*.yaml"],
         "pedi_drake.studies": ["*.yaml"],
         "pedi_drake.go1_driver": ["README.md"],
         "pedi_drake.go1_driver.lcmtypes": ["*.lcm", "*.sh"],

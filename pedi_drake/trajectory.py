@@ -47,6 +47,27 @@ def quintic_time_law(t: float, t0: float, duration: float) -> tuple[float, float
     return s, ds / duration, dds / duration**2
 
 
+def smooth_start_time_law(t: float, t0: float, ramp: float) -> tuple[float, float, float]:
+    """(s [s], ds/dt [-], d2s/dt2 [1/s]) of a motion that starts at rest at `t0` [s] and reaches
+    unit speed over `ramp` [s], then keeps it: its speed follows the minimum-jerk blend, so its
+    acceleration starts and ends at zero and is continuous. Distance = speed * s.
+
+    A reference that jumps to its speed in one tick asks for an infinite acceleration: a foot
+    impedance reads the lag it causes as an external force, and so does the torque that
+    accelerates the leg.
+    """
+    if not ramp > 0.0:
+        raise PediError(f"speed ramp must be > 0 s, got {ramp!r}")
+    tau = (t - t0) / ramp
+    if tau <= 0.0:
+        return 0.0, 0.0, 0.0
+    if tau >= 1.0:
+        return t - t0 - 0.5 * ramp, 1.0, 0.0
+    speed, ds, _ = min_jerk(tau)
+    # The blend's integral: tau^4 (2.5 - 3 tau + tau^2), 0.5 at tau = 1.
+    return ramp * tau**4 * (2.5 - 3.0 * tau + tau**2), speed, ds / ramp
+
+
 def quintic_coefficients(x0: float, x1: float, duration: float) -> np.ndarray:
     """Coefficients a0..a5 of Eq. 2 for a rest-to-rest move from x0 to x1 in `duration` [s]."""
     d = x1 - x0

@@ -22,6 +22,7 @@ from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.ik.analytic import solve_leg_ik_analytic
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
+from pedi_drake.prongs import ProngDesign
 from pedi_drake.scenario import load_scenario
 
 DT = 0.002
@@ -103,6 +104,71 @@ def test_a_trunk_swaying_over_planted_feet_is_tracked(rng):
     assert np.max(np.linalg.norm(est[:, :3] - truth[:, :3], axis=1)) < 0.001
     settled = slice(100, None)
     assert np.max(np.linalg.norm(est[settled, 3:] - truth[settled, 3:], axis=1)) < 0.01
+
+
+def _pivot_about_one_prong(tips_loaded: np.ndarray, duration: float = 2.0) -> np.ndarray:
+    """Height error [m] of the filter over a trunk pitching +-0.1 rad about the front prong's tip
+    (at 0.14 rad nose down, the rear tip 4 cm clear of the floor), the rear feet planted and the
+    front feet held in the air, told that the prongs in `tips_loaded` are loaded."""
+    prongs = ProngDesign()
+    tips_B = prongs.tip_positions_B()
+    kf = FloatingBaseKalmanFilter(
+        KalmanEstimatorConfig(), np.zeros(3), prong_tips_B=tips_B, prong_tip_radius=prongs.tip_radius
+    )
+    w = 2.0 * np.pi * 0.5
+
+    def pitch(t):  # (angle, rate, acceleration) [rad, rad/s, rad/s^2]
+        return 0.14 + 0.1 * np.sin(w * t), 0.1 * w * np.cos(w * t), -0.1 * w * w * np.sin(w * t)
+
+    tip_W = np.array([0.0, 0.0, prongs.tip_radius])
+
+    def trunk(t):  # p_WB, v_WB, a_WB, R_WB of the trunk turning about the front tip
+        theta, rate, acceleration = pitch(t)
+        R = RotationMatrix.MakeYRotation(theta).matrix()
+        r = R @ tips_B[0]  # tip from the trunk origin, world
+        w_W = np.array([0.0, rate, 0.0])
+        alpha_W = np.array([0.0, acceleration, 0.0])
+        # p_WB = tip_W - r, with r turning at w_W.
+        return tip_W - r, -np.cross(w_W, r), -np.cross(alpha_W, r) - np.cross(w_W, np.cross(w_W, r)), R, w_W
+
+    p0, _, _, R0, _ = trunk(0.0)
+    rear = [robot.LEG_NAMES.index(leg) for leg in ("RR", "RL")]
+    p_BF0, _ = foot_kinematics_B(robot.STANDING_Q)
+    feet_W = p_BF0 @ R0.T + p0
+    feet_W[:, 2] = 0.10  # the front feet held 10 cm up ...
+    feet_W[rear, 2] = robot.FOOT_RADIUS  # ... the rear feet on the floor, under where they stand
+    contact = np.zeros(4, dtype=bool)
+    contact[rear] = True
+    errors, x, P, q_prev = [], None, None, None
+    for k in range(int(duration / DT)):
+        t = k * DT
+        p, _, a, R, w_W = trunk(t)
+        q = np.empty(12)
+        for i in range(4):
+            sl = robot.leg_slice(robot.LEG_NAMES[i])
+            q[sl] = solve_leg_ik_analytic(robot.LEG_NAMES[i], R.T @ (feet_W[i] - p), robot.STANDING_Q[sl])
+        qd = np.zeros(12) if q_prev is None else (q - q_prev) / DT
+        q_prev = q
+        imu = ImuSample(R, R.T @ w_W, R.T @ (a - GRAVITY_W))
+        if x is None:
+            x, P = kf.initial_state(imu, q, p[:2])  # the rear feet, the lowest, on the floor
+        else:
+            x, P = kf.predict(x, P, imu, contact, DT)
+        x, P = kf.update(x, P, imu, q, qd, contact, tips_loaded=tips_loaded)
+        errors.append(x[2] - p[2])
+    return np.array(errors)
+
+
+def test_a_trunk_turning_about_one_loaded_prong_keeps_its_height():
+    # Only the front prong loaded: the lifted rear tip is not pinned to the floor.
+    errors = _pivot_about_one_prong(np.array([True, False]))
+    assert np.max(np.abs(errors)) < 0.002
+
+
+def test_pinning_a_lifted_prong_tip_to_the_floor_would_pull_the_height_off():
+    # The contradiction the per-prong flags avoid: both tips taken as on the floor.
+    errors = _pivot_about_one_prong(np.array([True, True]))
+    assert np.max(np.abs(errors)) > 0.01
 
 
 def test_contact_comes_from_the_schedule_and_the_sensor_together():

@@ -10,6 +10,7 @@ from pedi_drake.trajectory import (
     QuinticOrientationSegment,
     QuinticSegment,
     quintic_coefficients,
+    smooth_start_time_law,
 )
 
 
@@ -123,3 +124,23 @@ def test_pivoted_position_turns_about_the_pivot_and_its_derivatives_match():
         np.testing.assert_allclose(
             sample.acceleration, (path.sample(t + h).velocity - path.sample(t - h).velocity) / (2 * h), atol=1e-5
         )
+
+
+def test_smooth_start_reaches_unit_speed_without_an_acceleration_step():
+    t0, ramp, h = 1.0, 0.1, 1e-6
+    # At rest before the start; acceleration zero at both ends of the ramp (no step in it).
+    assert smooth_start_time_law(0.5, t0, ramp) == (0.0, 0.0, 0.0)
+    assert smooth_start_time_law(t0 + 1e-9, t0, ramp)[2] == pytest.approx(0.0, abs=1e-6)
+    assert smooth_start_time_law(t0 + ramp - 1e-9, t0, ramp)[2] == pytest.approx(0.0, abs=1e-6)
+    for t in np.linspace(t0 + 0.005, t0 + 0.3, 13):
+        s, sd, sdd = smooth_start_time_law(t, t0, ramp)
+        assert sd == pytest.approx(
+            (smooth_start_time_law(t + h, t0, ramp)[0] - smooth_start_time_law(t - h, t0, ramp)[0]) / (2 * h), abs=1e-6
+        )
+        assert sdd == pytest.approx(
+            (smooth_start_time_law(t + h, t0, ramp)[1] - smooth_start_time_law(t - h, t0, ramp)[1]) / (2 * h), abs=1e-4
+        )
+    # After the ramp: unit speed, half a ramp behind a motion that started at full speed.
+    assert smooth_start_time_law(t0 + 0.5, t0, ramp) == pytest.approx((0.5 - 0.5 * ramp, 1.0, 0.0))
+    with pytest.raises(PediError):
+        smooth_start_time_law(1.0, 0.0, 0.0)

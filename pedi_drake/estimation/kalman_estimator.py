@@ -10,11 +10,14 @@ orientation R_WB (its quaternion) and the angular velocity (gyro); the filter es
   a small random walk in contact and a large one in the air;
 * update, every foot: p_WF - p_WB = R_WB p_BF(q) (leg kinematics);
   every foot in contact: v_WB = -R_WB (J(q) qd + w_B x p_BF) + (its rolling velocity) (the
-  contact point does not move), and, on flat ground, p_WF,z = foot radius; with no foot in
-  contact the trunk rests on the ground (lying, or on prongs): v_WB = 0.
+  contact point does not move), and, on flat ground, p_WF,z = foot radius; every loaded prong
+  tip likewise (it does not move and touches the ground); with no foot and no prong loaded the
+  trunk rests on the ground (lying): v_WB = 0.
 
 A foot is in contact when the mission's contact schedule (if connected) loads it and its sensor
-reads above a threshold.
+reads above a threshold; a prong tip when the schedule loads that prong. Each prong counts on
+its own: a trunk turning about one tip lifts the others, and pinning those to the ground too
+would pull the height estimate between contradicting measurements.
 Only go1.* signals are read, in simulation and on hardware alike.
 """
 
@@ -272,7 +275,9 @@ class FloatingBaseKalmanFilter:
         rolling = rolling_velocities_W(imu.R_WB, imu.w_B, robot.STANDING_Q, np.zeros(12), self.foot_radius)
         for contact in (np.ones(4, bool), np.zeros(4, bool)):
             x, P = self.predict(x, P, imu, contact, 0.002, rolling)
-            self.update(x, P, imu, robot.STANDING_Q, np.zeros(12), contact, rolling, len(self.prong_tips_B) > 0)
+            self.update(
+                x, P, imu, robot.STANDING_Q, np.zeros(12), contact, rolling, np.ones(len(self.prong_tips_B), bool)
+            )
 
     def initial_state(self, imu: ImuSample, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(x, P) for a robot at rest with its lowest foot on the ground, trunk at `xy` [m]."""
@@ -328,7 +333,8 @@ class FloatingBaseKalmanFilter:
 
     def _measurement_model(self, contact: tuple[bool, ...], num_tips: int) -> tuple[np.ndarray, np.ndarray]:
         """(H, measurement noise variances) for the feet in `contact` and `num_tips` loaded prong
-        tips, in the row order of `update`. Constant for a contact pattern: made once each."""
+        tips, in the row order of `update`. Constant for a contact pattern: made once each (the
+        tip rows depend on how many tips are loaded, not which: their values carry the geometry)."""
         key = (contact, num_tips)
         model = self._measurement_models.get(key)
         if model is not None:
@@ -382,14 +388,16 @@ class FloatingBaseKalmanFilter:
         qd: np.ndarray,
         contact: np.ndarray,
         rolling: np.ndarray | None = None,
-        prongs_loaded: bool = False,
+        tips_loaded: np.ndarray | None = None,
     ):
         """Corrects (x, P) with the leg kinematics of all feet and the no-slip of the feet in contact
-        (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with the
-        prong tips when `prongs_loaded` (they do not move, and touch the ground)."""
+        (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with each
+        prong tip flagged in `tips_loaded` (one bool per prong; None: none loaded): it does not
+        move, and touches the ground."""
         p_BF, J = foot_kinematics_B(q)
         in_contact = np.asarray(contact[:4], bool)
-        num_tips = len(self.prong_tips_B) if prongs_loaded else 0
+        tips = self.prong_tips_B[np.asarray(tips_loaded, bool)] if tips_loaded is not None else self.prong_tips_B[:0]
+        num_tips = len(tips)
         H, noise = self._measurement_model(tuple(in_contact.tolist()), num_tips)
         y = _measurements_kernel(
             imu.R_WB,
@@ -402,7 +410,7 @@ class FloatingBaseKalmanFilter:
             rolling is not None,
             self.config.ground_height_measurement,
             self.foot_radius,
-            self.prong_tips_B[:num_tips],
+            tips,
             self.prong_tip_radius,
             len(noise),
         )
@@ -478,8 +486,8 @@ class KalmanEstimator(LeafSystem):
         else:
             x, P = s[self._layout["x"]], s[self._layout["P"]].reshape(n, n)
             x, P = self.filter.predict(x, P, imu, contact, self.config.period, rolling)
-        prongs_loaded = schedule is not None and len(schedule) > 4 and bool(np.any(np.asarray(schedule[4:]) > 0.5))
-        x, P = self.filter.update(x, P, imu, q, qd, contact, rolling, prongs_loaded)
+        tips_loaded = None if schedule is None else np.asarray(schedule[4:]) > 0.5
+        x, P = self.filter.update(x, P, imu, q, qd, contact, rolling, tips_loaded)
         if not (np.isfinite(x).all() and np.isfinite(P).all()):
             return
         s[0] = 1.0

@@ -16,6 +16,7 @@ from pedi_drake.control.tasks import orientation_error_W
 from pedi_drake.estimation.base_state import BaseState
 from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.mission.spec import MissionSpec
 
 # Floors of the paper-002 issue for IV-A.
 FOOT_POSITION_FLOOR_M = 0.005
@@ -51,12 +52,19 @@ class FootHoldEvaluation:
     def torso_tracking_rms_m(self) -> float:
         return float(np.sqrt(np.mean(np.sum((self.trunk - self.trunk_reference) ** 2, axis=1))))
 
+    @property
+    def torso_reference_span_m(self) -> float:
+        """The smaller of the torso reference's x and y extents (a circle's diameter) [m]."""
+        xy = self.trunk_reference[:, :2]
+        return float(np.min(xy.max(axis=0) - xy.min(axis=0)))
+
     def summary(self) -> dict:
         return {
             "foot_position_error_max_m": self.foot_position_error_max_m,
             "foot_orientation_error_max_deg": float(np.degrees(self.foot_orientation_error_max_rad)),
             "foot_yaw_error_max_deg": float(np.degrees(self.foot_yaw_error_max_rad)),
             "torso_tracking_rms_m": self.torso_tracking_rms_m,
+            "torso_reference_span_m": self.torso_reference_span_m,
         }
 
 
@@ -145,6 +153,22 @@ def _num_contacts_of(diagnostics_size: int) -> int | None:
     return None
 
 
+def phase_window(spec: MissionSpec, phases: list[dict], kind: str, pivoted: bool = False) -> tuple[float, float] | None:
+    """(start, end) [s] from the first to the last finished phase of `kind` in a run's `phases`
+    (result.json rows); with `pivoted`, only body_rotate phases that turn about a prong (the
+    mission `spec` says which). None when there is none."""
+    names = {p.name for p in spec.phases if not pivoted or getattr(p, "pivot", "")}
+    rows = [p for p in phases if p["kind"] == kind and p["name"] in names and p["t_end"] is not None]
+    if not rows:
+        return None
+    return rows[0]["t_start"], rows[-1]["t_end"]
+
+
+def pivot_prong(spec: MissionSpec) -> str:
+    """The prong the mission's body_rotate phases turn about ("" when none does)."""
+    return next((p.pivot for p in spec.phases if getattr(p, "pivot", "")), "")
+
+
 @dataclasses.dataclass
 class PivotEvaluation:
     """IV-B figures over the rotations about a prong (ground truth)."""
@@ -152,6 +176,9 @@ class PivotEvaluation:
     rotation_reached_rad: dict  # {"roll" | "pitch" | "yaw": (most negative, most positive)} from the start attitude
     front_feet_drift_max_m: float  # largest displacement of FR or FL from where they were held
     pivot_slip_max_m: float  # largest horizontal displacement of the pivot prong's tip
+    times: np.ndarray  # (N,) [s]
+    rotation: np.ndarray  # (N, 3) trunk rotation from its start attitude, world x, y, z [rad]
+    front_feet_displacement: np.ndarray  # (N, 2, 3) FR and FL from where they were held [m]
 
     def summary(self) -> dict:
         return {
@@ -159,6 +186,9 @@ class PivotEvaluation:
                 axis: [float(np.degrees(lo)), float(np.degrees(hi))]
                 for axis, (lo, hi) in self.rotation_reached_rad.items()
             },
+            "rotation_reached_min_deg": float(
+                np.degrees(min(min(-lo, hi) for lo, hi in self.rotation_reached_rad.values()))
+            ),
             "front_feet_drift_max_m": self.front_feet_drift_max_m,
             "pivot_slip_max_m": self.pivot_slip_max_m,
         }
@@ -197,10 +227,11 @@ def evaluate_pivot_rotations(
         mine = signed[dominant == k]
         reached[axis] = (float(min(mine.min(), 0.0)), float(max(mine.max(), 0.0))) if len(mine) else (0.0, 0.0)
     foot_positions = np.array(foot_positions)
-    drift = float(np.max(np.linalg.norm(foot_positions - foot_positions[0], axis=2)))
+    displacement = foot_positions - foot_positions[0]
+    drift = float(np.max(np.linalg.norm(displacement, axis=2)))
     tips = np.array(tips)
     slip = float(np.max(np.linalg.norm(tips[:, :2] - tips[0, :2], axis=1)))
-    return PivotEvaluation(reached, drift, slip)
+    return PivotEvaluation(reached, drift, slip, states.times[keep], relative, displacement)
 
 
 @dataclasses.dataclass

@@ -52,6 +52,7 @@ from pedi_drake.mission.progress import (
 )
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.trajectory import smooth_start_time_law
 
 MISSION_STATUS_SIZE = 4  # [phase index, status code, pedipulation active, number of phases]
 _IDENTITY_POSE = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
@@ -314,12 +315,12 @@ class MissionManager(LeafSystem):
             entries[leg] = (leg_traj.mode, sample.position, sample.velocity, last)
         press = refs.press
         if press is not None and press["frozen_at"] is None:
-            s = press["speed"] * max(t - press["t0"], 0.0)
+            s, sd, sdd = smooth_start_time_law(t, press["t0"], press["ramp"])
             entries[press["leg"]] = (
                 LEG_MODE_FOOT,
-                press["start"] + s * press["direction"],
-                press["speed"] * press["direction"],
-                np.zeros(3),
+                press["start"] + press["speed"] * s * press["direction"],
+                press["speed"] * sd * press["direction"],
+                press["speed"] * sdd * press["direction"],
             )
         output.SetFromVector(controller_refs.leg_reference_vector(entries))
 

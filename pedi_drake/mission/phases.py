@@ -45,6 +45,9 @@ CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-do
 PLACE_DEPTH = 0.015  # [m] below the floor that leg_to_support aims the foot (it stops at the touch)
 SHIFT_DURATION = 1.0  # [s] trunk shift before lifting a leg
 CONTACT_RAMP_WAIT = 0.3  # [s] wait for the controller to ramp a contact's force away
+# [s] a press reaches its speed over this, twice the foot impedance's slow time constant (30 N s/m
+# over 600 N/m: 50 ms), so that its start does not read as a force; 2.5 mm of travel at 5 cm/s.
+PRESS_SPEED_RAMP = 0.1
 
 
 class MissionEnvironment:
@@ -475,7 +478,13 @@ class PressRunner(PhaseRunner):
         trajectory = QuinticSegment(start, start, view.time, 1e-3)
         progress.references.legs[phase.leg] = LegTrajectory(LEG_MODE_FOOT, trajectory)
         progress.references.press = dict(
-            leg=phase.leg, start=start, direction=direction, speed=phase.speed, t0=view.time, frozen_at=None
+            leg=phase.leg,
+            start=start,
+            direction=direction,
+            speed=phase.speed,
+            ramp=PRESS_SPEED_RAMP,
+            t0=view.time,
+            frozen_at=None,
         )
         # Each estimate has a bias from model errors; measure it before touching anything.
         biases = {source: float(-force @ direction) for source, force in estimates.items()}

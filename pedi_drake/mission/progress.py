@@ -43,7 +43,8 @@ class References:
     body_orientation: QuinticOrientationSegment  # R_WB
     legs: dict[str, LegTrajectory]  # pedipulation legs only
     contacts: np.ndarray  # (4 + number of prongs,) 1 = loaded contact
-    # A press phase drives the foot at constant speed: p(t) = start + speed (t - t0) d, until frozen.
+    # A press phase drives the foot along d at its speed, reached smoothly over `ramp` [s] from t0
+    # (trajectory.smooth_start_time_law), until frozen.
     press: dict | None = None
 
     @staticmethod

@@ -1,4 +1,5 @@
-"""Plots of paper 002's evaluations (Figs. 3 to 5 of IV-A) from `pedi_drake.evaluation.paper002`."""
+"""Plots of paper 002's evaluations (Figs. 3 to 5 of IV-A, Fig. 7 of IV-B) from
+`pedi_drake.evaluation.paper002`."""
 
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -7,7 +8,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 if TYPE_CHECKING:  # the plots read the evaluation's fields; the evaluation never imports plots
-    from pedi_drake.evaluation.paper002 import FootHoldEvaluation
+    from pedi_drake.evaluation.paper002 import FootHoldEvaluation, PivotEvaluation
 
 
 def plot_foot_hold(evaluation: "FootHoldEvaluation", out_dir: Path, title: str = "") -> list[Path]:
@@ -42,3 +43,24 @@ def plot_foot_hold(evaluation: "FootHoldEvaluation", out_dir: Path, title: str =
     fig.savefig(paths[-1], dpi=100)
     plt.close(fig)
     return paths
+
+
+def plot_pivot_rotations(evaluation: "PivotEvaluation", out_dir: Path, title: str = "") -> Path:
+    """Fig. 7 of paper 002 as curves: the trunk's rotation about the prong (roll, pitch, yaw from
+    its start attitude) and the held front feet's displacement, against time (PNG)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    e = evaluation
+    t = e.times - e.times[0]
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(7, 5.5), sharex=True)
+    for k, axis in enumerate(("roll (x)", "pitch (y)", "yaw (z)")):
+        top.plot(t, np.degrees(e.rotation[:, k]), label=axis)
+    top.set(ylabel="trunk rotation [deg]", title=f"{title} rotations about one prong (Fig. 7)")
+    top.legend()
+    for k, leg in enumerate(("FR", "FL")):
+        bottom.plot(t, 1e3 * np.linalg.norm(e.front_feet_displacement[:, k], axis=1), label=leg)
+    bottom.set(xlabel="t [s]", ylabel="front foot displacement [mm]")
+    bottom.legend()
+    path = out_dir / "ivb_rotations.png"
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
