@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from pedi_drake.exceptions import ScenarioError
+from pedi_drake.mission.spec import TeleopFoot, load_mission, shipped_missions
 from pedi_drake.scenario import load_scenario
 
 
@@ -38,3 +39,10 @@ def test_run_sim_exits_2_on_a_bad_operator_source():
     )
     assert result.returncode == 2
     assert "operator.source" in result.stderr and "joystick" in result.stderr
+
+
+def test_the_operator_mission_loads_outside_the_autonomous_library():
+    # It needs an operator, so the autonomous missions' smoke tests and studies do not list it.
+    mission = load_mission("operator/teleop_foot")
+    assert any(isinstance(phase, TeleopFoot) for phase in mission.phases)
+    assert "teleop_foot" not in shipped_missions()
