@@ -1,8 +1,9 @@
 """MakePedipulationDiagram: the one place where a whole run is wired.
 
 Scenario -> station (plant or driver) -> state estimate -> mission manager <-> leg IK ->
-controller -> station command. run_sim.py, the tests, the benchmarks and the notebooks all build
-their diagrams here.
+controller -> station command, with the operator's input (when the scenario has one) beside the
+estimate into the mission manager and its E-stop on the command. run_sim.py, the tests, the
+benchmarks and the notebooks all build their diagrams here.
 """
 
 import dataclasses
@@ -10,6 +11,7 @@ import dataclasses
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.geometry import Meshcat
+from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource, MatrixGain, VectorLogSink
 
@@ -23,6 +25,9 @@ from pedi_drake.ik.leg_ik_system import LegIkSystem
 from pedi_drake.log_hold import LogHold
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
+from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE
+from pedi_drake.operator.estop_gate import OperatorEstopGate
+from pedi_drake.operator.operator_input import OperatorInput
 from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
 from pedi_drake.station_interface import MakeStation
 from pedi_drake.wall_clock import WallClock
@@ -93,11 +98,51 @@ def _add_leg_ik(builder: DiagramBuilder, manager: MissionManager) -> None:
             builder.Connect(ik.GetOutputPort(answer), manager.GetInputPort(f"{port}.{leg}"))
 
 
+# Where the E-stop flag sits in the operator_command vector (pedi_drake.operator.command).
+_OPERATOR_ESTOP_INDEX = 6
+
+
+def _add_operator(builder: DiagramBuilder, scenario: Scenario, lcm: DrakeLcmInterface | None) -> OperatorInput:
+    """The operator's input system ("operator") on its bus (`lcm`, or one opened on the scenario's URL)."""
+    config = scenario.operator
+    if lcm is None:
+        lcm = DrakeLcm(scenario.lcm_buses[config.lcm_bus].lcm_url)
+    return builder.AddNamedSystem("operator", OperatorInput(config, lcm))
+
+
+def _connect_operator_estop(builder, operator: OperatorInput, station, command, scenario: Scenario, hardware: bool):
+    """The command port that reaches the motors: on hardware the driver latches damping on the
+    operator's E-stop (its `driver.estop`); in simulation an OperatorEstopGate does the same."""
+    if hardware:
+        select = np.zeros((1, OPERATOR_COMMAND_SIZE))
+        select[0, _OPERATOR_ESTOP_INDEX] = 1.0
+        estop = builder.AddNamedSystem("operator.estop", MatrixGain(select))
+        builder.Connect(operator.GetOutputPort("operator_command"), estop.get_input_port())
+        builder.Connect(estop.get_output_port(), station.GetInputPort("driver.estop"))
+        return command
+    gate = builder.AddNamedSystem(
+        "operator.estop_gate", OperatorEstopGate(scenario.go1_driver.safety, scenario.go1_driver.safety.period)
+    )
+    builder.Connect(command, gate.GetInputPort("command"))
+    builder.Connect(operator.GetOutputPort("operator_command"), gate.GetInputPort("operator_command"))
+    for name in ("position_measured", "velocity_measured"):
+        builder.Connect(station.GetOutputPort(f"go1.{name}"), gate.GetInputPort(name))
+    return gate.GetOutputPort("command")
+
+
 def MakePedipulationDiagram(
-    scenario: Scenario, meshcat: Meshcat | None = None, *, hardware: bool = False, log_period: float = 0.002
+    scenario: Scenario,
+    meshcat: Meshcat | None = None,
+    *,
+    hardware: bool = False,
+    log_period: float = 0.002,
+    operator_lcm: DrakeLcmInterface | None = None,
 ) -> PedipulationDiagram:
     """Wires station, estimator, mission manager, leg IK and controller for `scenario`, with loggers
-    of LOGGED_SIGNALS (and of the controller's diagnostics and the mission's outputs)."""
+    of LOGGED_SIGNALS (and of the controller's diagnostics and the mission's outputs).
+
+    `operator_lcm`: the bus of the operator's input (scenario `operator:`); None opens the URL of
+    its `lcm_bus`. In-process tests pass one DrakeLcm("memq://") shared with their publisher."""
     mission = load_mission(scenario.mission) if scenario.mission else None
     if mission is not None:
         if scenario.controller not in MISSION_CONTROLLERS:
@@ -121,6 +166,9 @@ def MakePedipulationDiagram(
     base_state = estimator.GetOutputPort("base_state")
 
     extra_logs = {}
+    operator = _add_operator(builder, scenario, operator_lcm) if scenario.operator.source != "none" else None
+    if operator is not None:
+        extra_logs["operator.command"] = operator.GetOutputPort("operator_command")
     if scenario.controller == "stand_pd":
         controller = builder.AddNamedSystem("controller", StandController(scenario.stand))
         builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
@@ -161,6 +209,8 @@ def MakePedipulationDiagram(
                 builder.Connect(controller.diagnostics_port, estimate.get_input_port())
                 builder.Connect(estimate.get_output_port(), manager.GetInputPort("foot_force_estimate"))
             builder.Connect(base_state, manager.GetInputPort("base_state"))
+            if operator is not None:
+                builder.Connect(operator.GetOutputPort("operator_command"), manager.GetInputPort("operator_command"))
             for name in ("position_measured", "velocity_measured", "torque_estimated", "foot_contact"):
                 builder.Connect(station.GetOutputPort(f"go1.{name}"), manager.GetInputPort(name))
             for name in ("body_reference", "leg_reference", "contact_set", "safety_polygon", "friction"):
@@ -173,6 +223,8 @@ def MakePedipulationDiagram(
             extra_logs["mission.contact_set"] = manager.GetOutputPort("contact_set")
             extra_logs["mission.safety_polygon"] = manager.GetOutputPort("safety_polygon")
     command = controller.GetOutputPort("command")
+    if operator is not None:
+        command = _connect_operator_estop(builder, operator, station, command, scenario, hardware)
     builder.Connect(command, station.GetInputPort("go1.command"))
 
     sources = {"go1.command": command, "base_state": base_state, **extra_logs}

@@ -29,6 +29,7 @@ from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.exceptions import ProngDesignError, ScenarioError
 from pedi_drake.go1_driver.config import Go1DriverConfig
 from pedi_drake.go1_driver.constants import DEFAULT_GO1_LCM_URL, GO1_BUS_NAME
+from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.resources import models_dir, scenarios_dir
 
@@ -210,6 +211,9 @@ class Scenario:
     # The Go1 LCM driver (controller side: safety bounds, watchdogs, soft start) and the
     # simulator bridge (robot side: latency, drops).
     go1_driver: Go1DriverConfig = dataclasses.field(default_factory=Go1DriverConfig)
+    # The operator's input: none, an LCM channel of foot commands, or the Go1 remote (see
+    # pedi_drake.operator); its E-stop damps the motors, its commands drive teleop_foot phases.
+    operator: OperatorConfig = dataclasses.field(default_factory=OperatorConfig)
     # Meshcat publish period for the live view and the HTML replay [s].
     visualization_period: float = 1.0 / 32.0
 
@@ -319,6 +323,8 @@ class Scenario:
         )
         for problem in self.projected_impedance.validate(where="projected_impedance"):
             raise ScenarioError(f"{where}: {problem}")
+        for field, problem in self.operator.problems(self.lcm_buses):
+            need(False, f"operator.{field}", problem)
 
 
 def scene_problems(scene: list[SceneObject], base_dir: Path | None, field: str = "scene") -> list[str]:

@@ -291,3 +291,45 @@ class PivotedPosition:
         r = o.rotation.multiply(lever_0)
         w, alpha = o.angular_velocity, o.angular_acceleration
         return TrajectorySample(self.pivot + r, np.cross(w, r), np.cross(alpha, r) + np.cross(w, np.cross(w, r)))
+
+
+@dataclasses.dataclass(frozen=True)
+class RampSegment:
+    """Constant velocity for one interval, then rest: p(t) = start + velocity clip(t - t0, 0, T).
+
+    A teleoperated foot's reference for one control interval of length T [s]: the next interval's
+    segment starts where this one ends, so the position never jumps (its velocity is the bounded
+    command of each interval; the acceleration is zero, as the command holds no more)."""
+
+    start: np.ndarray  # [m]
+    velocity: np.ndarray  # [m/s]
+    t0: float  # [s]
+    duration: float  # T [s], > 0
+
+    def __post_init__(self) -> None:
+        for name in ("start", "velocity"):
+            value = np.asarray(getattr(self, name), dtype=float).copy()
+            if not np.all(np.isfinite(value)):
+                raise PediError(f"ramp {name} must be finite, got {value}")
+            value.flags.writeable = False
+            object.__setattr__(self, name, value)
+        if not (np.isfinite(self.duration) and self.duration > 0.0):
+            raise PediError(f"ramp duration must be a finite number > 0 s, got {self.duration!r}")
+
+    def __deepcopy__(self, memo) -> "RampSegment":
+        return self  # immutable
+
+    @property
+    def t_end(self) -> float:
+        return self.t0 + self.duration
+
+    @property
+    def end(self) -> np.ndarray:
+        """Where the segment comes to rest [m]."""
+        return self.start + self.duration * self.velocity
+
+    def sample(self, t: float) -> TrajectorySample:
+        elapsed = min(max(t - self.t0, 0.0), self.duration)
+        moving = self.t0 <= t < self.t_end
+        velocity = self.velocity if moving else np.zeros_like(self.velocity)
+        return TrajectorySample(self.start + elapsed * self.velocity, velocity, np.zeros_like(self.velocity))

@@ -75,7 +75,7 @@ def test_generated_types_are_up_to_date(tmp_path):
             pytest.skip("lcm-gen (from the lcm wheel) is not on PATH")
         lcm_gen = pathlib.Path(found)
     sources = sorted(str(p) for p in folder.glob("*.lcm"))
-    assert len(sources) == 4
+    assert len(sources) == 5
     subprocess.run([str(lcm_gen), "-p", "--ppath", str(tmp_path), *sources], check=True)
     for source in sources:
         name = pathlib.Path(source).stem + ".py"

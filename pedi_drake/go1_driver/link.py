@@ -53,6 +53,7 @@ REJECT_REASONS = (
     "wrong_fingerprint",  # right size, another type's fingerprint
     "undecodable",  # the type's decoder raised
     "nonfinite",  # NaN or Inf in a value the driver uses
+    "out_of_range",  # finite, but outside the values the channel's reader accepts (an unknown code)
 )
 _REASON_INDEX = {name: i for i, name in enumerate(REJECT_REASONS)}
 
@@ -79,10 +80,15 @@ class Inbox:
         *,
         sticky_max: bool = False,
         clock: Callable[[], float] = time.monotonic,
+        encoded_size: int | None = None,
+        in_range: Callable[[np.ndarray], bool] | None = None,
     ):
         self.channel = channel
         self._type = lcm_type
-        self._size = c.REFERENCE_ENCODED_SIZE[lcm_type.__name__]
+        # A type of fixed size: the bridge's reference size, or the given one for a type of our own.
+        self._size = encoded_size if encoded_size is not None else c.REFERENCE_ENCODED_SIZE[lcm_type.__name__]
+        # Rejects finite values the reader cannot use (e.g. an unknown mode code): "out_of_range".
+        self._in_range = in_range
         self._fingerprint = lcm_type._get_packed_fingerprint()
         self._to_vector = to_vector
         # sticky_max: keep the element-wise maximum of the values that arrived since the last
@@ -121,6 +127,9 @@ class Inbox:
             return
         if not np.isfinite(values).all():
             self._reject("nonfinite")
+            return
+        if self._in_range is not None and not self._in_range(values):
+            self._reject("out_of_range")
             return
         now = self._clock()
         with self._lock:

@@ -51,6 +51,7 @@ from pedi_drake.mission.progress import (
     References,
 )
 from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE, OperatorCommand
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.trajectory import smooth_start_time_law
 
@@ -62,7 +63,7 @@ def ik_legs_of(mission: spec.MissionSpec) -> tuple[str, ...]:
     """The legs whose joint angles the mission's phases (and their recovery) ask the IK for."""
     legs = set()
     for phase in mission.phases:
-        if isinstance(phase, spec.LegToPedipulation | spec.LegToSupport):
+        if isinstance(phase, spec.LegToPedipulation | spec.LegToSupport | spec.TeleopFoot):
             legs.add(phase.leg)
         elif isinstance(phase, spec.Reach):
             legs.update([phase.leg, *(companion.leg for companion in phase.together)])
@@ -112,6 +113,8 @@ class MissionManager(LeafSystem):
         # Eq. 11 of paper 002 per foot, world [N] (the projected-impedance controller's
         # `force_estimate` diagnostic); unconnected: only the joint-torque estimate exists.
         self._impedance_force = self.DeclareVectorInputPort("foot_force_estimate", 12)
+        # The operator's command (pedi_drake.operator.command); unconnected: no operator.
+        self._operator = self.DeclareVectorInputPort("operator_command", OPERATOR_COMMAND_SIZE)
         self._ik_answer_ports = {
             leg: (
                 self.DeclareVectorInputPort(f"ik_q_goal.{leg}", 3),
@@ -185,6 +188,9 @@ class MissionManager(LeafSystem):
                 if self._impedance_force.HasValue(context)
                 else None
             ),
+            operator=(
+                OperatorCommand.from_vector(self._operator.Eval(context)) if self._operator.HasValue(context) else None
+            ),
         )
 
     def _initialize(self, context, state) -> None:
@@ -215,6 +221,11 @@ class MissionManager(LeafSystem):
         view = self._view(context)
         if progress.status in (SUCCEEDED, FAILED):
             self._set_polygon(state, view, progress)  # the robot still stands on whatever it stands on
+            return
+        if view.operator is not None and view.operator.estop:
+            self._stop_for_estop(progress, view)
+            state.get_mutable_abstract_state(self._progress).set_value(progress)
+            self._set_polygon(state, view, progress)
             return
         phases = self._mission.phases if progress.status == RUNNING else progress.recovery
         phase = phases[progress.index]
@@ -255,6 +266,19 @@ class MissionManager(LeafSystem):
             self._finish_phase(progress, phases, outcome, view)
         state.get_mutable_abstract_state(self._progress).set_value(progress)
         self._set_polygon(state, view, progress)
+
+    def _stop_for_estop(self, progress: MissionProgress, view: RobotView) -> None:
+        """The operator's E-stop: the motors are damped (OperatorEstopGate or the driver), so the
+        mission fails here, without a recovery (nothing would carry it out)."""
+        reason = "operator E-stop: the motors are in damping"
+        if progress.records and progress.records[-1].t_end is None:
+            record = progress.records[-1]
+            record.status, record.t_end, record.reason = FAILED, view.time, reason
+        if progress.status == RUNNING:
+            for later in self._mission.phases[progress.index + (1 if progress.started else 0) :]:
+                progress.records.append(PhaseRecord(later.name, kind_name(later), "skipped", view.time))
+        progress.status, progress.reason, progress.started, progress.ik = FAILED, reason, False, None
+        progress.references.press = None
 
     def _fell(self, view: RobotView, progress: MissionProgress) -> bool:
         standing_started = any(r.kind == "stand_up" and r.status == SUCCEEDED for r in progress.records)

@@ -31,6 +31,7 @@ from pedi_drake.mission.progress import (
     MissionProgress,
 )
 from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.mission.teleop_foot import TeleopFootRunner
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.trajectory import (
     CircularPath,
@@ -667,6 +668,7 @@ RUNNERS: dict[type, PhaseRunner] = {
     spec.Press: PressRunner(),
     spec.LeanOnProngs: LeanOnProngsRunner(),
     spec.LeaveProngs: LeaveProngsRunner(),
+    spec.TeleopFoot: TeleopFootRunner(),
     spec.Wait: WaitRunner(),
 }
 assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a runner"

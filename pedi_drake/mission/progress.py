@@ -17,6 +17,7 @@ from pedi_drake.trajectory import (
     PivotedPosition,
     QuinticOrientationSegment,
     QuinticSegment,
+    RampSegment,
 )
 
 RUNNING, SUCCEEDED, FAILED, RECOVERING = "running", "succeeded", "failed", "recovering"
@@ -30,7 +31,7 @@ class LegTrajectory:
     a held foot pose in W (mode 3: the trajectory's position and the calf's orientation)."""
 
     mode: int
-    trajectory: PiecewiseQuintic | QuinticSegment
+    trajectory: PiecewiseQuintic | QuinticSegment | RampSegment
     # Mode 3: rotation vector of the calf's reference orientation R_WC_ref [rad].
     calf_rotation: np.ndarray | None = None
 

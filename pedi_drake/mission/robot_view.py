@@ -1,4 +1,5 @@
-"""What the mission knows about the robot: the state estimate and the `go1.*` measurements.
+"""What the mission knows about the robot (the state estimate and the `go1.*` measurements) and
+the operator's command.
 
 Everything here is computed from the base-state estimate and the joint sensors through the
 model, never from simulation ground truth.
@@ -14,6 +15,7 @@ from pedi_drake import robot
 from pedi_drake.estimation.base_state import BaseState
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
 from pedi_drake.leg_kinematics import foot_jacobian_B, joint_frames, leg_geometry
+from pedi_drake.operator.command import OperatorCommand
 
 
 @dataclasses.dataclass(frozen=True)
@@ -29,6 +31,8 @@ class RobotView:
     # (4, 3) paper 002's impedance-based estimate of the force on each foot, world [N]; None
     # when the controller does not make one.
     impedance_forces: np.ndarray | None = None
+    # The operator's command (pedi_drake.operator); None when the run has no operator input.
+    operator: OperatorCommand | None = None
 
     @functools.cached_property
     def X_WB(self) -> RigidTransform:

@@ -215,6 +215,37 @@ class LeaveProngs(PhaseBase):
 
 
 @dataclasses.dataclass
+class TeleopFoot(PhaseBase):
+    """The lifted foot of `leg` follows the operator's velocity or position command (scenario
+    `operator:`), bounded; each bound counts its activations in the phase's metrics.
+
+    Bounds: the leg's workspace (the foot target always has a closed-form IK solution at least
+    `joint_margin` inside every joint limit, stays `min_height` above the ground and out of the
+    trunk; a command leaving it slides along its boundary), the foot speed `max_speed`, and the
+    estimated foot contact force `max_force` (beyond it the foot does not move further into what
+    it pushes). Operator silence: after `hold_after` the foot holds; after `return_after` the phase
+    fails and the leg returns to support. Ends (succeeds) when the operator asks for the
+    autonomous mode, or after `duration`."""
+
+    leg: str = "FR"
+    # Largest foot speed [m/s].
+    max_speed: float = 0.1
+    # Workspace: the target's IK solution stays this far inside every joint limit [rad].
+    joint_margin: float = 0.05
+    # Workspace: lowest foot centre height above the ground (z = 0) [m].
+    min_height: float = 0.04
+    # Largest estimated contact force on the foot [N] (the mission's force estimate, bias removed).
+    max_force: float = 15.0
+    # Operator silent this long: the foot holds [s].
+    hold_after: float = 0.2
+    # Operator silent this long: the phase fails and the leg returns to support [s].
+    return_after: float = 2.0
+    # The phase succeeds after this long unless the operator switched to autonomous first [s].
+    duration: float = 30.0
+    timeout: float = 60.0
+
+
+@dataclasses.dataclass
 class Wait(PhaseBase):
     """Holds the current references for `duration` [s]."""
 
@@ -234,6 +265,7 @@ PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "press": Press,
     "lean_on_prongs": LeanOnProngs,
     "leave_prongs": LeaveProngs,
+    "teleop_foot": TeleopFoot,
     "wait": Wait,
 }
 
@@ -476,6 +508,12 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         need(phase.radius > 0 or phase.via_points, "via_points", "give a circle radius > 0 or at least one via point")
         for k, point in enumerate(phase.via_points):
             need(len(point) == 3, f"via_points[{k}]", f"expected [x, y, z] offsets in metres, got {point}")
+        need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+    if isinstance(phase, TeleopFoot):
+        for field in ("max_speed", "max_force", "hold_after", "return_after", "joint_margin", "min_height"):
+            value = getattr(phase, field)
+            need(math.isfinite(value) and value > 0, field, f"must be a finite number > 0, got {value}")
+        need(phase.return_after > phase.hold_after, "return_after", "must be longer than hold_after")
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
     if isinstance(phase, Press):
         norm = math.sqrt(sum(v * v for v in phase.direction)) if len(phase.direction) == 3 else 0.0

@@ -1,0 +1,141 @@
+"""TeleopFootRunner: the lifted foot follows the operator's command within the phase's bounds.
+
+Every mission tick the operator's command (RobotView.operator) becomes a desired foot velocity in
+the world: a velocity command as it is (rotated from the trunk frame by the estimated attitude),
+a position command as the velocity that would reach it in one tick. Then, in this order:
+
+  1. silence: with no valid message for `hold_after` the velocity is zero (the foot holds); for
+     `return_after` the phase fails, and the mission's recovery puts the leg back on the ground;
+  2. speed: at most `max_speed`;
+  3. force: with the estimated contact force (the mission's estimate, its bias at the phase start
+     removed) above `max_force`, no motion further into the contact;
+  4. workspace: the step is kept in the leg's workspace, sliding along its boundary
+     (pedi_drake.mission.teleop_bounds).
+
+The reference is a RampSegment from where the previous one ended, so it never jumps. Each bound
+counts the ticks it acted in the phase's metrics (`bound_activations`). The phase succeeds when
+the operator asks for the autonomous mode (after having asked for anything else during the
+phase), or after `duration`; the foot then holds where its reference ended.
+"""
+
+import numpy as np
+
+from pedi_drake.exceptions import UnreachableTarget
+from pedi_drake.mission.progress import FAILED, LEG_MODE_FOOT, RUNNING, SUCCEEDED, LegTrajectory, MissionProgress
+from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.mission.teleop_bounds import bound_force, bound_speed, slide_in_workspace, workspace_margin
+from pedi_drake.operator.command import FRAME_TRUNK, KIND_POSITION, MODE_AUTONOMOUS
+from pedi_drake.trajectory import RampSegment
+
+BOUNDS = ("workspace", "speed", "force", "silence_hold")
+# Length of the first reference segment, before a tick length is known [s].
+_FIRST_TICK = 0.01
+
+
+def _desired_velocity_W(view: RobotView, p_ref_W: np.ndarray, dt: float) -> np.ndarray:
+    """The operator's command as a world-frame foot velocity [m/s]."""
+    command = view.operator
+    R_WB = view.X_WB.rotation().matrix()
+    if command.kind == KIND_POSITION:
+        goal_W = view.X_WB @ command.value if command.frame == FRAME_TRUNK else command.value
+        return (goal_W - p_ref_W) / dt
+    return R_WB @ command.value if command.frame == FRAME_TRUNK else command.value
+
+
+class TeleopFootRunner:
+    """The teleop_foot phase kind (see the module docstring)."""
+
+    def start(self, phase, progress: MissionProgress, view: RobotView, env) -> None:
+        if phase.leg not in progress.references.legs:
+            raise UnreachableTarget(f"{phase.name}: {phase.leg} is not in pedipulation mode (lift it first)")
+        if view.operator is None:
+            raise UnreachableTarget(f"{phase.name}: no operator input (set the scenario's operator.source)")
+        estimates = view.foot_force_estimates_W(phase.leg)
+        if env.force_estimate not in estimates:
+            raise UnreachableTarget(f"{phase.name}: the {env.force_estimate} force estimate is not available")
+        # A foot reference continues where it is (no jump); after a joint-space one (the lift) the
+        # foot is where those angles put it, within the controller's tracking error.
+        leg_reference = progress.references.legs[phase.leg]
+        if leg_reference.mode == LEG_MODE_FOOT:
+            p_ref = leg_reference.trajectory.sample(view.time).position
+        else:
+            p_ref = view.foot_W(phase.leg)
+        progress.references.legs[phase.leg] = LegTrajectory(
+            LEG_MODE_FOOT, RampSegment(p_ref, np.zeros(3), view.time, _FIRST_TICK)
+        )
+        progress.memo.update(
+            p_ref_W=np.asarray(p_ref, float),
+            t_prev=view.time,
+            force_bias=estimates[env.force_estimate].copy(),
+            counts=dict.fromkeys(BOUNDS, 0),
+            holding=False,
+            other_mode_seen=view.operator.mode_request != MODE_AUTONOMOUS,
+            max_force_n=0.0,
+        )
+        progress.records[-1].metrics.update(leg=phase.leg, bound_activations=dict.fromkeys(BOUNDS, 0))
+
+    def step(self, phase, progress: MissionProgress, view: RobotView, env) -> str:
+        memo, command, t = progress.memo, view.operator, view.time
+        dt = t - memo["t_prev"]
+        metrics = progress.records[-1].metrics
+        if dt <= 0.0:
+            return RUNNING
+        memo["t_prev"] = t
+        counts = memo["counts"]
+        p_ref = memo["p_ref_W"]
+        silence = min(command.age, t - progress.phase_start)
+        if command.mode_request != MODE_AUTONOMOUS:
+            memo["other_mode_seen"] = True
+        elif memo["other_mode_seen"]:
+            metrics["ended_by"] = "operator"
+            return SUCCEEDED
+        if silence > phase.return_after:
+            metrics["ended_by"] = "operator_silence"
+            progress.reason = (
+                f"{phase.name}: no operator command for {silence:.2f} s (over return_after "
+                f"{phase.return_after:g} s): the foot held, then the leg returns to support"
+            )
+            return FAILED
+        if silence > phase.hold_after:
+            velocity = np.zeros(3)
+            if not memo["holding"]:
+                counts["silence_hold"] += 1
+            memo["holding"] = True
+        else:
+            memo["holding"] = False
+            velocity = _desired_velocity_W(view, p_ref, dt)
+        velocity, clipped = bound_speed(velocity, phase.max_speed)
+        counts["speed"] += clipped
+        force = view.foot_force_estimates_W(phase.leg)[env.force_estimate] - memo["force_bias"]
+        memo["max_force_n"] = max(memo["max_force_n"], float(np.linalg.norm(force)))
+        velocity, limited = bound_force(velocity, force, phase.max_force)
+        counts["force"] += limited
+
+        X_WB = view.X_WB
+        X_BW = X_WB.inverse()
+
+        def margin(p_B):
+            return workspace_margin(phase.leg, p_B, X_WB, phase.joint_margin, phase.min_height)
+
+        p_from_B = X_BW @ p_ref
+        if margin(p_from_B) < 0.0:
+            # The trunk moved under the held target: start from the measured foot, which the leg reaches.
+            p_from_B = view.foot_B(phase.leg)
+            counts["workspace"] += 1
+        p_to_B, clipped = slide_in_workspace(margin, p_from_B, p_from_B + X_BW.rotation() @ (velocity * dt))
+        counts["workspace"] += clipped
+        p_next = X_WB @ p_to_B
+        progress.references.legs[phase.leg] = LegTrajectory(
+            LEG_MODE_FOOT, RampSegment(p_ref, (p_next - p_ref) / dt, t, dt)
+        )
+        memo["p_ref_W"] = p_next
+        metrics.update(
+            bound_activations=dict(counts),
+            max_force_n=memo["max_force_n"],
+            target_W=p_next.tolist(),
+            foot_error_m=float(np.linalg.norm(view.foot_W(phase.leg) - p_ref)),
+        )
+        if t - progress.phase_start >= phase.duration:
+            metrics["ended_by"] = "duration"
+            return SUCCEEDED
+        return RUNNING

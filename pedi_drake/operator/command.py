@@ -1,0 +1,66 @@
+"""The operator's command as one vector: the `operator_command` port of OperatorInput.
+
+  operator_command (10) = [mode_request, frame, kind, value (3), estop, age, received, dropped]
+
+mode_request  the last mode the operator asked for: MODE_NONE (nothing asked yet),
+              MODE_AUTONOMOUS (the mission's phases) or MODE_TELEOP (the teleoperated foot)
+frame         FRAME_TRUNK or FRAME_WORLD: the frame of `value`
+kind          KIND_VELOCITY (value is a foot velocity [m/s]) or KIND_POSITION (a foot centre [m])
+estop         1 once any message asked for an E-stop (latched for the rest of the run)
+age           time since the last valid message [s] (inf before any): the operator's heartbeat
+received, dropped   valid messages taken in, and messages rejected (malformed, non-finite, ...)
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+
+MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP = 0, 1, 2
+MODES = (MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP)
+FRAME_TRUNK, FRAME_WORLD = 0, 1
+KIND_VELOCITY, KIND_POSITION = 0, 1
+OPERATOR_COMMAND_SIZE = 10
+
+
+@dataclasses.dataclass(frozen=True)
+class OperatorCommand:
+    """One sample of the operator's command (see the module docstring for the fields)."""
+
+    mode_request: int = MODE_NONE
+    frame: int = FRAME_TRUNK
+    kind: int = KIND_VELOCITY
+    value: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(3))  # [m/s] or [m]
+    estop: bool = False
+    age: float = math.inf  # [s]
+    received: int = 0
+    dropped: int = 0
+
+    @staticmethod
+    def from_vector(x: np.ndarray) -> "OperatorCommand":
+        x = np.asarray(x, float)
+        return OperatorCommand(
+            mode_request=int(x[0]),
+            frame=int(x[1]),
+            kind=int(x[2]),
+            value=x[3:6].copy(),
+            estop=bool(x[6] > 0.5),
+            age=float(x[7]),
+            received=int(x[8]),
+            dropped=int(x[9]),
+        )
+
+    def to_vector(self) -> np.ndarray:
+        return np.array(
+            [
+                self.mode_request,
+                self.frame,
+                self.kind,
+                *self.value,
+                float(self.estop),
+                self.age,
+                self.received,
+                self.dropped,
+            ],
+            float,
+        )

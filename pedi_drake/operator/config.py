@@ -1,0 +1,82 @@
+"""Settings of the operator input (the Scenario field `operator:`)."""
+
+import dataclasses
+import math
+
+from pedi_drake.go1_driver.constants import GO1_BUS_NAME, RC_ESTOP_FIELDS
+from pedi_drake.go1_driver.lcmtypes import rc_command_lcmt
+
+OPERATOR_SOURCES = ("none", "lcm", "remote")
+REMOTE_FRAMES = ("trunk", "world")
+# The remote's switches (rc_command_lcmt fields, int16 on the wire: non-zero while pressed).
+REMOTE_BUTTONS = tuple(name for name in rc_command_lcmt.__slots__ if name.endswith("_switch"))
+# The project's foot command channel (type foot_command_lcmt).
+DEFAULT_FOOT_COMMAND_CHANNEL = "operator_foot_command"
+
+
+@dataclasses.dataclass
+class RemoteMapping:
+    """How the Go1 remote's sticks and buttons (rc_command, walk-these-ways layout) become a command.
+
+    Sticks are in [-1, 1]: left stick up (left_stick[1]) moves the foot forward (+x), left stick
+    right (left_stick[0]) moves it right (-y), right stick up (right_stick[1]) moves it up (+z).
+    """
+
+    # Foot speed at full stick deflection [m/s].
+    max_speed: float = 0.1
+    # Stick deflections below this count as zero (the sticks do not rest at exactly 0) [-].
+    deadband: float = 0.05
+    # Frame of the foot velocity: "trunk" or "world".
+    frame: str = "trunk"
+    # Button (an rc_command switch field) that asks for the teleoperated foot.
+    teleop_button: str = "right_upper_switch"
+    # Button that asks for the autonomous mission.
+    autonomous_button: str = "left_upper_switch"
+    # Buttons that latch the E-stop (the driver's remote E-stop buttons by default).
+    estop_buttons: list[str] = dataclasses.field(default_factory=lambda: list(RC_ESTOP_FIELDS))
+
+
+@dataclasses.dataclass
+class OperatorConfig:
+    """Where the operator's commands come from and how they are read."""
+
+    # "none" (no operator), "lcm" (foot_command_lcmt on `channel`) or "remote" (the Go1 remote's
+    # rc_command, mapped by `remote`).
+    source: str = "none"
+    # The LCM bus (a name in the scenario's lcm_buses) the commands arrive on.
+    lcm_bus: str = GO1_BUS_NAME
+    # Channel of the foot commands (source: lcm).
+    channel: str = DEFAULT_FOOT_COMMAND_CHANNEL
+    # How often the input is read [s].
+    period: float = 0.01
+    # The remote's mapping (source: remote).
+    remote: RemoteMapping = dataclasses.field(default_factory=RemoteMapping)
+
+    def problems(self, lcm_buses) -> list[tuple[str, str]]:
+        """(field, problem) for every invalid value (field relative to `operator`); empty when valid."""
+        found = []
+        if self.source not in OPERATOR_SOURCES:
+            found.append(("source", f"must be one of {OPERATOR_SOURCES}, got {self.source!r}"))
+        if self.source != "none" and self.lcm_bus not in lcm_buses:
+            found.append(("lcm_bus", f"no bus named {self.lcm_bus!r} in lcm_buses ({sorted(lcm_buses)})"))
+        if not self.channel:
+            found.append(("channel", "must name an LCM channel"))
+        if not (math.isfinite(self.period) and self.period > 0):
+            found.append(("period", f"must be a finite number > 0 s, got {self.period}"))
+        remote = self.remote
+        if not (math.isfinite(remote.max_speed) and remote.max_speed > 0):
+            found.append(("remote.max_speed", f"must be a finite number > 0 m/s, got {remote.max_speed}"))
+        if not (math.isfinite(remote.deadband) and 0 <= remote.deadband < 1):
+            found.append(("remote.deadband", f"must be in [0, 1), got {remote.deadband}"))
+        if remote.frame not in REMOTE_FRAMES:
+            found.append(("remote.frame", f"must be one of {REMOTE_FRAMES}, got {remote.frame!r}"))
+        buttons = {"remote.teleop_button": remote.teleop_button, "remote.autonomous_button": remote.autonomous_button}
+        buttons.update({f"remote.estop_buttons[{i}]": b for i, b in enumerate(remote.estop_buttons)})
+        for field, button in buttons.items():
+            if button not in REMOTE_BUTTONS:
+                found.append((field, f"must be one of {REMOTE_BUTTONS}, got {button!r}"))
+        if remote.teleop_button == remote.autonomous_button:
+            found.append(("remote.autonomous_button", "must differ from remote.teleop_button"))
+        if {remote.teleop_button, remote.autonomous_button} & set(remote.estop_buttons):
+            found.append(("remote.estop_buttons", "a mode button cannot also be an E-stop button"))
+        return found

@@ -1,0 +1,89 @@
+"""The operator's LCM messages as vectors, and which values a reader accepts.
+
+Each message type becomes the same 7 numbers, [mode_request, frame, kind, value (3), estop]
+(the first seven entries of the `operator_command` layout, pedi_drake.operator.command), so
+the input system treats both sources alike:
+
+  foot_command_lcmt (the project's own type): copied; codes outside their sets are out of range.
+  rc_command_lcmt (the Go1 remote, walk-these-ways layout): sticks -> a foot velocity, buttons ->
+    a mode request and the E-stop (RemoteMapping); an eighth number, the largest stick
+    deflection, lets `remote_in_range` reject sticks outside [-1, 1].
+"""
+
+from collections.abc import Callable
+
+import numpy as np
+
+from pedi_drake.operator.command import (
+    FRAME_TRUNK,
+    FRAME_WORLD,
+    KIND_POSITION,
+    KIND_VELOCITY,
+    MODE_AUTONOMOUS,
+    MODE_NONE,
+    MODE_TELEOP,
+    MODES,
+)
+from pedi_drake.operator.config import RemoteMapping
+
+MESSAGE_VECTOR_SIZE = 7
+# Sticks are floats in [-1, 1] on the wire; this much beyond counts as rounding.
+_STICK_TOLERANCE = 1e-3
+
+
+def foot_command_vector(message) -> np.ndarray:
+    """[mode_request, frame, kind, value (3), estop] of a foot_command_lcmt."""
+    return np.array(
+        [message.mode_request, message.frame, message.kind, *message.value, 1.0 if message.estop else 0.0], float
+    )
+
+
+def foot_command_in_range(values: np.ndarray) -> bool:
+    """Whether the codes of a foot command vector are known ones (its values are checked finite before)."""
+    return bool(
+        values[0] in MODES and values[1] in (FRAME_TRUNK, FRAME_WORLD) and values[2] in (KIND_VELOCITY, KIND_POSITION)
+    )
+
+
+def _deadband(stick: float, deadband: float) -> float:
+    """The stick value with the dead band removed and the rest rescaled to [-1, 1] [-] (NaN stays NaN)."""
+    magnitude = abs(stick)
+    if magnitude != magnitude:
+        return float("nan")
+    if magnitude <= deadband:
+        return 0.0
+    return float(np.sign(stick) * (min(magnitude, 1.0) - deadband) / (1.0 - deadband))
+
+
+def remote_command_vector(mapping: RemoteMapping) -> Callable[[object], np.ndarray]:
+    """The function rc_command_lcmt -> [mode_request, frame, kind, value (3), estop] for `mapping`.
+
+    The eighth entry is the largest stick deflection (see `remote_in_range`); a stick that is not
+    finite makes the velocity non-finite (rejected by the inbox).
+    """
+    frame = FRAME_TRUNK if mapping.frame == "trunk" else FRAME_WORLD
+
+    def to_vector(message) -> np.ndarray:
+        sticks = np.abs(np.array([*message.left_stick, *message.right_stick], float))
+        forward = _deadband(message.left_stick[1], mapping.deadband)
+        right = _deadband(message.left_stick[0], mapping.deadband)
+        up = _deadband(message.right_stick[1], mapping.deadband)
+        velocity = mapping.max_speed * np.array([forward, -right, up])
+        speed = float(np.linalg.norm(velocity))
+        if speed > mapping.max_speed:  # both sticks at full: still the mapping's top speed
+            velocity *= mapping.max_speed / speed
+        if getattr(message, mapping.teleop_button) != 0:
+            mode = MODE_TELEOP
+        elif getattr(message, mapping.autonomous_button) != 0:
+            mode = MODE_AUTONOMOUS
+        else:
+            mode = MODE_NONE
+        estop = any(getattr(message, button) != 0 for button in mapping.estop_buttons)
+        return np.array([mode, frame, KIND_VELOCITY, *velocity, 1.0 if estop else 0.0, sticks.max()], float)
+
+    return to_vector
+
+
+def remote_in_range(values: np.ndarray) -> bool:
+    """Whether every stick of a remote vector (its eighth entry) is within [-1, 1]."""
+    return bool(values[MESSAGE_VECTOR_SIZE] <= 1.0 + _STICK_TOLERANCE)

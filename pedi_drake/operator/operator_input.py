@@ -1,0 +1,103 @@
+"""OperatorInput: the operator's messages on LCM -> the `operator_command` port, read at its period.
+
+The source is the scenario's (`operator.source`): the project's foot_command_lcmt on a channel
+("lcm"), or the Go1 remote's rc_command ("remote"). Messages are checked as the Go1 driver checks
+its own (`pedi_drake.go1_driver.link.Inbox`): a message of the wrong size or fingerprint, that
+fails to decode, carries NaN or Inf, or an unknown code is dropped and counted by reason
+(`counts()`), so a foreign or broken publisher can never reach the foot.
+
+A periodic update takes in what arrived (polling the DrakeLcm: the diagram's time is the only
+clock, so a lock-step simulation and a real-time run see the same ages) and keeps in the discrete
+state: the newest command, the last mode the operator asked for, the latched E-stop and the
+diagram time of the last valid message. `age` on the output is the time since then [s].
+"""
+
+import math
+
+import numpy as np
+from pydrake.lcm import DrakeLcmInterface
+from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
+
+from pedi_drake.go1_driver.constants import RC_COMMAND_CHANNEL
+from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt, rc_command_lcmt
+from pedi_drake.go1_driver.link import QUEUE_CAPACITY, Inbox
+from pedi_drake.operator.command import MODE_NONE, OPERATOR_COMMAND_SIZE
+from pedi_drake.operator.config import OperatorConfig
+from pedi_drake.operator.messages import (
+    MESSAGE_VECTOR_SIZE,
+    foot_command_in_range,
+    foot_command_vector,
+    remote_command_vector,
+    remote_in_range,
+)
+
+# Discrete state: [mode_request, frame, kind, value (3), estop, t_last [s], received, dropped].
+_MODE, _FRAME_KIND_VALUE, _ESTOP, _T_LAST, _RECEIVED, _DROPPED = 0, slice(1, 6), 6, 7, 8, 9
+FOOT_COMMAND_ENCODED_SIZE = len(foot_command_lcmt().encode())
+
+
+def operator_inbox(config: OperatorConfig) -> Inbox:
+    """The checked inbox of the configured source (foot_command_lcmt or the remote's rc_command)."""
+    if config.source == "lcm":
+        return Inbox(
+            config.channel,
+            foot_command_lcmt,
+            foot_command_vector,
+            encoded_size=FOOT_COMMAND_ENCODED_SIZE,
+            in_range=foot_command_in_range,
+        )
+    if config.source == "remote":
+        return Inbox(
+            RC_COMMAND_CHANNEL, rc_command_lcmt, remote_command_vector(config.remote), in_range=remote_in_range
+        )
+    raise ValueError(f"operator source {config.source!r} has no inbox")
+
+
+class OperatorInput(LeafSystem):
+    """The operator's command (port `operator_command`, layout in pedi_drake.operator.command)."""
+
+    def __init__(self, config: OperatorConfig, lcm: DrakeLcmInterface):
+        """`lcm`: the bus the commands arrive on (polled by this system's update)."""
+        super().__init__()
+        self._lcm = lcm
+        self._inbox = operator_inbox(config)
+        subscription = lcm.Subscribe(self._inbox.channel, self._inbox.handle)
+        if hasattr(subscription, "set_queue_capacity"):
+            subscription.set_queue_capacity(QUEUE_CAPACITY)
+        initial = np.zeros(OPERATOR_COMMAND_SIZE)
+        initial[_T_LAST] = -math.inf
+        self._state = self.DeclareDiscreteState(initial)
+        self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._take_in)
+        self.DeclareVectorOutputPort(
+            "operator_command",
+            OPERATOR_COMMAND_SIZE,
+            self._calc_command,
+            prerequisites_of_calc={self.xd_ticket(), self.time_ticket()},
+        )
+
+    @property
+    def channel(self) -> str:
+        return self._inbox.channel
+
+    def counts(self) -> dict:
+        """Messages received and dropped on the channel, the drops by reason."""
+        return self._inbox.counts()
+
+    def _take_in(self, context, discrete_state: DiscreteValues) -> None:
+        self._lcm.HandleSubscriptions(0)
+        values, received, dropped, _ = self._inbox.snapshot()
+        x = context.get_discrete_state(self._state).get_value().copy()
+        if values is not None and received > x[_RECEIVED]:
+            values = values[:MESSAGE_VECTOR_SIZE]
+            if values[0] != MODE_NONE:  # a mode request stands until the operator asks for another
+                x[_MODE] = values[0]
+            x[_FRAME_KIND_VALUE] = values[1:6]
+            x[_ESTOP] = max(x[_ESTOP], values[6])  # latched
+            x[_T_LAST] = context.get_time()
+        x[_RECEIVED], x[_DROPPED] = received, dropped
+        discrete_state.set_value(self._state, x)
+
+    def _calc_command(self, context, output: BasicVector) -> None:
+        x = context.get_discrete_state(self._state).get_value().copy()
+        x[_T_LAST] = context.get_time() - x[_T_LAST]  # the age [s]; inf before any message
+        output.SetFromVector(x)

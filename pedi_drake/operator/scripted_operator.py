@@ -1,0 +1,76 @@
+"""ScriptedOperator: publishes a fixed sequence of foot commands on LCM, like an operator would.
+
+For tests, benchmarks and the example app: the script is a list of steps, each holding from its
+start time until the next one's; after the last step's `until` nothing more is published (the
+operator falls silent). Messages go out every `period` [s] of diagram time, with a sequence
+number, on a DrakeLcm (memq:// in one process, udpm:// to another).
+"""
+
+import dataclasses
+
+import numpy as np
+from pydrake.lcm import DrakeLcmInterface
+from pydrake.systems.framework import EventStatus, LeafSystem
+
+from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt
+from pedi_drake.operator.command import FRAME_TRUNK, KIND_VELOCITY, MODE_NONE
+from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
+
+
+@dataclasses.dataclass(frozen=True)
+class ScriptStep:
+    """One step of the script: the command sent from `start` [s] (diagram time) on."""
+
+    start: float
+    value: tuple[float, float, float] = (0.0, 0.0, 0.0)  # [m/s] or [m]
+    mode_request: int = MODE_NONE
+    frame: int = FRAME_TRUNK
+    kind: int = KIND_VELOCITY
+    estop: bool = False
+
+
+def script_command(steps: list[ScriptStep], t: float) -> ScriptStep | None:
+    """The step in force at `t` [s] (the last one started), None before the first."""
+    current = None
+    for step in steps:
+        if step.start <= t:
+            current = step
+    return current
+
+
+def foot_command_message(step: ScriptStep, t: float, sequence: int) -> foot_command_lcmt:
+    message = foot_command_lcmt()
+    message.timestamp_us = int(round(t * 1e6))
+    message.sequence = sequence
+    message.mode_request, message.frame, message.kind = step.mode_request, step.frame, step.kind
+    message.value = [float(v) for v in step.value]
+    message.estop = 1 if step.estop else 0
+    return message
+
+
+class ScriptedOperator(LeafSystem):
+    """Publishes `steps` on `channel` every `period` [s] until `until` [s] (diagram time)."""
+
+    def __init__(
+        self,
+        lcm: DrakeLcmInterface,
+        steps: list[ScriptStep],
+        *,
+        until: float = np.inf,
+        period: float = 0.01,
+        channel: str = DEFAULT_FOOT_COMMAND_CHANNEL,
+    ):
+        super().__init__()
+        self._lcm, self._steps, self._until, self._channel = lcm, list(steps), until, channel
+        self._sequence = self.DeclareDiscreteState(1)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._publish)
+
+    def _publish(self, context, discrete_state) -> EventStatus:
+        t = context.get_time()
+        step = script_command(self._steps, t)
+        if step is None or t > self._until:
+            return EventStatus.DidNothing()
+        sequence = int(context.get_discrete_state(self._sequence).get_value()[0])
+        self._lcm.Publish(self._channel, foot_command_message(step, t, sequence).encode())
+        discrete_state.set_value(self._sequence, [sequence + 1])
+        return EventStatus.Succeeded()
