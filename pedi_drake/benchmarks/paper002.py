@@ -198,7 +198,7 @@ def obstacle_row(seed: int, out_dir: Path, reuse: bool = False) -> dict:
 
 
 def floors(rows: list[dict]) -> dict:
-    """Which of the issue's floors each measured row meets (paper 002's controller)."""
+    """Which of the acceptance floors each measured row meets (paper 002's controller)."""
     checks = {}
     for row in rows:
         if row["controller"] != "projected_impedance":

@@ -18,7 +18,7 @@ from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.spec import MissionSpec
 
-# Floors of the paper-002 issue for IV-A.
+# Acceptance floors of the IV-A evaluation (foot held within them while the torso circles).
 FOOT_POSITION_FLOOR_M = 0.005
 FOOT_ORIENTATION_FLOOR_RAD = np.radians(2.0)
 TORSO_TRACKING_RMS_FLOOR_M = 0.01
