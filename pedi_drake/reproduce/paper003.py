@@ -170,7 +170,8 @@ def _box_lift(folder: Path, section: Section, quick: bool) -> None:
             "low task-space gains (values not given)",
             f"kp {squeeze.foot_gains.kp:g} 1/s^2, kd {squeeze.foot_gains.kd:g} 1/s (the default foot task: "
             f"{scenario.whole_body.foot_position.kp:g}, {scenario.whole_body.foot_position.kd:g}); references "
-            f"{100 * abs(squeeze.feet[0].offset[0]) - 2:.0f} cm inside the faces; contact force while held "
+            f"moved {100 * abs(squeeze.feet[0].offset[0]):.0f} cm inwards from beside the faces; "
+            "contact force while held "
             + (" / ".join(f"{f:.1f}" for f in forces_held) + " N" if forces_held else "none")
             + f" ({'/'.join(check.feet)})",
             "the Eq. 1 foot acceleration task at lower gains: blocked by the box, each foot pushes with about its "
