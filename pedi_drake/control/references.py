@@ -10,13 +10,18 @@ Layouts (world frame W, Unitree leg order FR, FL, RR, RL):
 `body_reference` (19):
     [0:3] p_WB_ref [m]   [3:7] quaternion of R_WB_ref (w, x, y, z)   [7:10] v_WB_ref [m/s]
     [10:13] a_WB_ref [m/s^2]   [13:16] w_WB_ref [rad/s]   [16:19] alpha_WB_ref [rad/s^2]
-`leg_reference` (40): per leg k (10 entries from 10 k):
+`leg_reference` (48): per leg k (12 entries from 12 k):
     [0] mode: 0 none (the leg is a stance or idle leg), 1 foot position in W, 2 joint angles,
         3 foot pose in W (the 5-D task: foot position, and the calf's roll and pitch; yaw free)
     [1:4] position: foot p_WF_ref [m] (modes 1, 3) or (hip, thigh, calf) [rad] (mode 2)
     [4:7] velocity [m/s | rad/s]
     [7:10] acceleration [m/s^2 | rad/s^2] (modes 1, 2); mode 3: the rotation vector of the calf's
         reference orientation R_WC_ref [rad] (the foot pose is held: no acceleration reference)
+    [10:12] the whole-body controller's foot task gains of modes 1 and 3, stiffness kp [1/s^2]
+        and damping kd [1/s] of Eq. 1; kp 0 (or kp not > 0, or kd < 0) selects its configured
+        `foot_position` gains (paper 002's controller keeps its own `foot_stiffness`). A
+        low stiffness makes the foot compliant: pressed against an object it pushes with about
+        the leg's task-space inertia times kp times the distance to its reference.
     A leg with mode != 0 is a pedipulation leg; it should not be in the contact set.
 `contact_set` (4 + number of prongs): 1 for a contact that should bear load (FR, FL, RR, RL,
     prong_0, ...), 0 otherwise. Changes are ramped over `contact_ramp_time`.
@@ -41,8 +46,8 @@ from pedi_drake.exceptions import PediError
 from pedi_drake.vector3 import rotation_matrix_wxyz
 
 BODY_REFERENCE_SIZE = 19
-LEG_REFERENCE_SIZE = 40
-LEG_BLOCK = 10
+LEG_REFERENCE_SIZE = 48
+LEG_BLOCK = 12
 SAFETY_POLYGON_MAX_VERTICES = 8  # the four feet and up to four prong tips
 SAFETY_POLYGON_SIZE = 4 + 2 * SAFETY_POLYGON_MAX_VERTICES
 LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS, LEG_MODE_FOOT_POSE = 0, 1, 2, 3
@@ -82,29 +87,37 @@ def parse_body_reference(x: np.ndarray) -> BodyReference:
 
 @dataclasses.dataclass
 class LegReference:
-    """One leg's task: mode and position/velocity/acceleration (units per mode)."""
+    """One leg's task: mode and position/velocity/acceleration (units per mode), and the foot
+    task's gains (0: the controller's configured ones)."""
 
     mode: int
     position: np.ndarray
     velocity: np.ndarray
     acceleration: np.ndarray
+    foot_kp: float = 0.0  # [1/s^2]
+    foot_kd: float = 0.0  # [1/s]
 
 
 def leg_reference_vector(
     entries: dict[str, tuple[int, np.ndarray, np.ndarray, np.ndarray]] | None = None,
+    foot_gains: dict[str, tuple[float, float]] | None = None,
 ) -> np.ndarray:
-    """The 40-vector of `leg_reference` from {leg: (mode, position, velocity, acceleration)}."""
+    """The 48-vector of `leg_reference` from {leg: (mode, position, velocity, acceleration)} and
+    {leg: (kp [1/s^2], kd [1/s])} for the legs whose foot task runs at its own gains."""
     x = np.zeros(LEG_REFERENCE_SIZE)
     for leg, (mode, p, v, a) in (entries or {}).items():
         k = robot.LEG_NAMES.index(leg) * LEG_BLOCK
         x[k] = mode
         x[k + 1 : k + 10] = np.concatenate([p, v, a])
+    for leg, (kp, kd) in (foot_gains or {}).items():
+        k = robot.LEG_NAMES.index(leg) * LEG_BLOCK
+        x[k + 10 : k + 12] = kp, kd
     return x
 
 
 def parse_leg_reference(x: np.ndarray) -> list[LegReference]:
     blocks = np.asarray(x, float).reshape(len(robot.LEG_NAMES), LEG_BLOCK)
-    return [LegReference(round(b[0]), b[1:4], b[4:7], b[7:10]) for b in blocks]
+    return [LegReference(round(b[0]), b[1:4], b[4:7], b[7:10], b[10], b[11]) for b in blocks]
 
 
 def _rotation_2d(yaw: float) -> np.ndarray:

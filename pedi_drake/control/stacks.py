@@ -116,12 +116,14 @@ class StackBuilder:
         rows = []
         for i, (leg, ref) in enumerate(zip(robot.LEG_NAMES, inputs.legs, strict=True)):
             joints = self.leg_joint_indices[i]
+            # A mission may run a foot at its own gains (a compliant, low-gain foot on an object).
+            gains = tasks.PdGains(ref.foot_kp, ref.foot_kd) if ref.foot_kp > 0.0 and ref.foot_kd >= 0.0 else None
             if ref.mode == LEG_MODE_FOOT:
-                rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, ref.acceleration))
+                rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, ref.acceleration, gains))
                 rows[-1].name = f"foot_{leg}"
             elif ref.mode == LEG_MODE_FOOT_POSE:
                 # The optional 5-D task: the foot held at a world pose (its calf's roll and pitch too).
-                rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, np.zeros(3)))
+                rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, np.zeros(3), gains))
                 rows[-1].name = f"foot_{leg}"
                 rows.append(self.calf.rows(s, self.layout, i, axis_angle_matrix(ref.acceleration)))
                 rows[-1].name = f"calf_{leg}"

@@ -377,10 +377,13 @@ class FootPosition:
         p_ref: np.ndarray,
         v_ref: np.ndarray,
         a_ref: np.ndarray,
+        gains: PdGains | None = None,
     ) -> EqualityTask:
+        """The foot's rows at `gains` (None: the task's own)."""
+        gains = self.gains if gains is None else gains
         J = s.J_contacts[3 * contact : 3 * contact + 3]
         v = J @ s.v
-        a = a_ref + self.gains.kp * (p_ref - s.p_contacts[contact]) + self.gains.kd * (v_ref - v)
+        a = a_ref + gains.kp * (p_ref - s.p_contacts[contact]) + gains.kd * (v_ref - v)
         A = np.zeros((3, layout.size))
         A[:, : layout.nv] = J
         return EqualityTask("foot_position", A, a - s.Jdot_v_contacts[3 * contact : 3 * contact + 3])

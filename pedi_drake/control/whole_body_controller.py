@@ -10,7 +10,7 @@ Inputs (all numeric vectors; reference layouts in `pedi_drake.control.references
     position_measured (12)  joint angles [rad], Unitree order
     velocity_measured (12)  joint rates [rad/s], Unitree order
     body_reference (19)     trunk pose trajectory sample; unconnected: hold the first-tick pose
-    leg_reference (40)      per-leg foot / joint references; unconnected: no leg task
+    leg_reference (48)      per-leg foot / joint references; unconnected: no leg task
     contact_set (4 + prongs) loaded contacts 0/1; unconnected: the four feet
     safety_polygon (20)     capture-point polygon (vertices in its frame); unconnected or n = 0:
                             the support polygon of the loaded contacts shrunk by `safety_margin`

@@ -11,6 +11,7 @@ import numpy as np
 from pedi_drake import robot
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import capture_point, mission_results
+from pedi_drake.evaluation.box_lift import box_lift_trace, judge_box_lift
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_response
 from pedi_drake.evaluation.result_file import write_result
@@ -145,6 +146,18 @@ def judge_run(record) -> dict:
             box = mission_results.box_displacement(plant, states)
             if box is not None:
                 result["box"] = box
+            if mission.box_lift is not None and states.shape[1]:
+                trace = box_lift_trace(
+                    plant,
+                    scene_graph_inspector(record),
+                    mission.box_lift,
+                    t_state,
+                    states,
+                    logs["sim.foot_contact_forces"].times,
+                    logs["sim.foot_contact_forces"].data,
+                )
+                result["box_lift"], lift_problem = judge_box_lift(trace, mission.box_lift, result["phases"])
+                reason = "; ".join(filter(None, [reason, lift_problem]))
     if not hardware:
         manager_saw_fall = progress is not None and any(r.metrics.get("estimate_fell") for r in progress.records)
         reason = _fall_reason(reason, fell, estimate_fell, manager_saw_fall)
@@ -178,6 +191,11 @@ def judge_run(record) -> dict:
     result["reason"] = reason
     result["success"] = not reason
     return result
+
+
+def scene_graph_inspector(record):
+    """The simulated station's SceneGraphInspector (the shapes and poses of the collision geometry)."""
+    return record.built.diagram.GetSubsystemByName("station").GetSubsystemByName("scene_graph").model_inspector()
 
 
 def judge_pushes(plant, logs, pushes) -> tuple[list[dict], str]:

@@ -332,11 +332,13 @@ class MissionManager(LeafSystem):
     def _calc_legs(self, context, output: BasicVector) -> None:
         refs = self.progress(context).references
         t = context.get_time()
-        entries = {}
+        entries, foot_gains = {}, {}
         for leg, leg_traj in refs.legs.items():
             sample = leg_traj.trajectory.sample(t)
             last = sample.acceleration if leg_traj.calf_rotation is None else leg_traj.calf_rotation
             entries[leg] = (leg_traj.mode, sample.position, sample.velocity, last)
+            if leg_traj.foot_gains is not None:
+                foot_gains[leg] = leg_traj.foot_gains
         press = refs.press
         if press is not None and press["frozen_at"] is None:
             s, sd, sdd = smooth_start_time_law(t, press["t0"], press["ramp"])
@@ -346,7 +348,7 @@ class MissionManager(LeafSystem):
                 press["speed"] * sd * press["direction"],
                 press["speed"] * sdd * press["direction"],
             )
-        output.SetFromVector(controller_refs.leg_reference_vector(entries))
+        output.SetFromVector(controller_refs.leg_reference_vector(entries, foot_gains))
 
     def _ik_target_W(self, context, leg: str) -> np.ndarray:
         """The world-frame foot target `leg` is asked for; NaN when nothing is asked."""

@@ -525,6 +525,42 @@ class PressRunner(PhaseRunner):
         return RUNNING
 
 
+class MoveFeetRunner(PhaseRunner):
+    """Lifted feet moved in task space by world offsets (one quintic each), at the phase's gains."""
+
+    def start(self, phase, progress, view, env):
+        refs, t = progress.references, view.time
+        targets_W = {}
+        for foot in phase.feet:
+            current = refs.legs.get(foot.leg)
+            if current is None:
+                raise UnreachableTarget(f"{phase.name}: {foot.leg} is not in pedipulation mode")
+            if current.mode in (LEG_MODE_FOOT, LEG_MODE_FOOT_POSE):
+                # From the reference, not the foot: a foot held short of its reference by an
+                # object keeps pressing by the same amount as the reference moves on.
+                start = current.trajectory.sample(t).position
+                gains = current.foot_gains
+            else:
+                start, gains = view.foot_W(foot.leg), None
+            end = start + np.asarray(foot.offset, float)
+            if phase.foot_gains is not None:
+                gains = (phase.foot_gains.kp, phase.foot_gains.kd)
+            refs.legs[foot.leg] = LegTrajectory(
+                LEG_MODE_FOOT, QuinticSegment(start, end, t, phase.duration), foot_gains=gains
+            )
+            targets_W[foot.leg] = end
+        progress.memo["targets_W"] = targets_W
+
+    def step(self, phase, progress, view, env):
+        targets_W = progress.memo["targets_W"]
+        # The estimate's view; the true foot forces and positions come from the run's logs.
+        progress.records[-1].metrics["legs"] = [
+            {"leg": leg, "target_W": target.tolist(), "error_m": _foot_error(view, leg, target)}
+            for leg, target in targets_W.items()
+        ]
+        return SUCCEEDED if view.time >= progress.phase_start + phase.duration else RUNNING
+
+
 class LegToSupportRunner(PhaseRunner):
     """Places the foot on the ground under its hip, restores the contact, re-centres the trunk."""
 
@@ -666,6 +702,7 @@ RUNNERS: dict[type, PhaseRunner] = {
     spec.LegToSupport: LegToSupportRunner(),
     spec.Reach: ReachRunner(),
     spec.Press: PressRunner(),
+    spec.MoveFeet: MoveFeetRunner(),
     spec.LeanOnProngs: LeanOnProngsRunner(),
     spec.LeaveProngs: LeaveProngsRunner(),
     spec.TeleopFoot: TeleopFootRunner(),

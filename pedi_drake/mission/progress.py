@@ -34,6 +34,8 @@ class LegTrajectory:
     trajectory: PiecewiseQuintic | QuinticSegment | RampSegment
     # Mode 3: rotation vector of the calf's reference orientation R_WC_ref [rad].
     calf_rotation: np.ndarray | None = None
+    # Modes 1 and 3: the foot task's own (kp [1/s^2], kd [1/s]); None: the controller's gains.
+    foot_gains: tuple[float, float] | None = None
 
 
 @dataclasses.dataclass

@@ -196,6 +196,43 @@ class Press(PhaseBase):
 
 
 @dataclasses.dataclass
+class FootGains:
+    """A foot task's own gains (Eq. 1 of the whole-body controller), both > 0. Low gains make the
+    foot compliant: held against an object, it pushes with about its leg's task-space inertia
+    times `kp` times how far its reference lies inside the object."""
+
+    kp: float = 0.0  # stiffness [1/s^2]
+    kd: float = 0.0  # damping [1/s]
+
+
+@dataclasses.dataclass
+class FootOffset:
+    """One lifted foot a move_feet phase moves, and by how much."""
+
+    # Leg name; it must be in pedipulation mode and appear once in the phase.
+    leg: str = ""
+    # Displacement of the foot's reference, world frame [m].
+    offset: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+
+
+@dataclasses.dataclass
+class MoveFeet(PhaseBase):
+    """Moves lifted feet in task space: each foot's world-frame position reference by its
+    `offset`, from where its reference is at the phase start (the measured foot if the leg had a
+    joint reference), on one quintic over `duration`, then held there for whatever comes next.
+
+    With `foot_gains`, the moved feet run at those gains from now on (until a phase gives the leg
+    a joint reference again); without, each keeps the gains it had. The phase ends after
+    `duration`: a foot pressed on an object stays short of its reference by design, so the
+    foot errors are recorded, not required.
+    """
+
+    feet: list[FootOffset] = dataclasses.field(default_factory=list)
+    duration: float = 1.0
+    foot_gains: FootGains | None = None
+
+
+@dataclasses.dataclass
 class LeanOnProngs(PhaseBase):
     """Lowers the trunk (at its current attitude) until the prongs touch and carry load, then adds
     them as contacts. `prongs` names the prongs to lean on ("prong_0", ...); empty: every prong.
@@ -263,11 +300,35 @@ PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "leg_to_support": LegToSupport,
     "reach": Reach,
     "press": Press,
+    "move_feet": MoveFeet,
     "lean_on_prongs": LeanOnProngs,
     "leave_prongs": LeaveProngs,
     "teleop_foot": TeleopFoot,
     "wait": Wait,
 }
+
+
+@dataclasses.dataclass
+class BoxLift:
+    """The outcome a box-lifting mission must reach, judged by physics (the logged plant state).
+
+    The box's lowest corner must be at least `height` above the ground, each foot of `feet`
+    touching it with at least `contact_force`, for at least `hold` without a break; and the box
+    must not be back on the ground before the phase `until_phase` starts.
+    """
+
+    # Scene object (model instance) name of the box.
+    box: str = "box"
+    # The legs whose feet hold it.
+    feet: list[str] = dataclasses.field(default_factory=lambda: ["FL", "RL"])
+    # Lowest corner above the ground [m].
+    height: float = 0.05
+    # Time held at that height [s].
+    hold: float = 3.0
+    # Smallest contact force of each holding foot that counts as holding [N].
+    contact_force: float = 1.0
+    # Name of the phase that puts the box down (the box may not be dropped before it starts).
+    until_phase: str = ""
 
 
 @dataclasses.dataclass
@@ -285,6 +346,8 @@ class MissionSpec:
     stack: str = ""
     # Disturbances of the simulated world during the mission (added to the scenario's).
     pushes: list[Push] = dataclasses.field(default_factory=list)
+    # The box lift the judge requires (None: the mission lifts nothing).
+    box_lift: BoxLift | None = None
 
     def longest_duration(self) -> float:
         """Simulated time [s] the mission can take at most: every phase running to its timeout,
@@ -305,6 +368,8 @@ class _MissionFile:
     # "paper000" or "paper003"; empty: the scenario's. Ignored by the other controllers.
     stack: str = ""
     pushes: list[Push] = dataclasses.field(default_factory=list)
+    # The box lift the judge requires of the run (pedi_drake.evaluation.box_lift).
+    box_lift: BoxLift | None = None
     phases: list[dict] = dataclasses.field(default_factory=list)
 
 
@@ -428,6 +493,8 @@ def load_mission(name_or_path: str) -> MissionSpec:
     duplicates = sorted({name for name in names if names.count(name) > 1})
     if duplicates:
         raise MissionFileError(f"{where}: phases: duplicate phase names {duplicates}")
+    if header.box_lift is not None:
+        _check_box_lift(header.box_lift, header.scene, names, f"{where}: box_lift")
     return MissionSpec(
         name=path.stem,
         description=header.description,
@@ -438,6 +505,25 @@ def load_mission(name_or_path: str) -> MissionSpec:
         force_estimate=header.force_estimate,
         stack=header.stack,
         pushes=header.pushes,
+        box_lift=header.box_lift,
+    )
+
+
+def _check_box_lift(check: BoxLift, scene: list[SceneObject], phase_names: list[str], where: str) -> None:
+    def need(condition: bool, field: str, problem: str) -> None:
+        if not condition:
+            raise MissionFileError(f"{where}.{field}: {problem}")
+
+    objects = [obj.name or obj.kind for obj in scene]
+    need(check.box in objects, "box", f"must name a scene object ({objects}), got {check.box!r}")
+    need(len(check.feet) > 0, "feet", "expected at least one leg")
+    for k, leg in enumerate(check.feet):
+        need(leg in LEG_NAMES, f"feet[{k}]", f"must be one of {LEG_NAMES}, got {leg!r}")
+    for field in ("height", "hold", "contact_force"):
+        value = getattr(check, field)
+        need(math.isfinite(value) and value > 0, field, f"must be > 0, got {value}")
+    need(
+        check.until_phase in phase_names, "until_phase", f"must name a phase of the mission, got {check.until_phase!r}"
     )
 
 
@@ -497,6 +583,22 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
             )
             for j, point in enumerate(companion.via_points):
                 need(len(point) == 3, f"{field}.via_points[{j}]", f"expected [x, y, z] in metres, got {point}")
+    if isinstance(phase, MoveFeet):
+        need(len(phase.feet) > 0, "feet", "expected at least one {leg, offset}")
+        legs = [foot.leg for foot in phase.feet]
+        for k, foot in enumerate(phase.feet):
+            need(foot.leg in LEG_NAMES, f"feet[{k}].leg", f"must be one of {LEG_NAMES}, got {foot.leg!r}")
+            need(legs.count(foot.leg) == 1, f"feet[{k}].leg", f"{foot.leg} appears more than once")
+            need(
+                len(foot.offset) == 3 and all(math.isfinite(v) for v in foot.offset),
+                f"feet[{k}].offset",
+                f"expected finite [x, y, z] in metres, got {foot.offset}",
+            )
+        need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+        if phase.foot_gains is not None:
+            for field in ("kp", "kd"):
+                value = getattr(phase.foot_gains, field)
+                need(math.isfinite(value) and value > 0, f"foot_gains.{field}", f"must be > 0, got {value}")
     for k, name in enumerate(getattr(phase, "prongs", None) or []):
         need(_is_prong_name(name), f"prongs[{k}]", f"expected a prong name like 'prong_0', got {name!r}")
     pivot = getattr(phase, "pivot", "")
