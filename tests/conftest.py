@@ -11,6 +11,25 @@ import pytest
 from pedi_drake import robot  # noqa: E402
 
 
+# Tests that judge wall-clock behaviour (real-time bridges, watchdogs, signals at chosen moments)
+# or use every core themselves (a local Ray, a browser): `.ci/run` runs them on their own after
+# the rest has run on parallel workers, so a neighbour's load cannot make them miss a deadline.
+WALL_CLOCK_MODULES = {
+    "test_go1_link",
+    "test_sim_bridge",
+    "test_hardware_station",
+    "test_run_interrupt",
+    "test_batch",
+    "test_replay_browser",
+}
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    for item in items:
+        if item.module.__name__.rsplit(".", 1)[-1] in WALL_CLOCK_MODULES:
+            item.add_marker(pytest.mark.wall_clock)
+
+
 @pytest.fixture
 def rng() -> np.random.Generator:
     """A fresh seeded generator per test."""
