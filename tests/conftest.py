@@ -10,7 +10,6 @@ import pytest
 
 from pedi_drake import robot  # noqa: E402
 
-
 # Tests that judge wall-clock behaviour (real-time bridges, watchdogs, signals at chosen moments)
 # or use every core themselves (a local Ray, a browser): `.ci/run` runs them on their own after
 # the rest has run on parallel workers, so a neighbour's load cannot make them miss a deadline.

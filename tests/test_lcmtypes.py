@@ -49,6 +49,16 @@ def test_command_field_order_on_the_wire():
     np.testing.assert_array_equal(c.message_to_command(decoded), command)
 
 
+def test_the_drivers_command_encoder_writes_lcm_gens_bytes():
+    rng = np.random.default_rng(7)
+    for _ in range(500):
+        command = rng.normal(size=60) * 10.0 ** rng.uniform(-6, 3, 60)
+        stamp, message_id = int(rng.integers(0, 2**40)), int(rng.integers(0, 2**31))
+        data = c.encode_command(command, stamp, message_id)
+        assert data == c.command_to_message(command, stamp, message_id).encode()
+        np.testing.assert_array_equal(c.message_to_command(pd_tau_targets_lcmt.decode(data)), command)
+
+
 def test_status_round_trip_in_float32():
     message = leg_control_data_lcmt()
     message.q = [0.1 * i for i in range(12)]

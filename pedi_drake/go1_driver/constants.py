@@ -5,6 +5,8 @@ conversion between the station's 60-vector `go1.command` and the wire order of
 `pd_tau_targets_lcmt`. The conventions are written down in this package's README.md.
 """
 
+import struct
+
 import numpy as np
 
 from pedi_drake.go1_driver.lcmtypes import (
@@ -27,6 +29,8 @@ BRIDGE_PERIOD = 0.002  # [s]
 # (ttl=0: the traffic stays on this host; a real Go1 needs ttl=255).
 GO1_BUS_NAME = "go1"
 DEFAULT_GO1_LCM_URL = "udpm://239.255.76.67:7667?ttl=0"
+
+_COMMAND_FINGERPRINT = pd_tau_targets_lcmt._get_packed_fingerprint()
 
 # Message type by channel.
 # Status channels in the order of the driver's `driver.message_counts` output ([received, dropped] each).
@@ -58,21 +62,38 @@ REFERENCE_ENCODED_SIZE = {
 RC_ESTOP_FIELDS = ("right_lower_right_switch",)
 
 
+# go1.command blocks (q_des, qd_des, kp, kd, tau_ff) in the wire order (q_des, qd_des, tau_ff, kp, kd).
+_WIRE_ORDER = np.concatenate([np.arange(0, 24), np.arange(48, 60), np.arange(24, 48)])
+_WIRE_ORDER.flags.writeable = False
+
+
 def command_to_message(command: np.ndarray, timestamp_us: int = 0, message_id: int = 0) -> pd_tau_targets_lcmt:
     """The wire message for a 60-vector `go1.command` (q_des, qd_des, kp, kd, tau_ff; Unitree order).
 
     The wire order is q_des, qd_des, tau_ff, kp, kd; this is the one place it is converted.
     """
-    c = np.asarray(command, dtype=float)
+    wire = np.asarray(command, dtype=float)[_WIRE_ORDER].tolist()
     message = pd_tau_targets_lcmt()
-    message.q_des = c[0:12].tolist()
-    message.qd_des = c[12:24].tolist()
-    message.kp = c[24:36].tolist()
-    message.kd = c[36:48].tolist()
-    message.tau_ff = c[48:60].tolist()
+    message.q_des, message.qd_des, message.tau_ff = wire[0:12], wire[12:24], wire[24:36]
+    message.kp, message.kd = wire[36:48], wire[48:60]
     message.timestamp_us = int(timestamp_us)
     message.id = int(message_id)
     return message
+
+
+# The encoded pd_tau_targets_lcmt after its fingerprint: five double[12] in wire order, timestamp_us,
+# id, robot_id (int64), se_contactState (double[4]); lcm-gen's layout, big-endian.
+_COMMAND_BODY = struct.Struct(">60d3q4d")
+_NO_CONTACT_STATE = (0.0, 0.0, 0.0, 0.0)
+
+
+def encode_command(command: np.ndarray, timestamp_us: int = 0, message_id: int = 0) -> bytes:
+    """`command_to_message(command, timestamp_us, message_id).encode()`, in one pack.
+
+    The same bytes (tested), without building the message: the driver sends one every tick.
+    """
+    wire = np.asarray(command, dtype=float)[_WIRE_ORDER].tolist()
+    return _COMMAND_FINGERPRINT + _COMMAND_BODY.pack(*wire, int(timestamp_us), int(message_id), 0, *_NO_CONTACT_STATE)
 
 
 def message_to_command(message: pd_tau_targets_lcmt) -> np.ndarray:

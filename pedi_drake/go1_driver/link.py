@@ -322,9 +322,9 @@ class Go1Link:
     # -- sending -----------------------------------------------------------------------------
 
     def _publish(self, command: np.ndarray, t_us: int) -> None:
-        message = c.command_to_message(command, timestamp_us=t_us, message_id=self._message_id)
+        data = c.encode_command(command, timestamp_us=t_us, message_id=self._message_id)
         self._message_id += 1
-        self._transport.publish(c.COMMAND_CHANNEL, message.encode())
+        self._transport.publish(c.COMMAND_CHANNEL, data)
 
     def _damping(self) -> np.ndarray:
         values = self.leg_control.snapshot()[0]
