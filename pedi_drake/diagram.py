@@ -42,12 +42,25 @@ LOGGED_SIGNALS = (
     "go1.imu",
     "base_state",
 )
-# Simulation ground truth for judging: the plant state, the torques the motors applied, the pushes.
-SIM_LOGGED_SIGNALS = ("sim.plant_state", "sim.motor_torque", "sim.push_force", "sim.foot_contact_forces")
+# Simulation ground truth for judging: the plant state, the torques the motors applied, the pushes,
+# the contact forces on the feet and between the robot and each scene object.
+SIM_LOGGED_SIGNALS = (
+    "sim.plant_state",
+    "sim.motor_torque",
+    "sim.push_force",
+    "sim.foot_contact_forces",
+    "sim.scene_contact_forces",
+)
 # The tolerance of the mission's IK solves [m]: well inside every reach phase's tolerance.
 MISSION_IK_TOLERANCE = 5e-4
 # Simulated sensor signals that are costly to compute: logged through a sample-and-hold.
-SAMPLED_SENSOR_SIGNALS = ("go1.imu", "go1.foot_contact", "go1.torque_estimated", "sim.foot_contact_forces")
+SAMPLED_SENSOR_SIGNALS = (
+    "go1.imu",
+    "go1.foot_contact",
+    "go1.torque_estimated",
+    "sim.foot_contact_forces",
+    "sim.scene_contact_forces",
+)
 
 
 @dataclasses.dataclass

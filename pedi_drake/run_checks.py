@@ -60,7 +60,7 @@ def check_scene_geometry(scenario: Scenario, where: str = "scene") -> None:
     objects = {}
     for i, obj in enumerate(scenario.scene):
         try:
-            objects[add_scene_object(plant, obj, X_WB0)] = f"{where}[{i}] ({obj.name or obj.kind})"
+            objects[add_scene_object(plant, obj, X_WB0)] = f"{where}[{i}] ({obj.instance_name})"
         except RuntimeError as error:  # Drake's parser: a model that is not valid SDF/URDF
             raise ScenarioError(f"{where}[{i}].model: cannot be loaded: {error}") from None
     plant.Finalize()

@@ -33,7 +33,7 @@ from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.resources import models_dir, scenarios_dir
 
-SCENE_OBJECT_KINDS = ("door", "box", "target_panel", "back_object", "fixed_obstacle", "soft_obstacle")
+SCENE_OBJECT_KINDS = ("door", "box", "target_panel", "back_object", "fixed_obstacle", "soft_obstacle", "hand")
 INITIAL_POSES = ("lying", "standing")
 ESTIMATORS = ("ground_truth", "kalman")
 CONTROLLERS = ("stand_pd", "whole_body", "projected_impedance")
@@ -102,6 +102,11 @@ class SceneObject:
     # path (relative paths are taken from the scenario file's folder). It must have the bodies and
     # joints the kind expects (see pedi_drake/station/scene.py).
     model: str = ""
+
+    @property
+    def instance_name(self) -> str:
+        """The object's model instance name in the plant: its name, or its kind when unnamed."""
+        return self.name or self.kind
 
 
 @dataclasses.dataclass
@@ -344,7 +349,7 @@ def scene_problems(scene: list[SceneObject], base_dir: Path | None, field: str =
         if obj.model and not resolve_model_path(obj.model, base_dir).is_file():
             searched = "models/" if obj.model.startswith("package://") else (base_dir or Path.cwd())
             problems.append(f"{where}.model: model file not found: {obj.model!r} (looked in {searched})")
-        name = obj.name or obj.kind
+        name = obj.instance_name
         if name in names:
             problems.append(f"{where}.name: duplicate object name {name!r} (give each object a unique name)")
         names.add(name)

@@ -22,7 +22,7 @@ def _simulate(obj: SceneObject, body_name: str, force_W, duration: float, p_BoBq
     plant = station.GetSubsystemByName("plant")
     context = station.CreateDefaultContext()
     plant_context = plant.GetMyContextFromRoot(context)
-    model = plant.GetModelInstanceByName(obj.name or obj.kind)
+    model = plant.GetModelInstanceByName(obj.instance_name)
     body = plant.GetBodyByName(body_name, model)
     start = body.EvalPoseInWorld(plant_context)
     station.GetInputPort("go1.command").FixValue(context, pack_command(robot.LYING_Q, 0, 40, 1, 0))

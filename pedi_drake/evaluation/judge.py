@@ -13,9 +13,11 @@ from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import capture_point, mission_results
 from pedi_drake.evaluation.box_lift import box_lift_trace, judge_box_lift
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
+from pedi_drake.evaluation.off_trunk import judge_off_trunk, off_trunk_trace
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_response
 from pedi_drake.evaluation.result_file import write_result
 from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
+from pedi_drake.evaluation.touches import judge_touches
 from pedi_drake.fall import fell_during
 from pedi_drake.go1_driver.hardware_station import hardware_link
 from pedi_drake.go1_driver.safety import driver_report
@@ -158,6 +160,17 @@ def judge_run(record) -> dict:
                 )
                 result["box_lift"], lift_problem = judge_box_lift(trace, mission.box_lift, result["phases"])
                 reason = "; ".join(filter(None, [reason, lift_problem]))
+            if mission.touches:
+                contact = logs["sim.scene_contact_forces"]
+                scene_names = [obj.instance_name for obj in simulated.scene]
+                result["touches"], touch_problem = judge_touches(
+                    mission.touches, scene_names, result["phases"], contact.times, contact.data
+                )
+                reason = "; ".join(filter(None, [reason, touch_problem]))
+            if mission.leaves_trunk and states.shape[1]:
+                trace = off_trunk_trace(plant, mission.leaves_trunk, t_state, states)
+                result[mission.leaves_trunk], left_problem = judge_off_trunk(mission.leaves_trunk, trace)
+                reason = "; ".join(filter(None, [reason, left_problem]))
     if not hardware:
         manager_saw_fall = progress is not None and any(r.metrics.get("estimate_fell") for r in progress.records)
         reason = _fall_reason(reason, fell, estimate_fell, manager_saw_fall)

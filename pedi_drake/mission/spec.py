@@ -332,6 +332,22 @@ class BoxLift:
 
 
 @dataclasses.dataclass
+class Touch:
+    """A touch the judge requires: during the phase `phase`, the foot of `leg` pressed on the scene
+    object `object` with a normal contact force of at least `force` (the logged true contact
+    forces, pedi_drake.evaluation.touches); coming close is not touching."""
+
+    # Scene object (model instance) name.
+    object: str = ""
+    # The leg whose foot touches it.
+    leg: str = "FR"
+    # Name of the phase during which it touches.
+    phase: str = ""
+    # Smallest peak normal contact force that counts as a touch [N].
+    force: float = 1.0
+
+
+@dataclasses.dataclass
 class MissionSpec:
     """A loaded, validated mission."""
 
@@ -348,6 +364,10 @@ class MissionSpec:
     pushes: list[Push] = dataclasses.field(default_factory=list)
     # The box lift the judge requires (None: the mission lifts nothing).
     box_lift: BoxLift | None = None
+    # The touches the judge requires.
+    touches: list[Touch] = dataclasses.field(default_factory=list)
+    # Scene object that must be off the trunk at the end (pedi_drake.evaluation.off_trunk); empty: none.
+    leaves_trunk: str = ""
 
     def longest_duration(self) -> float:
         """Simulated time [s] the mission can take at most: every phase running to its timeout,
@@ -370,6 +390,10 @@ class _MissionFile:
     pushes: list[Push] = dataclasses.field(default_factory=list)
     # The box lift the judge requires of the run (pedi_drake.evaluation.box_lift).
     box_lift: BoxLift | None = None
+    # Touches the judge requires of the run: a foot's contact force on a scene object in a phase.
+    touches: list[Touch] = dataclasses.field(default_factory=list)
+    # Scene object the run must have taken off the trunk by its end (empty: none).
+    leaves_trunk: str = ""
     phases: list[dict] = dataclasses.field(default_factory=list)
 
 
@@ -495,6 +519,13 @@ def load_mission(name_or_path: str) -> MissionSpec:
         raise MissionFileError(f"{where}: phases: duplicate phase names {duplicates}")
     if header.box_lift is not None:
         _check_box_lift(header.box_lift, header.scene, names, f"{where}: box_lift")
+    for i, touch in enumerate(header.touches):
+        _check_touch(touch, header.scene, names, f"{where}: touches[{i}]")
+    objects = [obj.instance_name for obj in header.scene]
+    if header.leaves_trunk and header.leaves_trunk not in objects:
+        raise MissionFileError(
+            f"{where}: leaves_trunk: must name a scene object ({objects}), got {header.leaves_trunk!r}"
+        )
     return MissionSpec(
         name=path.stem,
         description=header.description,
@@ -506,6 +537,8 @@ def load_mission(name_or_path: str) -> MissionSpec:
         stack=header.stack,
         pushes=header.pushes,
         box_lift=header.box_lift,
+        touches=header.touches,
+        leaves_trunk=header.leaves_trunk,
     )
 
 
@@ -514,7 +547,7 @@ def _check_box_lift(check: BoxLift, scene: list[SceneObject], phase_names: list[
         if not condition:
             raise MissionFileError(f"{where}.{field}: {problem}")
 
-    objects = [obj.name or obj.kind for obj in scene]
+    objects = [obj.instance_name for obj in scene]
     need(check.box in objects, "box", f"must name a scene object ({objects}), got {check.box!r}")
     need(len(check.feet) > 0, "feet", "expected at least one leg")
     for k, leg in enumerate(check.feet):
@@ -525,6 +558,19 @@ def _check_box_lift(check: BoxLift, scene: list[SceneObject], phase_names: list[
     need(
         check.until_phase in phase_names, "until_phase", f"must name a phase of the mission, got {check.until_phase!r}"
     )
+
+
+def _check_touch(touch: Touch, scene: list[SceneObject], phase_names: list[str], where: str) -> None:
+    objects = [obj.instance_name for obj in scene]
+    problems = {
+        "object": (touch.object in objects, f"must name a scene object ({objects}), got {touch.object!r}"),
+        "leg": (touch.leg in LEG_NAMES, f"must be one of {LEG_NAMES}, got {touch.leg!r}"),
+        "phase": (touch.phase in phase_names, f"must name a phase of the mission, got {touch.phase!r}"),
+        "force": (math.isfinite(touch.force) and touch.force > 0, f"must be > 0 [N], got {touch.force}"),
+    }
+    for field, (ok, problem) in problems.items():
+        if not ok:
+            raise MissionFileError(f"{where}.{field}: {problem}")
 
 
 def _check_phase_values(phase: PhaseBase, where: str) -> None:

@@ -18,9 +18,10 @@ SCENE_MODELS = {
     "back_object": ("back_object.sdf", None),
     "fixed_obstacle": ("fixed_obstacle.sdf", "block"),
     "soft_obstacle": ("soft_obstacle.sdf", "base"),
+    "hand": ("hand.sdf", "palm"),
 }
 SOFT_OBSTACLE_STIFFNESS = 400.0  # [N/m] spring holding the soft obstacle's plate at rest.
-TRUNK_TOP_Z = 0.057  # [m] top face of the trunk box above the trunk origin.
+TRUNK_TOP_Z = robot.TRUNK_HALF_EXTENTS[2]  # [m] top face of the trunk box above the trunk origin.
 
 
 def add_ground(plant: MultibodyPlant, friction: float) -> None:
@@ -50,7 +51,7 @@ def add_scene_object(plant: MultibodyPlant, obj: SceneObject, X_WB_initial: Rigi
         (model,) = parser.AddModels(file_name=obj.model)
     else:
         (model,) = parser.AddModels(url=f"package://pedi_drake/scenes/{filename}")
-    plant.RenameModelInstance(model, obj.name or obj.kind)
+    plant.RenameModelInstance(model, obj.instance_name)
     if obj.kind == "back_object":
         X_BO = RigidTransform(RollPitchYaw(0, 0, obj.yaw), np.asarray(obj.position) + [0, 0, TRUNK_TOP_Z + 0.001])
         X_WO = X_WB_initial @ X_BO

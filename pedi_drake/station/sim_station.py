@@ -14,6 +14,7 @@ from pedi_drake.station.disturbance import PushDisturbance
 from pedi_drake.station.initial_state import initial_trunk_pose, set_default_go1_state
 from pedi_drake.station.motor_model import Go1MotorModel
 from pedi_drake.station.scene import add_ground, add_scene_object
+from pedi_drake.station.scene_contact import SceneContactForces
 from pedi_drake.station.sensors import FootContactForces, Go1SensorModel
 
 GO1_OUTPUT_PORTS = (
@@ -63,6 +64,10 @@ def MakeSimulationStation(scenario: Scenario, meshcat: Meshcat | None = None) ->
     feet = builder.AddNamedSystem("foot_contact_forces", FootContactForces(plant, plant_map))
     builder.Connect(plant.get_contact_results_output_port(), feet.GetInputPort("contact_results"))
     builder.ExportOutput(feet.GetOutputPort("foot_contact_forces"), "sim.foot_contact_forces")
+    scene_names = [obj.instance_name for obj in scenario.scene]
+    touches = builder.AddNamedSystem("scene_contact_forces", SceneContactForces(plant, plant_map, scene_names))
+    builder.Connect(plant.get_contact_results_output_port(), touches.GetInputPort("contact_results"))
+    builder.ExportOutput(touches.GetOutputPort("scene_contact_forces"), "sim.scene_contact_forces")
     builder.ExportOutput(plant.get_state_output_port(), "sim.plant_state")
     builder.ExportOutput(plant.get_contact_results_output_port(), "sim.contact_results")
     builder.ExportOutput(plant.get_body_poses_output_port(), "sim.body_poses")

@@ -1,0 +1,188 @@
+"""Mission outcomes judged by physics: a touch needs a contact force, a cleared back needs the
+object off the trunk; each check fails when its outcome is absent, from synthetic logs, from a
+real plant's contact results, and from a short real run."""
+
+import numpy as np
+import pytest
+from pydrake.systems.analysis import Simulator
+
+from pedi_drake import robot
+from pedi_drake.evaluation.off_trunk import ON_TRUNK_MAX_HEIGHT, OffTrunkTrace, judge_off_trunk, off_trunk_trace
+from pedi_drake.evaluation.touches import judge_touches
+from pedi_drake.exceptions import MissionFileError
+from pedi_drake.go1_command import pack_command
+from pedi_drake.mission.spec import Touch, load_mission
+from pedi_drake.resources import missions_dir
+from pedi_drake.run import run
+from pedi_drake.scenario import Scenario, SceneObject, load_scenario
+from pedi_drake.station.scene_contact import ROBOT_CONTACT_SOURCES, scene_contact_index
+from pedi_drake.station_interface import MakeStation
+
+PHASES = [{"name": "touch_cat", "t_start": 1.0, "t_end": 2.0}]
+TOUCH = Touch(object="target_panel", leg="FR", phase="touch_cat", force=1.0)
+SCENE = ["target_panel"]
+
+
+def _forces(times, fr_force):
+    """Synthetic `sim.scene_contact_forces` of a one-object scene: only FR touches it."""
+    forces = np.zeros((len(ROBOT_CONTACT_SOURCES), len(times)))
+    forces[scene_contact_index("target_panel", "FR", SCENE)] = fr_force
+    return forces
+
+
+def test_no_contact_with_the_panel_fails_the_touch_naming_foot_and_object():
+    times = np.linspace(0.0, 3.0, 301)
+    rows, problem = judge_touches([TOUCH], SCENE, PHASES, times, _forces(times, 0.0))
+    assert rows[0]["touched"] is False and rows[0]["max_normal_force_n"] == 0.0
+    assert "touch_cat" in problem and "FR" in problem and "target_panel" in problem
+
+
+def test_a_force_below_the_threshold_is_not_a_touch():
+    times = np.linspace(0.0, 3.0, 301)
+    rows, problem = judge_touches([TOUCH], SCENE, PHASES, times, _forces(times, 0.6))
+    assert rows[0]["touched"] is False and "0.60 N" in problem
+
+
+def test_contact_outside_the_phase_does_not_count():
+    times = np.linspace(0.0, 3.0, 301)
+    rows, problem = judge_touches([TOUCH], SCENE, PHASES, times, _forces(times, np.where(times > 2.5, 5.0, 0.0)))
+    assert rows[0]["touched"] is False and problem
+
+
+def test_another_foot_on_the_panel_is_not_the_reaching_foot():
+    times = np.linspace(0.0, 3.0, 301)
+    forces = np.zeros((len(ROBOT_CONTACT_SOURCES), len(times)))
+    forces[scene_contact_index("target_panel", "FL", SCENE)] = 5.0
+    rows, problem = judge_touches([TOUCH], SCENE, PHASES, times, forces)
+    assert rows[0]["touched"] is False and problem
+
+
+def test_a_press_in_the_phase_is_a_touch_with_its_peak_and_time():
+    times = np.linspace(0.0, 3.0, 301)
+    force = np.where(np.abs(times - 1.5) < 0.05, 2.5, 0.0)
+    rows, problem = judge_touches([TOUCH], SCENE, PHASES, times, _forces(times, force))
+    assert problem == ""
+    assert rows[0]["touched"] is True and rows[0]["max_normal_force_n"] == 2.5
+    assert 1.44 < rows[0]["max_force_at_s"] < 1.56
+
+
+def test_a_phase_that_never_ran_fails_the_touch():
+    times = np.linspace(0.0, 3.0, 301)
+    _, problem = judge_touches([TOUCH], SCENE, [], times, _forces(times, 5.0))
+    assert "never ran" in problem
+
+
+def _trace(p_TopO):
+    p_TopO = np.asarray(p_TopO, float)
+    return OffTrunkTrace(np.arange(len(p_TopO)) * 0.1, p_TopO, p_TopO)
+
+
+def test_an_object_still_on_the_trunk_fails_naming_it():
+    row, problem = judge_off_trunk("back_object", _trace([[0.06, 0.02, 0.025]] * 5))
+    assert row["on_trunk"] is True and row["left_at_s"] is None
+    assert "back_object" in problem and "still on the trunk" in problem
+
+
+def test_an_object_beside_the_trunk_left_it_at_its_first_sample_off():
+    side = robot.TRUNK_HALF_EXTENTS[1] + 0.03
+    row, problem = judge_off_trunk("back_object", _trace([[0.06, 0.02, 0.025]] * 3 + [[-0.1, side, -0.05]] * 2))
+    assert problem == "" and row["on_trunk"] is False
+    assert row["left_at_s"] == pytest.approx(0.3)
+    assert row["final_position_trunk_m"] == pytest.approx([-0.1, side, -0.05])
+
+
+def test_an_object_back_on_the_trunk_at_the_end_did_not_leave_it():
+    row, problem = judge_off_trunk("back_object", _trace([[0.3, 0.0, 0.0]] * 2 + [[0.0, 0.0, 0.02]]))
+    assert row["on_trunk"] is True and problem
+
+
+def test_an_object_high_above_the_footprint_is_not_resting_on_it():
+    row, _ = judge_off_trunk("back_object", _trace([[0.0, 0.0, ON_TRUNK_MAX_HEIGHT + 0.05]]))
+    assert row["on_trunk"] is False
+
+
+def _back_object_plant():
+    station = MakeStation(Scenario(scene=[SceneObject(kind="back_object", position=[0.06, 0.02, 0.0])]))
+    plant = station.GetSubsystemByName("plant")
+    return plant, plant.GetPositions(plant.CreateDefaultContext())
+
+
+def test_the_shipped_back_object_starts_on_the_trunk_and_is_off_it_on_the_ground():
+    plant, q = _back_object_plant()
+    states = np.tile(q[:, None], (1, 2))
+    (body,) = plant.GetBodyIndices(plant.GetModelInstanceByName("back_object"))
+    start = plant.get_body(body).floating_positions_start() + 4
+    states[start : start + 3, 1] = [0.0, 0.5, 0.0]  # on the ground, half a metre to the left
+    trace = off_trunk_trace(plant, "back_object", np.array([0.0, 1.0]), states)
+    row, problem = judge_off_trunk("back_object", trace)
+    assert trace.p_TopO[0] == pytest.approx([0.06, 0.02, 0.026], abs=1e-3)
+    assert row["on_trunk"] is False and row["left_at_s"] == 1.0 and problem == ""
+
+
+def test_the_station_reports_a_foot_pressing_on_a_scene_object_as_that_foots_force():
+    """A hand placed 5 mm into the FR foot of the initial (lying) pose: the FR entry is a positive
+    normal force, every other robot part's entry is zero."""
+    plant, q = _back_object_plant()  # any plant of the Go1 gives the initial foot position
+    context = plant.CreateDefaultContext()
+    p_foot = plant.GetBodyByName("FR_foot").EvalPoseInWorld(context).translation()
+    top = p_foot - [0.0, 0.0, robot.FOOT_RADIUS - 0.005]
+    station = MakeStation(Scenario(scene=[SceneObject(kind="hand", position=top.tolist())]))
+    context = station.CreateDefaultContext()
+    station.GetInputPort("go1.command").FixValue(context, pack_command(robot.LYING_Q, 0, 40, 1, 0))
+    # The plant's contact results are those of its last step: take one.
+    Simulator(station, context).AdvanceTo(station.GetSubsystemByName("plant").time_step())
+    forces = station.GetOutputPort("sim.scene_contact_forces").Eval(context)
+    fr = scene_contact_index("hand", "FR", ["hand"])
+    assert forces[fr] > 1.0
+    assert np.all(np.delete(forces, fr) == 0.0)
+
+
+def _mission_with(tmp_path, name, old, new):
+    text = (missions_dir() / f"{name}.yaml").read_text()
+    assert old in text
+    path = tmp_path / f"{name}_changed.yaml"
+    path.write_text(text.replace(old, new))
+    return path
+
+
+@pytest.mark.parametrize(
+    "old,new,field",
+    [
+        ("object: target_panel, leg: FR", "object: cat, leg: FR", "touches[0].object"),
+        ("leg: FR, phase: touch_cat", "leg: XX, phase: touch_cat", "touches[0].leg"),
+        ("phase: touch_cat, force", "phase: nowhere, force", "touches[0].phase"),
+        ("force: 1.0}", "force: 0.0}", "touches[0].force"),
+    ],
+)
+def test_a_touch_must_name_an_object_a_leg_a_phase_and_a_positive_force(tmp_path, old, new, field):
+    with pytest.raises(MissionFileError, match=field.replace(".", r"\.").replace("[", r"\[").replace("]", r"\]")):
+        load_mission(str(_mission_with(tmp_path, "hit_target_front", old, new)))
+
+
+def test_leaves_trunk_must_name_a_scene_object(tmp_path):
+    path = _mission_with(tmp_path, "remove_object_from_back", "leaves_trunk: back_object", "leaves_trunk: cup")
+    with pytest.raises(MissionFileError, match="leaves_trunk"):
+        load_mission(str(path))
+
+
+def _run_until_touched(tmp_path, mission):
+    """The mission up to just after hit_target_front's reach ends (7.1 s at seed 0)."""
+    scenario = load_scenario(scenario_name="default")
+    scenario.mission, scenario.controller, scenario.simulation_duration = str(mission), "whole_body", 7.3
+    return run(scenario=scenario, name="touch", out_dir=tmp_path / "out", quiet=True, replay=False)
+
+
+def test_a_reach_that_ends_short_of_the_panel_fails_although_the_foot_reached_its_target(tmp_path):
+    # The panel 3 cm further away: the foot reaches its target, about 3 cm short of the panel's face.
+    path = _mission_with(tmp_path, "hit_target_front", "position: [0.47, -0.13, 0.0]", "position: [0.50, -0.13, 0.0]")
+    result = _run_until_touched(tmp_path, path)
+    reach = next(row for row in result["phases"] if row["name"] == "touch_cat")
+    assert reach["status"] == "succeeded"
+    assert result["touches"][0]["touched"] is False and result["touches"][0]["max_normal_force_n"] < 0.1
+    assert "did not touch target_panel" in result["reason"]
+
+
+def test_the_shipped_front_reach_presses_on_the_panel(tmp_path):
+    result = _run_until_touched(tmp_path, missions_dir() / "hit_target_front.yaml")
+    assert result["touches"][0]["touched"] is True, result["touches"]
+    assert "did not touch" not in result["reason"]
