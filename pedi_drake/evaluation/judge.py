@@ -70,6 +70,7 @@ def judge_run(record) -> dict:
         "interrupted": record.interrupted is not None,
         "interrupt_reason": record.interrupted or "",
         "phases": [],
+        "mode_switches": [],
         "foot_errors_m": [],
         "max_base_drift_m": 0.0,
         "fell": fell,
@@ -118,6 +119,7 @@ def judge_run(record) -> dict:
         reason = _stand_reason(scenario, final_height, sim_time)
     else:
         result["phases"] = mission_results.phase_table(progress)
+        result["mode_switches"] = mission_results.mode_switch_table(progress)
         if not hardware:
             _check_stand_up_phases(result["phases"], record.built.mission, p_WB, t_WB)
         failed = [row for row in result["phases"] if row["status"] == FAILED]

@@ -39,6 +39,14 @@ def phase_table(progress: MissionProgress) -> list[dict]:
     ]
 
 
+def mode_switch_table(progress: MissionProgress) -> list[dict]:
+    """The `mode_switches` list of result.json: {time [s], from, to, reason, phase} per switch."""
+    return [
+        {"time": s.time, "from": s.from_mode, "to": s.to_mode, "reason": s.reason, "phase": s.phase}
+        for s in progress.switches
+    ]
+
+
 def _reach_rows(progress: MissionProgress):
     """(record, leg, target_W, estimated error) for every leg of every finished reach phase."""
     for record in progress.records:

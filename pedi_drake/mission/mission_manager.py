@@ -18,6 +18,10 @@ plans its motion when the answers are in (a path of waypoints takes one tick a w
 
 A failed phase (IK unreachable, timeout, fall) fails the mission with a reason; the manager then
 places any lifted leg back on the ground ("recovering") and holds the robot standing.
+
+With a `teleop:` block in the mission, the operator's request for the teleoperated mode inserts
+a teleop sequence at the next safe point and the mission resumes afterwards
+(pedi_drake.mission.mode_switch); every switch is in `MissionProgress.switches`.
 """
 
 import numpy as np
@@ -29,7 +33,7 @@ from pedi_drake.control import references as controller_refs
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE, BaseState
 from pedi_drake.exceptions import ConfigError, PediError
 from pedi_drake.fall import trunk_has_fallen
-from pedi_drake.mission import spec
+from pedi_drake.mission import mode_switch, spec
 from pedi_drake.mission.phases import (
     RUNNERS,
     IkAnswer,
@@ -47,11 +51,12 @@ from pedi_drake.mission.progress import (
     STATUS_CODES,
     SUCCEEDED,
     MissionProgress,
+    ModeSwitch,
     PhaseRecord,
     References,
 )
 from pedi_drake.mission.robot_view import RobotView
-from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE, OperatorCommand
+from pedi_drake.operator.command import MODE_AUTONOMOUS, MODE_TELEOP, OPERATOR_COMMAND_SIZE, OperatorCommand
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.trajectory import smooth_start_time_law
 
@@ -67,6 +72,8 @@ def ik_legs_of(mission: spec.MissionSpec) -> tuple[str, ...]:
             legs.add(phase.leg)
         elif isinstance(phase, spec.Reach):
             legs.update([phase.leg, *(companion.leg for companion in phase.together)])
+    if mission.teleop is not None:
+        legs.add(mission.teleop.leg)
     return tuple(leg for leg in robot.LEG_NAMES if leg in legs)
 
 
@@ -227,7 +234,9 @@ class MissionManager(LeafSystem):
             state.get_mutable_abstract_state(self._progress).set_value(progress)
             self._set_polygon(state, view, progress)
             return
-        phases = self._mission.phases if progress.status == RUNNING else progress.recovery
+        if view.operator is not None and self._mission.teleop is not None:
+            self._follow_mode_request(progress, view)
+        phases = self._phases(progress)
         phase = phases[progress.index]
         runner = RUNNERS[type(phase)]
         outcome = RUNNING
@@ -275,8 +284,11 @@ class MissionManager(LeafSystem):
             record = progress.records[-1]
             record.status, record.t_end, record.reason = FAILED, view.time, reason
         if progress.status == RUNNING:
-            for later in self._mission.phases[progress.index + (1 if progress.started else 0) :]:
+            # During a teleop sequence the mission's own phase has not (re)started yet.
+            first = progress.resume_index if progress.interlude else progress.index + (1 if progress.started else 0)
+            for later in self._mission.phases[first:]:
                 progress.records.append(PhaseRecord(later.name, kind_name(later), "skipped", view.time))
+        progress.interlude = []
         progress.status, progress.reason, progress.started, progress.ik = FAILED, reason, False, None
         progress.references.press = None
 
@@ -294,6 +306,8 @@ class MissionManager(LeafSystem):
 
     def _finish_phase(self, progress: MissionProgress, phases, outcome: str, view: RobotView) -> None:
         record = progress.records[-1]
+        if progress.interlude and isinstance(phases[progress.index], spec.TeleopFoot):
+            outcome = self._end_teleop(progress, outcome, view)
         record.status, record.t_end = outcome, view.time
         if outcome == FAILED:
             record.reason = progress.reason
@@ -302,11 +316,16 @@ class MissionManager(LeafSystem):
             progress.index += 1
             if progress.index < len(phases):
                 return
+            if progress.interlude:  # the teleop sequence is done: the interrupted phase restarts
+                progress.interlude, progress.index = [], progress.resume_index
+                return
             progress.status = SUCCEEDED if progress.status == RUNNING else FAILED
             return
         # A failure: mark the rest skipped and, once, put lifted legs back down.
         if progress.status == RUNNING:
-            for later in self._mission.phases[progress.index + 1 :]:
+            first = progress.resume_index if progress.interlude else progress.index + 1
+            progress.interlude = []
+            for later in self._mission.phases[first:]:
                 progress.records.append(PhaseRecord(later.name, kind_name(later), "skipped", view.time))
             lifted = [leg for leg in robot.LEG_NAMES if leg in progress.references.legs]
             progress.references.press = None
@@ -315,6 +334,81 @@ class MissionManager(LeafSystem):
                 progress.status, progress.index = RECOVERING, 0
                 return
         progress.status = FAILED
+
+    # Mode switches -----------------------------------------------------------------------------
+
+    def _phases(self, progress: MissionProgress) -> list:
+        """The phase list being run: the mission's, a teleop sequence inserted into it, or the recovery."""
+        if progress.status != RUNNING:
+            return progress.recovery
+        return progress.interlude or self._mission.phases
+
+    def _follow_mode_request(self, progress: MissionProgress, view: RobotView) -> None:
+        """Takes a change of the operator's mode request; starts a pending teleop at a safe point."""
+        block, request = self._mission.teleop, view.operator.mode_request
+        if progress.status == RUNNING and request != progress.operator_mode:
+            progress.operator_mode = request
+            progress.teleop_pending = request == MODE_TELEOP and not progress.interlude
+            if request == MODE_AUTONOMOUS and progress.interlude:
+                self._drop_teleop_not_started(progress, view)
+        if progress.status != RUNNING or not progress.teleop_pending:
+            return
+        why = mode_switch.safe_point(progress, view, block)
+        if why is None:
+            return
+        interrupted = self._mission.phases[progress.index]
+        if progress.started:  # a held foot: the phase is stopped here and restarts afterwards
+            record = progress.records[-1]
+            record.status, record.t_end, record.reason = "interrupted", view.time, "the operator took the foot"
+            progress.started, progress.ik, progress.memo = False, None, {}
+        number = 1 + sum(switch.to_mode == mode_switch.TELEOP for switch in progress.switches)
+        lifted = block.leg in progress.references.legs
+        progress.interlude = mode_switch.teleop_sequence(block, lifted, view.foot_W(block.leg), number)
+        progress.resume_index, progress.index, progress.teleop_pending = progress.index, 0, False
+        progress.switches.append(
+            ModeSwitch(
+                view.time, mode_switch.AUTONOMOUS, mode_switch.TELEOP, f"operator request ({why})", interrupted.name
+            )
+        )
+
+    def _drop_teleop_not_started(self, progress: MissionProgress, view: RobotView) -> None:
+        """The operator asked for the autonomous mode before the teleop phase began: it is left
+        out (the switch says so; the leg is still put back by the rest of the sequence)."""
+        for k in range(progress.index + (1 if progress.started else 0), len(progress.interlude)):
+            if isinstance(progress.interlude[k], spec.TeleopFoot):
+                progress.interlude = progress.interlude[:k] + progress.interlude[k + 1 :]
+                progress.switches.append(
+                    ModeSwitch(
+                        view.time,
+                        mode_switch.TELEOP,
+                        mode_switch.AUTONOMOUS,
+                        "operator request (before the foot was taken)",
+                        self._mission.phases[progress.resume_index].name,
+                    )
+                )
+                return
+
+    def _end_teleop(self, progress: MissionProgress, outcome: str, view: RobotView) -> str:
+        """Records the switch back to autonomous at the end of an inserted teleop_foot phase; the
+        outcome to record. Operator silence ends the teleoperation, not the mission: the foot has
+        held and the rest of the sequence returns it."""
+        metrics = progress.records[-1].metrics
+        ended_by = metrics.get("ended_by", "")
+        if outcome == FAILED and ended_by == "operator_silence":
+            metrics["silence"] = progress.reason
+            outcome, progress.reason = SUCCEEDED, ""
+        if outcome == SUCCEEDED:
+            reason = {"operator": "operator request", "operator_silence": "operator silence"}.get(ended_by, ended_by)
+            progress.switches.append(
+                ModeSwitch(
+                    view.time,
+                    mode_switch.TELEOP,
+                    mode_switch.AUTONOMOUS,
+                    reason,
+                    self._mission.phases[progress.resume_index].name,
+                )
+            )
+        return outcome
 
     # Outputs ---------------------------------------------------------------------------------
 
@@ -373,4 +467,5 @@ class MissionManager(LeafSystem):
     def _calc_status(self, context, output: BasicVector) -> None:
         progress = self.progress(context)
         active = 1.0 if progress.references.legs else 0.0
-        output.SetFromVector([progress.index, STATUS_CODES[progress.status], active, len(self._mission.phases)])
+        index = progress.resume_index if progress.interlude else progress.index
+        output.SetFromVector([index, STATUS_CODES[progress.status], active, len(self._mission.phases)])

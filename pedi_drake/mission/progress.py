@@ -113,6 +113,18 @@ class PhaseRecord:
     metrics: dict = dataclasses.field(default_factory=dict)
 
 
+@dataclasses.dataclass(frozen=True)
+class ModeSwitch:
+    """One switch of the operation mode, as reported in result.json (`mode_switches`)."""
+
+    time: float  # [s] diagram time
+    from_mode: str  # "autonomous" or "teleop"
+    to_mode: str
+    reason: str
+    # The mission phase the switch interrupted, or the one the mission resumes with.
+    phase: str
+
+
 @dataclasses.dataclass
 class MissionProgress:
     """Everything about the mission that changes during a run."""
@@ -129,6 +141,15 @@ class MissionProgress:
     recovery: list = dataclasses.field(default_factory=list)
     # Foot targets waiting for joint angles from the leg IK systems (None: nothing asked).
     ik: IkPlan | None = None
+    # The operator's teleop sequence inserted into the mission (pedi_drake.mission.mode_switch):
+    # its phases, run at `index` while the mission waits at `resume_index`. Empty: autonomous.
+    interlude: list = dataclasses.field(default_factory=list)
+    resume_index: int = 0
+    # The operator's mode request last seen (pedi_drake.operator.command MODE_*), and whether a
+    # request for the teleoperated mode waits for a safe point.
+    operator_mode: int = 0
+    teleop_pending: bool = False
+    switches: list[ModeSwitch] = dataclasses.field(default_factory=list)
 
     def copy(self) -> "MissionProgress":
         """A copy that is safe to change (a progress in a Context is never changed): deep, except

@@ -283,6 +283,28 @@ class TeleopFoot(PhaseBase):
 
 
 @dataclasses.dataclass
+class TeleopMode(TeleopFoot):
+    """The mission file's `teleop:` block: how the operator may take a foot during the mission.
+
+    When the operator asks for the teleoperated mode, the mission manager inserts, at the next
+    safe point, a teleop_foot phase on `leg` with these bounds (the fields of teleop_foot), lifted
+    first to `working_depth` below its hip if it stands on the ground (leg_to_pedipulation) and
+    put back afterwards (leg_to_support); then the interrupted phase restarts
+    (pedi_drake.mission.mode_switch)."""
+
+    name: str = "teleop"
+    # Foot depth below the hip joint when the inserted lift is done [m].
+    working_depth: float = 0.15
+    # Duration of the inserted lift's and placing's joint motions [s].
+    leg_duration: float = 1.5
+
+    def foot_phase(self, name: str) -> TeleopFoot:
+        """The teleop_foot phase these settings make, named `name`."""
+        fields = {f.name: getattr(self, f.name) for f in dataclasses.fields(TeleopFoot)}
+        return TeleopFoot(**{**fields, "name": name})
+
+
+@dataclasses.dataclass
 class Wait(PhaseBase):
     """Holds the current references for `duration` [s]."""
 
@@ -368,6 +390,8 @@ class MissionSpec:
     touches: list[Touch] = dataclasses.field(default_factory=list)
     # Scene object that must be off the trunk at the end (pedi_drake.evaluation.off_trunk); empty: none.
     leaves_trunk: str = ""
+    # How the operator may take a foot mid-mission (None: the mission is autonomous only).
+    teleop: TeleopMode | None = None
 
     def longest_duration(self) -> float:
         """Simulated time [s] the mission can take at most: every phase running to its timeout,
@@ -394,6 +418,8 @@ class _MissionFile:
     touches: list[Touch] = dataclasses.field(default_factory=list)
     # Scene object the run must have taken off the trunk by its end (empty: none).
     leaves_trunk: str = ""
+    # The operator's teleoperated foot, inserted on request (pedi_drake.mission.mode_switch).
+    teleop: TeleopMode | None = None
     phases: list[dict] = dataclasses.field(default_factory=list)
 
 
@@ -517,6 +543,8 @@ def load_mission(name_or_path: str) -> MissionSpec:
     duplicates = sorted({name for name in names if names.count(name) > 1})
     if duplicates:
         raise MissionFileError(f"{where}: phases: duplicate phase names {duplicates}")
+    if header.teleop is not None:
+        _check_phase_values(header.teleop, f"{where}: teleop")
     if header.box_lift is not None:
         _check_box_lift(header.box_lift, header.scene, names, f"{where}: box_lift")
     for i, touch in enumerate(header.touches):
@@ -539,6 +567,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
         box_lift=header.box_lift,
         touches=header.touches,
         leaves_trunk=header.leaves_trunk,
+        teleop=header.teleop,
     )
 
 
@@ -583,7 +612,7 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         value = getattr(phase, field, None)
         if value is not None:
             need(math.isfinite(value) and value >= 0, field, f"must be a finite number >= 0, got {value}")
-    for field in ("duration", "speed", "height"):
+    for field in ("duration", "speed", "height", "leg_duration", "working_depth"):
         value = getattr(phase, field, None)
         if value is not None:
             need(value > 0, field, f"must be > 0, got {value}")

@@ -1,0 +1,211 @@
+"""A command-line operator: foot commands (foot_command_lcmt) on the scenario's LCM bus.
+
+    python -m pedi_drake.apps.teleop_lcm [--scenario_file FILE --scenario_name NAME]
+                                         [--scenario_text YAML] [--lcm_url URL] [--speed M_PER_S]
+                                         [--rate HZ] [--frame trunk|world] [--script FILE]
+
+In a terminal, keys set the command, which is sent `--rate` times a second until `q`:
+
+    w / s   foot forward / back (+x / -x)     t      ask for the teleoperated foot
+    a / d   foot left / right   (+y / -y)     g      ask for the autonomous mission (go)
+    r / f   foot up / down      (+z / -z)     space  stop the foot (zero velocity)
+    e       E-stop (latched by the robot)     q      quit (the robot sees the operator fall silent)
+
+A velocity key holds its velocity (`--speed`, in `--frame`) until space or another velocity key:
+a terminal reports key presses, not releases.
+
+With `--script FILE`, or when stdin is not a terminal, the commands come from a script instead:
+one step per line, `t_s mode vx vy vz` (time from the start [s], increasing; mode `none`,
+`teleop`, `autonomous` or `estop`; the foot velocity [m/s]), `#` starts a comment. Each step
+holds until the next one's time; the app ends at the last step's time. A malformed script exits
+with status 2 and names the file and line.
+
+The bus and channel are the scenario's (`operator.lcm_bus` in `lcm_buses`, `operator.channel`),
+the ones `run_sim.py` with `operator: {source: lcm}` listens on.
+"""
+
+import argparse
+import contextlib
+import math
+import select
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+from pydrake.lcm import DrakeLcm, DrakeLcmInterface
+
+from pedi_drake.exceptions import PediError
+from pedi_drake.operator.command import FRAME_TRUNK, FRAME_WORLD, MODE_AUTONOMOUS, MODE_NONE, MODE_TELEOP
+from pedi_drake.operator.scripted_operator import ScriptStep, foot_command_message, script_command
+from pedi_drake.scenario import load_scenario
+
+SCRIPT_MODES = {"none": MODE_NONE, "teleop": MODE_TELEOP, "autonomous": MODE_AUTONOMOUS, "estop": MODE_NONE}
+# Key -> unit direction of the foot velocity (x forward, y left, z up).
+VELOCITY_KEYS = {
+    "w": (1.0, 0.0, 0.0),
+    "s": (-1.0, 0.0, 0.0),
+    "a": (0.0, 1.0, 0.0),
+    "d": (0.0, -1.0, 0.0),
+    "r": (0.0, 0.0, 1.0),
+    "f": (0.0, 0.0, -1.0),
+}
+MODE_KEYS = {"t": MODE_TELEOP, "g": MODE_AUTONOMOUS}
+DEFAULT_SPEED = 0.05  # [m/s]
+DEFAULT_RATE = 50.0  # [Hz]: well above the operator input's 0.2 s hold-after silence
+
+
+class ScriptError(PediError):
+    """A script line that is not `t_s mode vx vy vz`."""
+
+
+def parse_script(text: str, source: str = "<script>", frame: int = FRAME_TRUNK) -> list[ScriptStep]:
+    """The steps of a script (see the module docstring); raises ScriptError naming `source` and the line."""
+    steps: list[ScriptStep] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        words = line.split("#", 1)[0].split()
+        if not words:
+            continue
+        where = f"{source}:{number}"
+        if len(words) != 5:
+            raise ScriptError(f"{where}: expected 't_s mode vx vy vz', got {line.strip()!r}")
+        try:
+            t, vx, vy, vz = (float(words[k]) for k in (0, 2, 3, 4))
+        except ValueError:
+            raise ScriptError(f"{where}: time and velocities must be numbers, got {line.strip()!r}") from None
+        if not all(math.isfinite(v) for v in (t, vx, vy, vz)):
+            raise ScriptError(f"{where}: time and velocities must be finite, got {line.strip()!r}")
+        if words[1] not in SCRIPT_MODES:
+            raise ScriptError(f"{where}: mode must be one of {tuple(SCRIPT_MODES)}, got {words[1]!r}")
+        if t < 0 or (steps and t <= steps[-1].start):
+            raise ScriptError(f"{where}: times must be >= 0 s and increasing, got {t} after the previous step")
+        steps.append(
+            ScriptStep(t, (vx, vy, vz), mode_request=SCRIPT_MODES[words[1]], frame=frame, estop=words[1] == "estop")
+        )
+    if not steps:
+        raise ScriptError(f"{source}: no steps")
+    return steps
+
+
+def script_messages(steps: list[ScriptStep], rate: float) -> Iterator[tuple[float, bytes]]:
+    """(time from the start [s], encoded foot_command_lcmt) at `rate` [Hz], to the last step's time."""
+    for k in range(int(math.floor(steps[-1].start * rate + 1e-9)) + 1):
+        t = k / rate
+        yield t, foot_command_message(script_command(steps, t), t, k + 1).encode()
+
+
+def play_script(
+    steps: list[ScriptStep],
+    lcm: DrakeLcmInterface,
+    channel: str,
+    rate: float,
+    sleep: Callable[[float], None] = time.sleep,
+    clock: Callable[[], float] = time.monotonic,
+) -> int:
+    """Publishes the script on `channel` at its times (wall clock); the number of messages."""
+    start, count = clock(), 0
+    for t, data in script_messages(steps, rate):
+        sleep(max(0.0, start + t - clock()))
+        lcm.Publish(channel, data)
+        count += 1
+    return count
+
+
+class KeyboardOperator:
+    """The command the keys have set so far (see the module docstring)."""
+
+    def __init__(self, speed: float, frame: int):
+        self.step = ScriptStep(0.0, frame=frame)
+        self._speed = speed
+
+    def press(self, key: str) -> bool:
+        """Takes one key; False for quit."""
+        step = self.step
+        if key == "q":
+            return False
+        if key in VELOCITY_KEYS:
+            self.step = ScriptStep(
+                0.0, tuple(self._speed * np.array(VELOCITY_KEYS[key])), step.mode_request, step.frame
+            )
+        elif key == " ":
+            self.step = ScriptStep(0.0, (0.0, 0.0, 0.0), step.mode_request, step.frame, estop=step.estop)
+        elif key in MODE_KEYS:
+            self.step = ScriptStep(0.0, step.value, MODE_KEYS[key], step.frame, estop=step.estop)
+        elif key == "e":
+            self.step = ScriptStep(0.0, (0.0, 0.0, 0.0), step.mode_request, step.frame, estop=True)
+        return True
+
+
+@contextlib.contextmanager
+def _raw_terminal():
+    """stdin unbuffered and without echo for the block (restored after, also on Ctrl-C)."""
+    import termios
+    import tty
+
+    saved = termios.tcgetattr(sys.stdin)
+    try:
+        tty.setcbreak(sys.stdin.fileno())
+        yield
+    finally:
+        termios.tcsetattr(sys.stdin, termios.TCSADRAIN, saved)
+
+
+def run_keyboard(lcm: DrakeLcmInterface, channel: str, rate: float, speed: float, frame: int) -> int:
+    """Sends the keys' command at `rate` [Hz] until `q`; the number of messages."""
+    operator, count, start = KeyboardOperator(speed, frame), 0, time.monotonic()
+    print(__doc__.split("\n\n")[2], flush=True)
+    with _raw_terminal():
+        while True:
+            ready, _, _ = select.select([sys.stdin], [], [], 1.0 / rate)
+            if ready and not operator.press(sys.stdin.read(1)):
+                return count
+            t = time.monotonic() - start
+            count += 1
+            lcm.Publish(channel, foot_command_message(operator.step, t, count).encode())
+            step = operator.step
+            print(
+                f"\rmode {step.mode_request} v {np.round(step.value, 3)} m/s estop {step.estop}   ", end="", flush=True
+            )
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--scenario_file", default=None, help="YAML file of named scenarios (default: the shipped one)")
+    parser.add_argument("--scenario_name", default="default", help="scenario to read from --scenario_file")
+    parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto the scenario (as run_sim.py)")
+    parser.add_argument("--lcm_url", default="", help="the bus URL (default: the scenario's operator bus)")
+    parser.add_argument("--speed", type=float, default=DEFAULT_SPEED, help="foot speed of a key [m/s]")
+    parser.add_argument("--rate", type=float, default=DEFAULT_RATE, help="messages a second [Hz]")
+    parser.add_argument("--frame", choices=("trunk", "world"), default="trunk")
+    parser.add_argument("--script", default="", help="script file (t_s mode vx vy vz per line)")
+    args = parser.parse_args(argv)
+    if not (math.isfinite(args.rate) and args.rate > 0 and math.isfinite(args.speed) and args.speed > 0):
+        print("--rate and --speed must be finite numbers > 0", file=sys.stderr)
+        return 2
+    frame = FRAME_TRUNK if args.frame == "trunk" else FRAME_WORLD
+    try:
+        scenario = load_scenario(
+            filename=args.scenario_file, scenario_name=args.scenario_name, scenario_text=args.scenario_text
+        )
+        config = scenario.operator
+        url = args.lcm_url or scenario.lcm_buses[config.lcm_bus].lcm_url
+        steps = None
+        if args.script or not sys.stdin.isatty():
+            source = args.script or "<stdin>"
+            text = Path(args.script).read_text() if args.script else sys.stdin.read()
+            steps = parse_script(text, source, frame)
+    except (PediError, OSError) as error:
+        print(error, file=sys.stderr)
+        return 2
+    lcm = DrakeLcm(url)
+    if steps is not None:
+        count = play_script(steps, lcm, config.channel, args.rate)
+    else:
+        count = run_keyboard(lcm, config.channel, args.rate, args.speed, frame)
+    print(f"\nsent {count} foot commands on {config.channel} ({url})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
