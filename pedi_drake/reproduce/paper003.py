@@ -118,20 +118,27 @@ def reproduce(folder: Path, *, quick: bool = False) -> Section:
     return section
 
 
-def _box_lift(folder: Path, section: Section, quick: bool) -> None:
-    """Figs. 9-10: the box lift with the two left legs, run, judged by physics and plotted."""
-    if quick:
-        name, scenario = QUICK_BOX_LIFT_DEMO, demo_scenario(QUICK_BOX_LIFT_DEMO)
+def _run_judged(folder: Path, mission: str, quick_demo: str | None):
+    """(record, result) of `mission` on the default scenario (or of `quick_demo` on its own demo
+    scenario), judged by physics and written to folder/<name>."""
+    if quick_demo is not None:
+        name, scenario = quick_demo, demo_scenario(quick_demo)
     else:
-        name = BOX_LIFT_MISSION
+        name = mission
         scenario = load_scenario(
-            scenario_text=f"{{mission: {name}, controller: whole_body, simulation_duration: 60.0}}"
+            scenario_text=f"{{mission: {mission}, controller: whole_body, simulation_duration: 60.0}}"
         )
     record = simulate(scenario=scenario, name=name, quiet=True, replay=False)
     result = judge_run(record)
     (folder / name).mkdir(parents=True, exist_ok=True)
     write_run(record, result, folder / name)
-    mission = record.built.mission
+    return record, result
+
+
+def _box_lift(folder: Path, section: Section, quick: bool) -> None:
+    """Figs. 9-10: the box lift with the two left legs, run, judged by physics and plotted."""
+    record, result = _run_judged(folder, BOX_LIFT_MISSION, QUICK_BOX_LIFT_DEMO if quick else None)
+    name, scenario, mission = record.name, record.scenario, record.built.mission
     check = mission.box_lift
     plant = record.built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     states, forces = record.logs["sim.plant_state"], record.logs["sim.foot_contact_forces"]
@@ -222,17 +229,7 @@ def _push_recovery(folder: Path, section: Section, quick: bool) -> None:
     """Figs. 5-6: the push with and without prongs, run, judged and plotted on one time axis."""
     rows, series = {}, {}
     for label, mission in PUSH_MISSIONS.items():
-        if quick:
-            name, scenario = QUICK_PUSH_DEMOS[label], demo_scenario(QUICK_PUSH_DEMOS[label])
-        else:
-            name = mission
-            scenario = load_scenario(
-                scenario_text=f"{{mission: {mission}, controller: whole_body, simulation_duration: 60.0}}"
-            )
-        record = simulate(scenario=scenario, name=name, quiet=True, replay=False)
-        result = judge_run(record)
-        (folder / name).mkdir(parents=True, exist_ok=True)
-        write_run(record, result, folder / name)
+        record, result = _run_judged(folder, mission, QUICK_PUSH_DEMOS[label] if quick else None)
         (spec,) = apply_mission(record.scenario, record.built.mission).pushes
         plant = record.built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
         series[label] = push_series(plant, record.logs, spec)
