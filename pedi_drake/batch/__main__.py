@@ -55,8 +55,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     engine = make_engine(args.engine, address=args.address, num_cpus=args.num_cpus, max_retries=args.max_retries)
-    # SIGTERM stops a study like Ctrl-C: the rows already written stay.
+    # SIGTERM stops a study like Ctrl-C: the rows already written stay. SIGINT is installed too:
+    # a study started in the background of a shell inherits SIGINT ignored, and Ctrl-C (or a
+    # test's SIGINT) must still stop it.
     signal.signal(signal.SIGTERM, _interrupt)
+    signal.signal(signal.SIGINT, _interrupt)
     print(f"study {study.name}: {len(study.tasks)} tasks on {args.engine}, results in {folder}/", flush=True)
     try:
         results = run_study(study, folder, engine, resume=args.resume, quiet=args.quiet)
