@@ -9,11 +9,21 @@ the compiled one on random inputs.
 
     PEDI_DRAKE_JIT=0    runs every kernel as plain Python (debugging; the same results, slower)
 
+The disk cache lives in a folder named by a hash of the package's sources
+(`<cache>/pedi_drake/numba/<hash>`, the user cache folder, or NUMBA_CACHE_DIR when set). numba
+judges a cached kernel stale only by its own file's time stamp, not by the kernels it calls in
+other files, so a kernel calling a changed kernel of another module would otherwise keep the old
+code: with the folder keyed by every source, any change of the package starts a new cache.
+
 Without numba installed the kernels run as plain Python too. Systems that call kernels compile
 them in their constructor (`warm_up`), never inside a control tick.
 """
 
+import hashlib
 import os
+from pathlib import Path
+
+import numpy as np
 
 try:
     import numba
@@ -21,6 +31,32 @@ except ImportError:  # pragma: no cover - numba is a dependency; this keeps a br
     numba = None
 
 ENABLED = numba is not None and os.environ.get("PEDI_DRAKE_JIT", "1") != "0"
+
+
+def _source_hash() -> str:
+    """A short hash of every Python source of the package (paths and contents)."""
+    package = Path(__file__).resolve().parent
+    digest = hashlib.sha1()
+    for path in sorted(package.rglob("*.py")):
+        digest.update(str(path.relative_to(package)).encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _cache_folder() -> Path:
+    base = os.environ.get("NUMBA_CACHE_DIR") or os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "pedi_drake" / "numba" / _source_hash()
+
+
+if ENABLED:
+    # Read by numba when a kernel is decorated (below, as each module is imported).
+    numba.config.CACHE_DIR = str(_cache_folder())
+
+
+def python_records(array):
+    """A structured array as numpy's recarray, whose records read fields as attributes the way
+    compiled kernels do: for calling a kernel's `.py_func` on the records of compiled code."""
+    return array.view(np.recarray)
 
 
 def kernel(function):

@@ -34,7 +34,7 @@ import numpy as np
 from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
 
 from pedi_drake import robot
-from pedi_drake.control import references, tasks
+from pedi_drake.control import compiled_stack, references, tasks, whole_body_tick
 from pedi_drake.control.config import HQP_MODES, QP_BACKENDS, STACKS, WholeBodyControllerConfig
 from pedi_drake.control.hqp import HqpSettings, solve_hqp, solve_weighted
 from pedi_drake.control.robot_model import ControllerModel
@@ -48,6 +48,10 @@ STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0
 # Solved with sliding contacts' tangential no-motion below the force limits (see StackBuilder.levels).
 STATUS_CONTACTS_RELAXED = 3.0
 MAX_LEVELS = 5
+_NO_LEG_REFERENCE = np.zeros(references.LEG_REFERENCE_SIZE)
+_NO_LEG_REFERENCE.flags.writeable = False
+_DEFAULT_POLYGON = np.zeros(references.SAFETY_POLYGON_SIZE)
+_DEFAULT_POLYGON.flags.writeable = False
 
 
 def diagnostics_layout(num_contacts: int) -> dict[str, slice]:
@@ -114,6 +118,9 @@ class WholeBodyController(LeafSystem):
         self.diag = diagnostics_layout(nc)
         self.command_gains = np.concatenate([np.full(12, config.joint_kp), np.full(12, config.joint_kd)])
         self.default_contact_set = references.contact_set_vector(num_prongs=nc - 4)
+        self.compiled = config.qp_backend == "compiled"
+        if self.compiled:
+            self._compiled_records()
 
         self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
         self.position_port = self.DeclareVectorInputPort("position_measured", 12)
@@ -129,17 +136,90 @@ class WholeBodyController(LeafSystem):
         self.ramp_state = self.DeclareDiscreteState(nc)
         self.hold_state = self.DeclareDiscreteState(8)  # initialised flag, p_WB (3), quat (4)
         self.diagnostics_state = self.DeclareDiscreteState(self.diag["contact_ramp"].stop)
+        # The discrete states in the compiled tick's argument order.
+        self._state_indices = (
+            self.command_state,
+            self.reference_state,
+            self.ramp_state,
+            self.hold_state,
+            self.diagnostics_state,
+        )
         self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
         # The same tick on demand (CalcForcedDiscreteVariableUpdate): tests and the benchmark.
         self.DeclareForcedDiscreteUpdateEvent(self._update)
         self.command_port = self.DeclareStateOutputPort("command", self.command_state)
         self.diagnostics_port = self.DeclareStateOutputPort("diagnostics", self.diagnostics_state)
 
+    def _compiled_records(self) -> None:
+        """The compiled tick's constant records and its buffers (a snapshot, a row table)."""
+        nv, nc = self.model.nv, self.num_contacts
+        self._stack_params = compiled_stack.stack_params(
+            self.config, self.layout.v_joints, nv, nc, self.model.total_mass
+        )
+        self._tick_params = whole_body_tick.tick_params(self.config, self.hqp_settings, self.diag, MAX_LEVELS)
+        self._snapshot = compiled_stack.new_record(compiled_stack.snapshot_dtype(nv, nc))
+        self._table = compiled_stack.new_record(compiled_stack.table_dtype(nv, nc))
+
+    def _fill_snapshot(self, base, q, qd) -> None:
+        s = self.model.update(base, q, qd)
+        r = self._snapshot[0]
+        for name in (
+            "q", "v", "M", "h", "J_contacts", "Jdot_v_contacts", "p_contacts", "J_trunk", "Jdot_v_trunk",
+            "R_WB", "p_WB", "p_com", "J_com", "Jdot_v_com", "q_joints", "v_joints", "V_trunk", "v_com",
+        ):
+            r[name] = getattr(s, name)
+        for i in range(4):
+            r["R_calf"][i], r["J_calf"][i], r["bias_calf"][i] = self.model.calf_orientation(i)
+
+    def _update_compiled(self, context: Context, discrete_state: DiscreteValues) -> None:
+        start = time.perf_counter()
+        base = np.asarray(self.base_state_port.Eval(context), float)
+        q = np.asarray(self.position_port.Eval(context), float)
+        qd = np.asarray(self.velocity_port.Eval(context), float)
+        has_body = self.body_reference_port.HasValue(context)
+        body = (
+            np.asarray(self.body_reference_port.Eval(context), float)
+            if has_body
+            else np.zeros(references.BODY_REFERENCE_SIZE)
+        )
+        contact_set = self._optional(self.contact_set_port, context, self.default_contact_set)
+        leg_x = self._optional(self.leg_reference_port, context, _NO_LEG_REFERENCE)
+        polygon_x = self._optional(self.safety_polygon_port, context, _DEFAULT_POLYGON)
+        mu_x = self._optional(self.friction_port, context, np.array([self.config.friction]))
+        states = [context.get_discrete_state(index).value() for index in self._state_indices]
+        self._fill_snapshot(base, q, qd)
+        outputs = [discrete_state.get_mutable_vector(index).get_mutable_value() for index in self._state_indices]
+        solve_start = time.perf_counter()
+        whole_body_tick.whole_body_tick(
+            self._tick_params,
+            self._stack_params,
+            self._snapshot,
+            base,
+            q,
+            qd,
+            contact_set,
+            body,
+            has_body,
+            leg_x,
+            polygon_x,
+            mu_x,
+            *states,
+            self._table,
+            *outputs,
+        )
+        diag = outputs[-1]
+        now = time.perf_counter()
+        diag[self.diag["solve_time"]] = now - solve_start
+        diag[self.diag["tick_time"]] = now - start
+
     # ---------------------------------------------------------------------------------------------
     def _optional(self, port, context: Context, default: np.ndarray) -> np.ndarray:
         return np.asarray(port.Eval(context), float) if port.HasValue(context) else default
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        if self.compiled:
+            self._update_compiled(context, discrete_state)
+            return
         start = time.perf_counter()
         c = self.config
         base = np.asarray(self.base_state_port.Eval(context), float)

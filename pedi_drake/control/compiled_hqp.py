@@ -1,0 +1,412 @@
+"""The hierarchical QP of `hqp.py` as one compiled kernel over a table of rows.
+
+`hqp.solve_hqp` and `hqp.solve_weighted` take Python lists of tasks; the controller's compiled
+tick cannot build those, so it writes every level's rows into a `RowTable` of flat arrays and
+calls `solve_strict` or `solve_weighted` here. The algorithm is `hqp.py`'s, step for step (its
+module docstring gives the maths), so the two agree to rounding and to the QP solver's
+tolerance; `tests/test_compiled_hqp.py` compares them on random and recorded levels.
+
+A RowTable holds, for levels 0..L-1 in priority order (rows of a level contiguous, levels in
+order; `*_start[k]:*_start[k+1]` are level k's rows):
+
+    eq_A (mE, n), eq_b (mE,), eq_start (L+1,)      equalities, each row scaled by sqrt(weight)
+    hard_G (mH, n), hard_h (mH,), hard_start (L+1,)  hard inequalities G x <= h
+    soft_G (mS, n), soft_h (mS,), soft_w (mS,), soft_start (L+1,)
+                                                   soft inequalities and their weights [-]
+
+Every kernel returns a status: STATUS_OK, or STATUS_INFEASIBLE when a level's QP has no
+solution (hqp.py raises QpInfeasible there), or STATUS_NUMERICAL when a factorisation failed
+(numpy's LinAlgError in hqp.py). x and the residuals are only meaningful with STATUS_OK.
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+
+from pedi_drake.control import dense_qp
+from pedi_drake.control.hqp import HqpSettings, Level
+from pedi_drake.control.small_linalg import cholesky_solve, forward_substitute_transposed, householder_rows
+from pedi_drake.jit import kernel
+
+STATUS_OK, STATUS_INFEASIBLE, STATUS_NUMERICAL = 0, 1, 2
+# The tall least-squares step is accepted only when its Cholesky factor's diagonal spreads less
+# than sqrt(rank_tolerance) (hqp._least_squares_step).
+
+
+@dataclasses.dataclass
+class RowTable:
+    """Every level's rows as flat arrays (see the module docstring)."""
+
+    n: int
+    eq_A: np.ndarray
+    eq_b: np.ndarray
+    eq_start: np.ndarray
+    hard_G: np.ndarray
+    hard_h: np.ndarray
+    hard_start: np.ndarray
+    soft_G: np.ndarray
+    soft_h: np.ndarray
+    soft_w: np.ndarray
+    soft_start: np.ndarray
+
+    @property
+    def num_levels(self) -> int:
+        return len(self.eq_start) - 1
+
+    @classmethod
+    def from_levels(cls, levels: list[Level], n: int) -> "RowTable":
+        """The table of `hqp.Level`s (tests, and the Python path's cross-check)."""
+        eq_A, eq_b, hard_G, hard_h, soft_G, soft_h, soft_w = [], [], [], [], [], [], []
+        eq_start, hard_start, soft_start = [0], [0], [0]
+        for level in levels:
+            for t in level.equalities:
+                scale = math.sqrt(t.weight)
+                eq_A.append(np.asarray(t.A, float) * scale)
+                eq_b.append(np.asarray(t.b, float) * scale)
+            for t in level.inequalities:
+                if t.hard:
+                    hard_G.append(np.asarray(t.G, float))
+                    hard_h.append(np.asarray(t.h, float))
+            for t in level.inequalities:
+                if not t.hard:
+                    soft_G.append(np.asarray(t.G, float))
+                    soft_h.append(np.asarray(t.h, float))
+                    soft_w.append(np.full(len(t.h), float(t.weight)))
+            eq_start.append(eq_start[-1] + sum(len(t.b) for t in level.equalities))
+            hard_start.append(hard_start[-1] + sum(len(t.h) for t in level.inequalities if t.hard))
+            soft_start.append(soft_start[-1] + sum(len(t.h) for t in level.inequalities if not t.hard))
+
+        def rows(blocks, width):
+            return np.ascontiguousarray(np.vstack(blocks)) if blocks else np.zeros((0, width))
+
+        def values(blocks):
+            return np.concatenate(blocks) if blocks else np.zeros(0)
+
+        index = np.int64
+        return cls(
+            n,
+            rows(eq_A, n),
+            values(eq_b),
+            np.array(eq_start, index),
+            rows(hard_G, n),
+            values(hard_h),
+            np.array(hard_start, index),
+            rows(soft_G, n),
+            values(soft_h),
+            values(soft_w),
+            np.array(soft_start, index),
+        )
+
+
+# ------------------------------------------------------------------------------------------------
+# Row space and null space of a level's rows (hqp._row_space_split).
+
+
+@kernel
+def _row_space_split(A: np.ndarray, tolerance: float, Y: np.ndarray, N: np.ndarray, R: np.ndarray) -> tuple:
+    """Row-space basis Y (n, r), null-space basis N (n, n - r) and, when A (m, n) has full row
+    rank r = m <= n, R (m, m) with A = R^T Y^T. Writes Y, N and R into the leading blocks of the
+    given buffers (Y, N: (n, n); R: (n, n)) and returns (rank, has_R, ok)."""
+    m, n = A.shape
+    if m == 0:
+        for i in range(n):
+            for j in range(n):
+                N[i, j] = 1.0 if i == j else 0.0
+        return 0, True, True
+    if m <= n:
+        Q = np.empty((n, n))
+        Rm = np.empty((m, m))
+        householder_rows(A, Q, Rm)
+        largest, smallest = 0.0, np.inf
+        for i in range(m):
+            d = abs(Rm[i, i])
+            largest = max(largest, d)
+            smallest = min(smallest, d)
+        if smallest > tolerance * max(1.0, largest):
+            Y[:n, :m] = Q[:, :m]
+            N[:n, : n - m] = Q[:, m:]
+            R[:m, :m] = Rm
+            return m, True, True
+    U, sigma, Vt = np.linalg.svd(A)
+    top = sigma[0] if len(sigma) else 0.0
+    rank = 0
+    for s in sigma:
+        if s > tolerance * max(1.0, top):
+            rank += 1
+    Y[:n, :rank] = Vt[:rank].T
+    N[:n, : n - rank] = Vt[rank:].T
+    return rank, False, True
+
+
+@kernel
+def _min_norm_least_squares(A, r, Y, rank, R, has_R, z) -> None:
+    """argmin ||z|| among the minimisers of ||A z - r|| (hqp._min_norm_least_squares)."""
+    m, n = A.shape
+    if has_R:
+        w = np.empty(rank)
+        if forward_substitute_transposed(R[:rank, :rank], r, w):
+            z[:] = np.ascontiguousarray(Y[:n, :rank]) @ w
+            return
+    z[:] = np.linalg.lstsq(A, r, rcond=np.finfo(np.float64).eps * max(m, n))[0]
+
+
+@kernel
+def _meets(G: np.ndarray, upper: np.ndarray, z: np.ndarray, tolerance: float) -> bool:
+    """Whether G z <= upper + tolerance on every row."""
+    for i in range(G.shape[0]):
+        s = 0.0
+        for j in range(G.shape[1]):
+            s += G[i, j] * z[j]
+        if s - upper[i] > tolerance:
+            return False
+    return True
+
+
+@kernel
+def _solve_level_qp(H, f, C, upper, eps_prox, y) -> int:
+    """min 0.5 y'Hy + f'y s.t. C y <= upper into y (hqp._solve_dense_qp); a status."""
+    if C.shape[0] == 0:
+        y[:] = np.linalg.lstsq(H, -f, rcond=np.finfo(np.float64).eps * H.shape[0])[0]
+        return STATUS_OK
+    status = dense_qp.solve(H, f, C, upper, eps_prox, y)
+    if status != dense_qp.OPTIMAL:
+        return STATUS_INFEASIBLE
+    for v in y:
+        if not math.isfinite(v):
+            return STATUS_INFEASIBLE
+    return STATUS_OK
+
+
+@kernel
+def solve_strict(
+    n,
+    eq_A,
+    eq_b,
+    eq_start,
+    hard_G,
+    hard_h,
+    hard_start,
+    soft_G,
+    soft_h,
+    soft_w,
+    soft_start,
+    rank_tolerance,
+    fix_tolerance,
+    eps_prox,
+    x,
+    residuals,
+) -> int:
+    """Solves the levels in strict priority order (hqp.solve_hqp) into x (n,) and the levels'
+    equality residuals (L,); returns a status."""
+    num_levels = len(eq_start) - 1
+    for i in range(n):
+        x[i] = 0.0
+    Z = np.eye(n)
+    nz = n
+    capacity = hard_G.shape[0] + soft_G.shape[0]
+    G_all = np.empty((capacity, n))
+    h_all = np.empty(capacity)
+    mh = 0
+    num_verified = 0
+    Y = np.empty((n, n))
+    N = np.empty((n, n))
+    R = np.empty((n, n))
+    for level in range(num_levels):
+        e0, e1 = eq_start[level], eq_start[level + 1]
+        s0, s1 = soft_start[level], soft_start[level + 1]
+        h0, h1 = hard_start[level], hard_start[level + 1]
+        m = e1 - e0
+        ms = s1 - s0
+        for i in range(h0, h1):
+            G_all[mh] = hard_G[i]
+            h_all[mh] = hard_h[i]
+            mh += 1
+        if nz == 0 and ms == 0:
+            continue
+        if m == 0 and ms == 0 and level + 1 < num_levels:
+            continue
+        A = eq_A[e0:e1]
+        Az = A @ Z
+        rz = eq_b[e0:e1] - A @ x
+        have_split = False
+        rank, has_R = 0, False
+        z = np.zeros(nz)
+        if mh == 0 and ms == 0:
+            if m:
+                rank, has_R, ok = _row_space_split(Az, rank_tolerance, Y, N, R)
+                have_split = True
+                _min_norm_least_squares(Az, rz, Y, rank, R, has_R, z)
+            solved = True
+        else:
+            GZ = G_all[:mh] @ Z
+            upper = np.empty(mh + ms)
+            upper[:mh] = h_all[:mh] - G_all[:mh] @ x
+            for i in range(num_verified):
+                upper[i] = max(upper[i], 0.0)
+            Gs = soft_G[s0:s1]
+            GsZ = Gs @ Z
+            upper[mh:] = soft_h[s0:s1] - Gs @ x
+            solved = True
+            if m and nz:
+                if m <= nz:
+                    rank, has_R, ok = _row_space_split(Az, rank_tolerance, Y, N, R)
+                    have_split = True
+                    _min_norm_least_squares(Az, rz, Y, rank, R, has_R, z)
+                else:
+                    S = Az.T @ Az
+                    solved = cholesky_solve(S, Az.T @ rz, z)
+                    if solved:
+                        largest, smallest = 0.0, np.inf
+                        for i in range(nz):
+                            largest = max(largest, abs(S[i, i]))
+                            smallest = min(smallest, abs(S[i, i]))
+                        solved = smallest > math.sqrt(rank_tolerance) * largest
+            if solved:
+                solved = _meets(GZ, upper[:mh], z, 0.0) and (ms == 0 or _meets(GsZ, upper[mh:], z, 0.0))
+            if not solved:
+                size = nz + ms
+                H = np.zeros((size, size))
+                H[:nz, :nz] = Az.T @ Az
+                f = np.zeros(size)
+                f[:nz] = -(Az.T @ rz)
+                C = np.zeros((mh + ms, size))
+                C[:mh, :nz] = GZ
+                for i in range(ms):
+                    ws = math.sqrt(soft_w[s0 + i])
+                    H[nz + i, nz + i] = ws * ws
+                    C[mh + i, :nz] = GsZ[i]
+                    C[mh + i, nz + i] = -1.0
+                y = np.empty(size)
+                status = _solve_level_qp(H, f, C, upper, eps_prox, y)
+                if status != STATUS_OK:
+                    return status
+                z[:] = y[:nz]
+        x += Z @ z
+        num_verified = mh
+        if ms:
+            Gs = soft_G[s0:s1]
+            violation = Gs @ x - soft_h[s0:s1]
+            for i in range(ms):
+                G_all[mh] = Gs[i]
+                h_all[mh] = soft_h[s0 + i] + max(violation[i], 0.0) + fix_tolerance
+                mh += 1
+        if m and nz and level + 1 < num_levels:
+            if not have_split:
+                rank, has_R, ok = _row_space_split(Az, rank_tolerance, Y, N, R)
+            Z = Z @ np.ascontiguousarray(N[:nz, : nz - rank])
+            nz = nz - rank
+    for level in range(num_levels):
+        e0, e1 = eq_start[level], eq_start[level + 1]
+        r = eq_A[e0:e1] @ x - eq_b[e0:e1]
+        residuals[level] = math.sqrt(r @ r)
+    return STATUS_OK
+
+
+@kernel
+def solve_weighted(
+    n,
+    eq_A,
+    eq_b,
+    eq_start,
+    hard_G,
+    hard_h,
+    hard_start,
+    soft_G,
+    soft_h,
+    soft_w,
+    soft_start,
+    level_weights,
+    regularization,
+    eps_prox,
+    x,
+    residuals,
+) -> int:
+    """One QP with level k's equalities and soft rows weighted by level_weights[k], hard rows kept
+    hard (hqp.solve_weighted), into x (n,) and the residuals (L,); returns a status."""
+    num_levels = len(eq_start) - 1
+    mh = hard_G.shape[0]
+    ms = soft_G.shape[0]
+    size = n + ms
+    H = np.zeros((size, size))
+    f = np.zeros(size)
+    for i in range(n):
+        H[i, i] = regularization
+    for level in range(num_levels):
+        e0, e1 = eq_start[level], eq_start[level + 1]
+        A = eq_A[e0:e1]
+        weight = level_weights[level]
+        H[:n, :n] += weight * (A.T @ A)
+        f[:n] -= weight * (A.T @ eq_b[e0:e1])
+        for i in range(soft_start[level], soft_start[level + 1]):
+            H[n + i, n + i] = weight * soft_w[i] + regularization
+    C = np.zeros((mh + ms, size))
+    upper = np.empty(mh + ms)
+    C[:mh, :n] = hard_G
+    upper[:mh] = hard_h
+    for i in range(ms):
+        C[mh + i, :n] = soft_G[i]
+        C[mh + i, n + i] = -1.0
+        upper[mh + i] = soft_h[i]
+    y = np.empty(size)
+    status = _solve_level_qp(H, f, C, upper, eps_prox, y)
+    if status != STATUS_OK:
+        return status
+    x[:] = y[:n]
+    for level in range(num_levels):
+        e0, e1 = eq_start[level], eq_start[level + 1]
+        r = eq_A[e0:e1] @ x - eq_b[e0:e1]
+        residuals[level] = math.sqrt(r @ r)
+    return STATUS_OK
+
+
+def solve_table_strict(table: RowTable, settings: HqpSettings | None = None) -> tuple[int, np.ndarray, np.ndarray]:
+    """(status, x, residuals) of `solve_strict` on a RowTable (tests, benchmarks)."""
+    settings = settings or HqpSettings()
+    x, residuals = np.zeros(table.n), np.zeros(table.num_levels)
+    status = solve_strict(
+        table.n,
+        table.eq_A,
+        table.eq_b,
+        table.eq_start,
+        table.hard_G,
+        table.hard_h,
+        table.hard_start,
+        table.soft_G,
+        table.soft_h,
+        table.soft_w,
+        table.soft_start,
+        settings.rank_tolerance,
+        settings.fix_tolerance,
+        settings.proximal_weight,
+        x,
+        residuals,
+    )
+    return status, x, residuals
+
+
+def solve_table_weighted(
+    table: RowTable, level_weights, settings: HqpSettings | None = None
+) -> tuple[int, np.ndarray, np.ndarray]:
+    """(status, x, residuals) of `solve_weighted` on a RowTable (tests, benchmarks)."""
+    settings = settings or HqpSettings()
+    x, residuals = np.zeros(table.n), np.zeros(table.num_levels)
+    status = solve_weighted(
+        table.n,
+        table.eq_A,
+        table.eq_b,
+        table.eq_start,
+        table.hard_G,
+        table.hard_h,
+        table.hard_start,
+        table.soft_G,
+        table.soft_h,
+        table.soft_w,
+        table.soft_start,
+        np.asarray(level_weights, float),
+        settings.regularization,
+        settings.proximal_weight,
+        x,
+        residuals,
+    )
+    return status, x, residuals

@@ -1,0 +1,118 @@
+"""Dense linear algebra on the controller's small matrices, as compiled kernels.
+
+The hierarchical QP splits every level's task rows into their row space and null space and
+solves small least-squares problems, on matrices of 3 to 40 rows and columns, several times a
+tick. At these sizes a LAPACK call from Python costs more in call overhead than in arithmetic, so
+the compiled controller does the same factorisations here, in the same algorithms as LAPACK's
+unblocked routines (so results agree to rounding):
+
+* `householder_rows(A, Q, R)`: the QR factorisation of A^T (A is m x n with m <= n, read as its
+  m rows), A^T = Q [R; 0] with Q (n x n) orthogonal and R (m x m) upper triangular: the first m
+  columns of Q span the row space of A, the last n - m its null space (LAPACK's dgeqr2 followed
+  by dorg2r on the complete Q: reflectors H_k = I - tau_k v_k v_k^T, v_k[k] = 1).
+* `forward_substitute_transposed(R, r, w)`: R^T w = r for upper-triangular R.
+* `cholesky_solve(S, r, z)`: S z = r for symmetric positive definite S, by the Cholesky factor
+  L (S = L L^T), which is returned in S's lower triangle for callers that judge its conditioning.
+"""
+
+import math
+
+import numpy as np
+
+from pedi_drake.jit import kernel
+
+
+@kernel
+def householder_rows(A: np.ndarray, Q: np.ndarray, R: np.ndarray) -> None:
+    """A^T = Q [R; 0] for A (m, n), m <= n: fills Q (n, n) and R (m, m). A is not modified."""
+    m, n = A.shape
+    W = A.copy()  # row k of W is column k of the factorised matrix
+    tau = np.zeros(m)
+    for k in range(m):
+        alpha = W[k, k]
+        scale = 0.0
+        for i in range(k + 1, n):
+            scale += W[k, i] * W[k, i]
+        xnorm = math.sqrt(scale)
+        if xnorm == 0.0:
+            tau[k] = 0.0
+            continue
+        beta = -math.copysign(math.hypot(alpha, xnorm), alpha)
+        tau[k] = (beta - alpha) / beta
+        inv = 1.0 / (alpha - beta)
+        for i in range(k + 1, n):
+            W[k, i] *= inv
+        W[k, k] = beta
+        # Apply H_k to the remaining columns (rows j > k of W), coordinates k..n-1.
+        for j in range(k + 1, m):
+            dot = W[j, k]
+            for i in range(k + 1, n):
+                dot += W[k, i] * W[j, i]
+            dot *= tau[k]
+            W[j, k] -= dot
+            for i in range(k + 1, n):
+                W[j, i] -= dot * W[k, i]
+    for i in range(m):
+        for j in range(m):
+            R[i, j] = W[j, i] if j >= i else 0.0
+    # Q = H_0 H_1 ... H_{m-1}, accumulated from the last reflector back (each touches rows k..).
+    for i in range(n):
+        for j in range(n):
+            Q[i, j] = 1.0 if i == j else 0.0
+    for k in range(m - 1, -1, -1):
+        t = tau[k]
+        if t == 0.0:
+            continue
+        for j in range(k, n):
+            dot = Q[k, j]
+            for i in range(k + 1, n):
+                dot += W[k, i] * Q[i, j]
+            dot *= t
+            Q[k, j] -= dot
+            for i in range(k + 1, n):
+                Q[i, j] -= dot * W[k, i]
+
+
+@kernel
+def forward_substitute_transposed(R: np.ndarray, r: np.ndarray, w: np.ndarray) -> bool:
+    """Solves R^T w = r for upper-triangular R (m, m); False (w untouched beyond) on a zero pivot."""
+    m = R.shape[0]
+    for i in range(m):
+        s = r[i]
+        for k in range(i):
+            s -= R[k, i] * w[k]
+        if R[i, i] == 0.0:
+            return False
+        w[i] = s / R[i, i]
+    return True
+
+
+@kernel
+def cholesky_solve(S: np.ndarray, r: np.ndarray, z: np.ndarray) -> bool:
+    """Solves S z = r for symmetric positive definite S (k, k), overwriting S's lower triangle
+    with the Cholesky factor L (S = L L^T); False when S is not numerically positive definite."""
+    k = S.shape[0]
+    for j in range(k):
+        d = S[j, j]
+        for p in range(j):
+            d -= S[j, p] * S[j, p]
+        if not d > 0.0:
+            return False
+        d = math.sqrt(d)
+        S[j, j] = d
+        for i in range(j + 1, k):
+            s = S[i, j]
+            for p in range(j):
+                s -= S[i, p] * S[j, p]
+            S[i, j] = s / d
+    for i in range(k):  # L y = r
+        s = r[i]
+        for p in range(i):
+            s -= S[i, p] * z[p]
+        z[i] = s / S[i, i]
+    for i in range(k - 1, -1, -1):  # L^T z = y
+        s = z[i]
+        for p in range(i + 1, k):
+            s -= S[p, i] * z[p]
+        z[i] = s / S[i, i]
+    return True

@@ -1,0 +1,388 @@
+"""One tick of the whole-body controller as one compiled call.
+
+`WholeBodyController` (whole_body_controller.py) documents what a tick does; its reference
+implementation composes `robot_model`, `stacks`, `tasks` and `hqp` in Python. This module is the
+same tick in compiled code: `whole_body_tick` takes the tick's inputs and the controller's
+discrete state as arrays, writes the next state, and returns the tick's status, with the dynamics
+terms from `go1_dynamics`, the levels from `compiled_stack.build_levels` and the hierarchical
+solve from `compiled_hqp`. No Python object is touched between the first input and the last
+output, so a tick costs tens of microseconds instead of a millisecond, and the interpreter's lock
+is released throughout (the driver's receive thread runs meanwhile).
+
+Discrete state, as WholeBodyController declares it: command (60), reference (24: q_ref, qd_ref
+in Unitree order), ramp (nc), hold (8: initialised flag, p_WB, quaternion), diagnostics
+(`whole_body_controller.diagnostics_layout`).
+"""
+
+import math
+import numpy as np
+
+from pedi_drake import robot
+from pedi_drake.control import compiled_hqp
+from pedi_drake.control.compiled_stack import (
+    MAX_LEVELS,
+    build_levels,
+    new_record,
+    capture_point,
+    orientation_error_W,
+    polygon_halfplanes,
+    rotation_matrix_wxyz,
+    torque_map,
+)
+from pedi_drake.control.references import SAFETY_POLYGON_MAX_VERTICES
+from pedi_drake.jit import kernel
+
+STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT, STATUS_CONTACTS_RELAXED = 0.0, 1.0, 2.0, 3.0
+# Slices of the diagnostics vector, in this order (whole_body_controller.DIAGNOSTICS_FIELDS).
+DIAGNOSTICS_FIELDS = (
+    "status",
+    "solve_time",
+    "tick_time",
+    "consecutive_failures",
+    "total_failures",
+    "capture_point",
+    "trunk_position_error",
+    "trunk_orientation_error",
+    "foot_errors",
+    "level_residuals",
+    "contact_forces",
+    "tau_ff",
+    "contact_ramp",
+)
+_STATUS, _SOLVE, _TICK, _CONSECUTIVE, _TOTAL, _CP, _TRUNK_P, _TRUNK_R, _FEET, _RESIDUALS, _FORCES, _TAU, _RAMP = range(
+    13
+)
+_FOOT_MODE = 1
+
+
+# Constants of a configured WholeBodyController's tick (`tick_params`); the stack's own are
+# compiled_stack.STACK_PARAMS_DTYPE.
+TICK_PARAMS_DTYPE = np.dtype(
+    [
+        ("period", "f8"),  # [s]
+        ("contact_ramp_time", "f8"),  # [s]
+        ("max_reference_rate_deviation", "f8"),  # [rad/s]
+        ("max_reference_deviation", "f8"),  # [rad]
+        ("joint_kp", "f8"),  # [N m/rad]
+        ("joint_kd", "f8"),  # [N m s/rad]
+        ("failure_kd", "f8"),  # [N m s/rad]
+        ("safety_margin", "f8"),  # [m]
+        ("strict", "?"),  # strict priorities, else one weighted QP
+        ("num_level_weights", "i8"),  # 0: weights 100^(L-1-k)
+        ("level_weights", "f8", MAX_LEVELS),  # weighted mode, per level of the stack
+        ("rank_tolerance", "f8"),
+        ("fix_tolerance", "f8"),
+        ("proximal_weight", "f8"),
+        ("regularization", "f8"),
+        ("diagnostics", "i8", len(DIAGNOSTICS_FIELDS)),  # start of each DIAGNOSTICS_FIELDS slice
+        ("max_residuals", "i8"),  # entries of the level_residuals slice
+    ]
+)
+
+
+def tick_params(config, settings, diagnostics_layout: dict[str, slice], max_residuals: int) -> np.ndarray:
+    """The TICK_PARAMS_DTYPE record of a WholeBodyControllerConfig `config`, HqpSettings
+    `settings` and the controller's diagnostics layout."""
+    record = new_record(TICK_PARAMS_DTYPE)
+    r = record[0]
+    for name in (
+        "period",
+        "contact_ramp_time",
+        "max_reference_rate_deviation",
+        "max_reference_deviation",
+        "joint_kp",
+        "joint_kd",
+        "failure_kd",
+        "safety_margin",
+    ):
+        r[name] = getattr(config, name)
+    r["strict"] = config.hqp_mode != "weighted"
+    r["num_level_weights"] = len(config.level_weights)
+    r["level_weights"][: len(config.level_weights)] = config.level_weights
+    for name in ("rank_tolerance", "fix_tolerance", "proximal_weight", "regularization"):
+        r[name] = getattr(settings, name)
+    r["diagnostics"] = [diagnostics_layout[name].start for name in DIAGNOSTICS_FIELDS]
+    r["max_residuals"] = max_residuals
+    return record
+
+
+@kernel
+def _all_finite(x: np.ndarray) -> bool:
+    for value in x:
+        if not math.isfinite(value):
+            return False
+    return True
+
+
+@kernel
+def held_command(last_command: np.ndarray, q_measured: np.ndarray, kd_min: float, out: np.ndarray) -> None:
+    """go1_command.held_command into `out` (60,): the last good command, zero rate targets, at least
+    `kd_min` damping, the measured joints as targets before any good command, never NaN."""
+    out[:] = last_command
+    started = False
+    for i in range(24, 36):
+        started |= out[i] != 0.0
+    for i in range(48, 60):
+        started |= out[i] != 0.0
+    if not started and _all_finite(q_measured):
+        out[0:12] = q_measured
+    out[12:24] = 0.0
+    for i in range(36, 48):
+        out[i] = max(out[i], kd_min)
+    for i in range(60):
+        if not math.isfinite(out[i]):
+            out[i] = 0.0
+
+
+@kernel
+def _fail(tp, status, last_command, q, diag_in, out_command, out_diag) -> float:
+    held_command(last_command, q, tp.failure_kd, out_command)
+    d = tp.diagnostics
+    out_diag[:] = diag_in
+    out_diag[d[_STATUS]] = status
+    out_diag[d[_CONSECUTIVE]] += 1.0
+    out_diag[d[_TOTAL]] += 1.0
+    return status
+
+
+@kernel
+def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
+    """The built levels, solved strictly or weighted (WholeBodyController._solve); a compiled_hqp status."""
+    n = p.nv + 3 * p.nc
+    t = table
+    eq_start = t.eq_start[: num_levels + 1]
+    hard_start = t.hard_start[: num_levels + 1]
+    soft_start = t.soft_start[: num_levels + 1]
+    eq_A, eq_b = t.eq_A[: eq_start[num_levels]], t.eq_b[: eq_start[num_levels]]
+    hard_G, hard_h = t.hard_G[: hard_start[num_levels]], t.hard_h[: hard_start[num_levels]]
+    ms = soft_start[num_levels]
+    soft_G, soft_h, soft_w = t.soft_G[:ms], t.soft_h[:ms], t.soft_w[:ms]
+    if tp.strict:
+        status = compiled_hqp.solve_strict(
+            n,
+            eq_A,
+            eq_b,
+            eq_start,
+            hard_G,
+            hard_h,
+            hard_start,
+            soft_G,
+            soft_h,
+            soft_w,
+            soft_start,
+            tp.rank_tolerance,
+            tp.fix_tolerance,
+            tp.proximal_weight,
+            x,
+            residuals[:num_levels],
+        )
+    else:
+        weights = np.empty(num_levels)
+        if tp.num_level_weights:
+            k = 0
+            for level in range(num_levels):
+                # The sliding contacts' level weighs as the limits' level above it.
+                if relaxed and level == 2:
+                    weights[level] = tp.level_weights[1]
+                else:
+                    weights[level] = tp.level_weights[k]
+                    k += 1
+        else:
+            for level in range(num_levels):
+                weights[level] = 100.0 ** (num_levels - 1 - level)
+        status = compiled_hqp.solve_weighted(
+            n,
+            eq_A,
+            eq_b,
+            eq_start,
+            hard_G,
+            hard_h,
+            hard_start,
+            soft_G,
+            soft_h,
+            soft_w,
+            soft_start,
+            weights,
+            tp.regularization,
+            tp.proximal_weight,
+            x,
+            residuals[:num_levels],
+        )
+    if status == compiled_hqp.STATUS_OK and not _all_finite(x):
+        status = compiled_hqp.STATUS_INFEASIBLE
+    return status
+
+
+@kernel
+def whole_body_tick(
+    tick_params: np.ndarray,
+    stack_params: np.ndarray,
+    snapshot: np.ndarray,
+    base: np.ndarray,
+    q: np.ndarray,
+    qd: np.ndarray,
+    contact_set_in: np.ndarray,
+    body_in: np.ndarray,
+    has_body: bool,
+    leg_x: np.ndarray,
+    polygon_x: np.ndarray,
+    mu_x: np.ndarray,
+    last_command: np.ndarray,
+    last_reference: np.ndarray,
+    last_ramp: np.ndarray,
+    last_hold: np.ndarray,
+    last_diag: np.ndarray,
+    table_record: np.ndarray,
+    command: np.ndarray,
+    reference: np.ndarray,
+    ramp: np.ndarray,
+    hold: np.ndarray,
+    diag: np.ndarray,
+) -> float:
+    """One controller tick (WholeBodyController._update) from the snapshot `s` of the estimate
+    `base` and the measured joints `q`, `qd`: writes the next command, reference, ramp, hold and
+    diagnostics (all but the two timing entries) and returns the tick's status. The records are
+    one-element arrays of TICK_PARAMS_DTYPE, compiled_stack.STACK_PARAMS_DTYPE, snapshot_dtype and
+    table_dtype."""
+    tp, p, s, table = tick_params[0], stack_params[0], snapshot[0], table_record[0]
+    nv, nc = p.nv, p.nc
+    d = tp.diagnostics
+    reference[:] = last_reference
+    ramp[:] = last_ramp
+    hold[:] = last_hold
+    contact_set = np.empty(nc)
+    for i in range(nc):
+        contact_set[i] = min(max(contact_set_in[i], 0.0), 1.0)
+    if not (_all_finite(base) and _all_finite(q) and _all_finite(qd) and _all_finite(contact_set)):
+        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
+    new_hold = last_hold.copy()
+    new_ramp = last_ramp.copy()
+    q_ref = last_reference[:12].copy()
+    qd_ref = last_reference[12:].copy()
+    if new_hold[0] == 0.0:
+        # First tick: hold the current trunk pose, start the reference at the measurement and the
+        # contact ramps at the commanded contact set (the robot starts on its feet).
+        new_hold[0] = 1.0
+        new_hold[1:4] = base[4:7]
+        new_hold[4:8] = base[0:4]
+        q_ref[:] = q
+        qd_ref[:] = qd
+        new_ramp[:] = contact_set
+    step = tp.period / max(tp.contact_ramp_time, 1e-9)
+    for i in range(nc):
+        change = min(max(contact_set[i] - new_ramp[i], -step), step)
+        new_ramp[i] = min(max(new_ramp[i] + change, 0.0), 1.0)
+
+    body = np.zeros(19)
+    if has_body:
+        body[:] = body_in
+    else:
+        body[0:3] = new_hold[1:4]
+        body[3:7] = new_hold[4:8]
+    if not (_all_finite(body) and _all_finite(leg_x) and _all_finite(polygon_x) and _all_finite(mu_x)):
+        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
+    if mu_x[0] <= 0.0:
+        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
+    num_vertices = round(polygon_x[0])
+    if num_vertices != 0 and not 3 <= num_vertices <= SAFETY_POLYGON_MAX_VERTICES:
+        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
+
+    no_motion = np.empty(nc, dtype=np.bool_)
+    num_loaded = 0
+    ground = 0.0
+    for i in range(nc):
+        no_motion[i] = contact_set[i] > 0.5 or new_ramp[i] > 0.0
+        if contact_set[i] > 0.5:
+            num_loaded += 1
+            ground += s.p_contacts[i, 2]
+    if num_loaded:
+        ground = ground / num_loaded - robot.FOOT_RADIUS
+    max_rows = max(SAFETY_POLYGON_MAX_VERTICES, nc)
+    polygon_N = np.empty((max_rows, 2))
+    polygon_d = np.empty(max_rows)
+    rows = 0
+    if num_vertices > 0:
+        c, sn = math.cos(polygon_x[3]), math.sin(polygon_x[3])
+        vertices = np.empty((num_vertices, 2))
+        for k in range(num_vertices):
+            vx, vy = polygon_x[4 + 2 * k], polygon_x[5 + 2 * k]
+            vertices[k, 0] = polygon_x[1] + (vx * c - vy * sn)
+            vertices[k, 1] = polygon_x[2] + (vx * sn + vy * c)
+        rows = polygon_halfplanes(vertices, 0.0, polygon_N, polygon_d)
+    elif num_loaded >= 3:
+        points = np.empty((num_loaded, 2))
+        k = 0
+        for i in range(nc):
+            if contact_set[i] > 0.5:
+                points[k, 0] = s.p_contacts[i, 0]
+                points[k, 1] = s.p_contacts[i, 1]
+                k += 1
+        rows = polygon_halfplanes(points, tp.safety_margin, polygon_N, polygon_d)
+
+    n = nv + 3 * nc
+    T = np.empty((12, n))
+    t0 = np.empty(12)
+    torque_map(p, s, T, t0)
+    x = np.zeros(n)
+    residuals = np.zeros(MAX_LEVELS)
+    status = STATUS_OK
+    num_levels = build_levels(
+        p, s, body, leg_x, new_ramp, no_motion, polygon_N[:rows], polygon_d[:rows], mu_x[0], ground, False, T, t0, table
+    )
+    solved = _solve(tp, p, table, num_levels, False, x, residuals)
+    if solved != compiled_hqp.STATUS_OK:
+        num_levels = build_levels(
+            p, s, body, leg_x, new_ramp, no_motion, polygon_N[:rows], polygon_d[:rows], mu_x[0], ground, True, T, t0, table
+        )
+        if num_levels > 0:
+            # Sliding contacts that friction cannot stop at once: let them brake.
+            solved = _solve(tp, p, table, num_levels, True, x, residuals)
+            status = STATUS_CONTACTS_RELAXED
+        if num_levels == 0 or solved != compiled_hqp.STATUS_OK:
+            ramp[:] = new_ramp
+            hold[:] = new_hold
+            return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, command, diag)
+
+    tau = T @ x + t0
+    for k in range(12):
+        qdd = x[p.v_joints[k]]
+        # Integrate the QP's accelerations into the joint reference, kept near the measurement so
+        # a long stall (e.g. contact with an obstacle) cannot wind up the PD.
+        rate = qd_ref[k] + qdd * tp.period
+        qd_ref[k] = min(
+            max(rate, qd[k] - tp.max_reference_rate_deviation), qd[k] + tp.max_reference_rate_deviation
+        )
+        angle = q_ref[k] + qd_ref[k] * tp.period
+        q_ref[k] = min(max(angle, q[k] - tp.max_reference_deviation), q[k] + tp.max_reference_deviation)
+        command[k] = q_ref[k]
+        command[12 + k] = qd_ref[k]
+        command[24 + k] = tp.joint_kp
+        command[36 + k] = tp.joint_kd
+        command[48 + k] = tau[k]
+
+    diag[:] = last_diag
+    diag[d[_STATUS]] = status
+    diag[d[_CONSECUTIVE]] = 0.0
+    capture_point(s, ground, diag[d[_CP] : d[_CP] + 2])
+    for k in range(3):
+        diag[d[_TRUNK_P] + k] = body[k] - s.p_WB[k]
+    orientation_error_W(rotation_matrix_wxyz(body[3:7]), s.R_WB, diag[d[_TRUNK_R] : d[_TRUNK_R] + 3])
+    for i in range(4):
+        error = 0.0
+        if round(leg_x[12 * i]) == _FOOT_MODE:
+            for k in range(3):
+                error += (leg_x[12 * i + 1 + k] - s.p_contacts[i, k]) ** 2
+        diag[d[_FEET] + i] = math.sqrt(error)
+    for k in range(tp.max_residuals):
+        diag[d[_RESIDUALS] + k] = residuals[k] if k < num_levels else 0.0
+    for j in range(3 * nc):
+        diag[d[_FORCES] + j] = x[nv + j]
+    for k in range(12):
+        diag[d[_TAU] + k] = tau[k]
+    for i in range(nc):
+        diag[d[_RAMP] + i] = new_ramp[i]
+    reference[:12] = q_ref
+    reference[12:] = qd_ref
+    ramp[:] = new_ramp
+    hold[:] = new_hold
+    return status
