@@ -5,8 +5,8 @@ the measured joints, a `RobotSnapshot` with the mass matrix, bias and gravity te
 Jacobians and their bias accelerations, the trunk Jacobian and the centre of mass. Two paths
 give the same terms to rounding:
 
-* compiled (the default): one call of `go1_dynamics.go1_dynamics` (~15 us), whose parameters are
-  read from the same plant;
+* compiled (the default): one call of `go1_dynamics.go1_dynamics` (~20 us with the snapshot),
+  whose parameters are read from the same plant;
 * Drake (`compiled=False`, the reference the tests compare against): a plant (from
   `make_go1_plant`, never the simulation's) and a scratch context overwritten from the inputs,
   then one Drake call per term (~230 us). The context holds no information that survives a tick,
@@ -39,7 +39,8 @@ def contact_names(prongs: ProngDesign | None) -> tuple[str, ...]:
 
 
 class ControllerModel:
-    """Plant, scratch context and contact frames for the whole-body controller."""
+    """The whole-body controller's dynamics terms: compiled (`Go1Dynamics`) or, for reference,
+    from a plant, a scratch context and the contact frames."""
 
     def __init__(self, prongs: ProngDesign | None = None, com_bias: bool = True, compiled: bool = True) -> None:
         """`com_bias` False returns Jdot_com v as zeros: it cost ~70 us a tick on the Drake path and
