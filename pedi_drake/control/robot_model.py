@@ -1,17 +1,21 @@
 """The controller's view of the robot at one instant: the dynamics terms every task is built from.
 
-`ControllerModel` owns a plant (from `make_go1_plant`, never the simulation's) and a scratch
-context. `ControllerModel.update(base_state, q_joints, v_joints)` overwrites that context from
-the state ESTIMATE and the measured joints and returns a `RobotSnapshot` with the mass matrix,
-bias and gravity terms, contact Jacobians and their bias accelerations, the trunk Jacobian and
-the centre of mass. The scratch context holds no information that survives a tick (it is fully
-rewritten from inputs each time), so it is a computation workspace, not controller state.
+`ControllerModel.update(base_state, q_joints, v_joints)` computes, from the state ESTIMATE and
+the measured joints, a `RobotSnapshot` with the mass matrix, bias and gravity terms, contact
+Jacobians and their bias accelerations, the trunk Jacobian and the centre of mass. Two paths
+give the same terms to rounding:
+
+* compiled (the default): one call of `go1_dynamics.go1_dynamics` (~20 us with the snapshot),
+  whose parameters are read from the same plant;
+* Drake (`compiled=False`, the reference the tests compare against): a plant (from
+  `make_go1_plant`, never the simulation's) and a scratch context overwritten from the inputs,
+  then one Drake call per term (~230 us). The context holds no information that survives a tick,
+  so it is a computation workspace, not controller state.
 
 Velocity coordinates are the plant's: v = [w_WB (3, world); v_WB (3, world); joint rates], with
 the joints at `plant_map.v_index` in Unitree order.
 """
 
-import dataclasses
 import math
 
 import numpy as np
@@ -19,7 +23,11 @@ from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import Context
 
 from pedi_drake import robot
+from pedi_drake.control.go1_dynamics import Go1Dynamics, contact_points
+from pedi_drake.control.robot_snapshot import RobotSnapshot
 from pedi_drake.prongs import ProngDesign
+
+__all__ = ["FOOT_CONTACTS", "ControllerModel", "RobotSnapshot", "contact_names"]
 
 # Contact names: the four feet (Unitree order) then the prongs.
 FOOT_CONTACTS = robot.LEG_NAMES
@@ -30,46 +38,18 @@ def contact_names(prongs: ProngDesign | None) -> tuple[str, ...]:
     return FOOT_CONTACTS + robot.prong_body_names(prongs)
 
 
-@dataclasses.dataclass
-class RobotSnapshot:
-    """Dynamics terms at the current estimate. Shapes use nv = 18 and nc contacts."""
-
-    q: np.ndarray  # (nq,) plant positions
-    v: np.ndarray  # (nv,) plant velocities
-    M: np.ndarray  # (nv, nv) mass matrix, reflected rotor inertia included [kg, kg m, kg m^2]
-    h: np.ndarray  # (nv,) C(q, v) v - tau_g(q) + joint damping: all but M vdot on the dynamics' left side
-    J_contacts: np.ndarray  # (3 nc, nv) world translational Jacobians of the contact points
-    Jdot_v_contacts: np.ndarray  # (3 nc,) their bias accelerations [m/s^2]
-    p_contacts: np.ndarray  # (nc, 3) contact point positions in world [m]
-    J_trunk: np.ndarray  # (6, nv) trunk spatial Jacobian [angular; translational], world frame
-    Jdot_v_trunk: np.ndarray  # (6,) trunk spatial bias acceleration
-    R_WB: np.ndarray  # (3, 3) trunk orientation
-    p_WB: np.ndarray  # (3,) trunk origin [m]
-    p_com: np.ndarray  # (3,) centre of mass in world [m]
-    J_com: np.ndarray  # (3, nv) centre-of-mass Jacobian
-    Jdot_v_com: np.ndarray  # (3,) centre-of-mass bias acceleration [m/s^2]
-    q_joints: np.ndarray  # (12,) Unitree order [rad]
-    v_joints: np.ndarray  # (12,) Unitree order [rad/s]
-    V_trunk: np.ndarray  # (6,) trunk spatial velocity [w; v] in world [rad/s, m/s]
-    v_com: np.ndarray  # (3,) centre-of-mass velocity in world [m/s]
-    # (T, t0) of tasks.torque_map, filled on first use.
-    torque_map: tuple[np.ndarray, np.ndarray] | None = None
-    # ControllerModel.calf_orientation of the legs with a 5-D foot task, by Unitree leg index.
-    calf_orientations: dict = dataclasses.field(default_factory=dict)
-
-    @property
-    def num_contacts(self) -> int:
-        return self.p_contacts.shape[0]
-
-
 class ControllerModel:
-    """Plant, scratch context and contact frames for the whole-body controller."""
+    """The whole-body controller's dynamics terms: compiled (`Go1Dynamics`) or, for reference,
+    from a plant, a scratch context and the contact frames."""
 
-    def __init__(self, prongs: ProngDesign | None = None, com_bias: bool = True) -> None:
-        """`com_bias` False skips Jdot_com v (returned as zeros): it costs ~70 us a tick and only
-        enters the capture-point prediction scaled by horizon / omega (below 1 mm at standing speeds)."""
+    def __init__(self, prongs: ProngDesign | None = None, com_bias: bool = True, compiled: bool = True) -> None:
+        """`com_bias` False returns Jdot_com v as zeros: it cost ~70 us a tick on the Drake path and
+        only enters the capture-point prediction scaled by horizon / omega (below 1 mm at standing
+        speeds); the compiled path honours it too, so both paths give the same commands.
+        `compiled` False computes every term with Drake calls (the reference)."""
         self.prongs = prongs
         self.com_bias = com_bias
+        self.compiled = compiled
         self.plant, self.plant_map = robot.make_go1_plant(robot.design_key(prongs))
         self.context: Context = self.plant.CreateDefaultContext()
         plant, model = self.plant, self.plant_map.model
@@ -77,12 +57,9 @@ class ControllerModel:
         self.trunk_frame = plant.GetBodyByName(robot.TRUNK_BODY_NAME, model).body_frame()
         self.contact_names = contact_names(prongs)
         frames, points = [], []
-        for name in robot.FOOT_BODY_NAMES:
+        for name, p_BP in contact_points(prongs):  # foot sphere centres, then prong tip sphere centres
             frames.append(plant.GetBodyByName(name, model).body_frame())
-            points.append(np.zeros(3))  # the foot sphere's centre
-        for name in robot.prong_body_names(prongs):
-            frames.append(plant.GetBodyByName(name, model).body_frame())
-            points.append(np.array([0.0, 0.0, -prongs.length]))  # the tip sphere's centre
+            points.append(p_BP)
         self.calf_frames = tuple(plant.GetBodyByName(f"{leg}_calf", model).body_frame() for leg in robot.LEG_NAMES)
         self.contact_frames = tuple(frames)
         self.contact_points = tuple(points)
@@ -97,13 +74,24 @@ class ControllerModel:
         self.damping = np.zeros(self.nv)
         for name, index in zip(robot.JOINT_NAMES, self.plant_map.v_index, strict=True):
             self.damping[index] = plant.GetJointByName(name, model).default_damping_vector()[0]
+        self.dynamics = Go1Dynamics(prongs) if compiled else None
 
     @property
     def num_contacts(self) -> int:
         return len(self.contact_frames)
 
     def update(self, base_state: np.ndarray, q_joints: np.ndarray, v_joints: np.ndarray) -> RobotSnapshot:
-        """Sets the scratch context from the estimate and measured joints; returns the dynamics terms."""
+        """The dynamics terms at the estimate and measured joints (compiled or Drake path)."""
+        if self.dynamics is None:
+            return self.update_with_drake(base_state, q_joints, v_joints)
+        snapshot = self.dynamics.update(base_state, q_joints, v_joints)
+        if not self.com_bias:
+            snapshot.Jdot_v_com[:] = 0.0
+        return snapshot
+
+    def update_with_drake(self, base_state: np.ndarray, q_joints: np.ndarray, v_joints: np.ndarray) -> RobotSnapshot:
+        """The reference path: sets the scratch context from the estimate and measured joints and
+        computes every term with Drake. Also makes `calf_orientation_with_drake` valid."""
         plant, context, pm = self.plant, self.context, self.plant_map
         base = np.asarray(base_state, float)  # layout: pedi_drake.estimation.base_state
         quaternion = base[0:4] / math.sqrt(float(base[0:4] @ base[0:4]))
@@ -163,7 +151,13 @@ class ControllerModel:
     def calf_orientation(self, leg: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(R_WC (3, 3), J_w (3, nv), Jdot_w v (3,)) of the calf of leg `leg` (Unitree index) at
         the state of the last `update`: its orientation, angular-velocity Jacobian (world) and
-        angular bias acceleration [rad/s^2]. On demand: only a 5-D foot task needs it."""
+        angular bias acceleration [rad/s^2]. Only a 5-D foot task needs it."""
+        if self.dynamics is None:
+            return self.calf_orientation_with_drake(leg)
+        return self.dynamics.calf_orientation(leg)
+
+    def calf_orientation_with_drake(self, leg: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`calf_orientation` computed by Drake at the state of the last `update_with_drake`."""
         plant, context, frame, world = self.plant, self.context, self.calf_frames[leg], self.world
         kV = JacobianWrtVariable.kV
         J = plant.CalcJacobianSpatialVelocity(context, kV, frame, self._origin, world, world)
