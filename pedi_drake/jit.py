@@ -53,6 +53,17 @@ if ENABLED:
     numba.config.CACHE_DIR = str(_cache_folder())
 
 
+def new_record(dtype: np.dtype) -> np.ndarray:
+    """A one-element array of the structured `dtype`, zeroed: how records cross into compiled
+    code (a kernel takes the array and reads `a[0].field`).
+
+    numba resolves a plain record array's type from its dtype at the cost of an array, where a
+    tuple of arrays (a NamedTuple) costs tens of microseconds per call. Interpreted kernels (jit
+    disabled) read fields as attributes too, which needs numpy's recarray view."""
+    record = np.zeros(1, dtype=dtype)
+    return record if ENABLED else python_records(record)
+
+
 def python_records(array):
     """A structured array as numpy's recarray, whose records read fields as attributes the way
     compiled kernels do: for calling a kernel's `.py_func` on the records of compiled code."""
@@ -63,8 +74,11 @@ def kernel(function):
     """`function` compiled by numba (nopython, cached, releases the GIL) when enabled, else itself.
 
     The returned object is called like `function`; `.py_func` is always the plain function.
+    Division by zero gives inf or NaN as in numpy (numba's "numpy" error model), never an
+    exception: a kernel inside a control tick must return, and its callers check for finite
+    results.
     """
     if not ENABLED:
         function.py_func = function
         return function
-    return numba.njit(cache=True, nogil=True)(function)
+    return numba.njit(cache=True, nogil=True, error_model="numpy")(function)

@@ -80,7 +80,7 @@ def measure(prongs: ProngDesign | None, samples: int) -> dict[str, float]:
     compiled = ControllerModel(prongs)
     dynamics = compiled.dynamics
     out = dynamics.new_output()
-    _repeat_go1_dynamics(dynamics.model, bases, q, v, out, 1)  # compiled here, not timed
+    _repeat_go1_dynamics(dynamics.model_record, bases, q, v, out, 1)  # compiled here, not timed
     states = list(zip(bases, q, v, strict=True))
 
     def block(function, calls):
@@ -99,10 +99,10 @@ def measure(prongs: ProngDesign | None, samples: int) -> dict[str, float]:
         "drake calf_orientation (one leg)": median_us_per_call(block(drake_calf, 8), 8, samples),
         "compiled update (RobotSnapshot)": median_us_per_call(block(compiled.update, 64), 64, samples),
         "go1_dynamics from Python": median_us_per_call(
-            block(lambda b, qj, vj: go1_dynamics(dynamics.model, b, qj, vj, out), 64), 64, samples
+            block(lambda b, qj, vj: go1_dynamics(dynamics.model_record, b, qj, vj, out), 64), 64, samples
         ),
         "go1_dynamics from compiled code": median_us_per_call(
-            lambda: _repeat_go1_dynamics(dynamics.model, bases, q, v, out, 1024), 1024, samples
+            lambda: _repeat_go1_dynamics(dynamics.model_record, bases, q, v, out, 1024), 1024, samples
         ),
     }
 

@@ -9,12 +9,13 @@ same solution on random and recorded controller states.
 
 Inputs are records (one-element structured arrays, indexed [0] in compiled code): the stack
 parameters (constants of the configured controller, built once by `stack_params`), a snapshot
-(the dynamics terms of `robot_model.RobotSnapshot`, `snapshot_dtype`) and the resolved
+(the dynamics terms of `robot_model.RobotSnapshot`, `go1_dynamics.output_dtype`) and the resolved
 references of the instant (`stacks.ResolvedInputs`, as arrays); the rows go into a table record
 (`table_dtype`).
 """
 
 import math
+
 import numpy as np
 
 from pedi_drake import robot
@@ -22,53 +23,11 @@ from pedi_drake.control import references
 from pedi_drake.control.config import WholeBodyControllerConfig
 from pedi_drake.control.stacks import SLIDING_SPEED
 from pedi_drake.control.tasks import GRAVITY
-from pedi_drake.friction import pyramid_slope
-from pedi_drake import jit
-from pedi_drake.jit import kernel
+from pedi_drake.jit import kernel, new_record
 
 STACK_PAPER000, STACK_PAPER003 = 0, 1
 # Leg reference modes (references.py).
 _FOOT, _JOINTS, _FOOT_POSE = references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, references.LEG_MODE_FOOT_POSE
-
-
-def snapshot_dtype(nv: int, nc: int) -> np.dtype:
-    """`robot_model.RobotSnapshot` as one record (`new_record`), with every calf's orientation
-    terms: the layout the compiled dynamics fill and the compiled tasks read."""
-    return np.dtype(
-        [
-            ("q", "f8", nv + 1),  # plant positions (quaternion, position, joints)
-            ("v", "f8", nv),  # plant velocities
-            ("M", "f8", (nv, nv)),
-            ("h", "f8", nv),
-            ("J_contacts", "f8", (3 * nc, nv)),
-            ("Jdot_v_contacts", "f8", 3 * nc),  # [m/s^2]
-            ("p_contacts", "f8", (nc, 3)),  # [m]
-            ("J_trunk", "f8", (6, nv)),
-            ("Jdot_v_trunk", "f8", 6),
-            ("R_WB", "f8", (3, 3)),
-            ("p_WB", "f8", 3),  # [m]
-            ("p_com", "f8", 3),  # [m]
-            ("J_com", "f8", (3, nv)),
-            ("Jdot_v_com", "f8", 3),  # [m/s^2]
-            ("q_joints", "f8", 12),  # Unitree order [rad]
-            ("v_joints", "f8", 12),  # [rad/s]
-            ("V_trunk", "f8", 6),  # [w; v] world [rad/s, m/s]
-            ("v_com", "f8", 3),  # [m/s]
-            ("R_calf", "f8", (4, 3, 3)),  # R_WC of each calf, Unitree leg order
-            ("J_calf", "f8", (4, 3, nv)),  # each calf's angular-velocity Jacobian (world)
-            ("bias_calf", "f8", (4, 3)),  # each calf's angular bias acceleration [rad/s^2]
-        ]
-    )
-
-
-def new_record(dtype: np.dtype) -> np.ndarray:
-    """A one-element array of `dtype`, zeroed: how records cross into compiled code (`a[0]` there).
-
-    numba resolves a plain record array's type from its dtype at the cost of an array, where a
-    tuple of arrays costs tens of microseconds per call. Interpreted kernels (jit disabled) read
-    fields as attributes too, which needs numpy's recarray view (`jit.python_records`)."""
-    record = np.zeros(1, dtype=dtype)
-    return record if jit.ENABLED else jit.python_records(record)
 
 
 # The constants of a configured whole-body controller (`stack_params`).
@@ -91,6 +50,7 @@ STACK_PARAMS_DTYPE = np.dtype(
         ("joint_limit_horizon", "f8"),  # [s]
         ("joint_limit_margin", "f8"),  # [rad]
         ("balance_horizon", "f8"),  # [s]
+        ("com_bias", "?"),  # Jdot_com v in the capture point's prediction (else taken as zero)
         ("trunk_orientation_gains", "f8", 2),  # kp [1/s^2], kd [1/s]
         ("trunk_position_gains", "f8", 2),
         ("foot_gains", "f8", 2),
@@ -127,6 +87,7 @@ def stack_params(
     r["q_lower"], r["q_upper"], r["v_max"] = robot.Q_LOWER, robot.Q_UPPER, robot.VELOCITY_LIMIT
     r["joint_limit_horizon"], r["joint_limit_margin"] = config.joint_limit_horizon, config.joint_limit_margin
     r["balance_horizon"] = config.balance_horizon
+    r["com_bias"] = bool(config.balance_com_bias)
     for field, gains in (
         ("trunk_orientation_gains", config.trunk_orientation),
         ("trunk_position_gains", config.trunk_position),
@@ -479,13 +440,17 @@ def build_levels(
     R_ref = rotation_matrix_wxyz(body[3:7])
     orientation_error_W(R_ref, s.R_WB, error)
     kp, kd = p.trunk_orientation_gains[0], p.trunk_orientation_gains[1]
-    row = _pd_row_targets(s.J_trunk[:3], s.v, error, body[13:16], body[16:19], kp, kd, s.Jdot_v_trunk[:3], eq_A, eq_b, row)
+    row = _pd_row_targets(
+        s.J_trunk[:3], s.v, error, body[13:16], body[16:19], kp, kd, s.Jdot_v_trunk[:3], eq_A, eq_b, row
+    )
     if p.stack == STACK_PAPER003:
         level = _close_level(table, level, row, hard, soft)
     for i in range(3):
         error[i] = body[i] - s.p_WB[i]
     kp, kd = p.trunk_position_gains[0], p.trunk_position_gains[1]
-    row = _pd_row_targets(s.J_trunk[3:], s.v, error, body[7:10], body[10:13], kp, kd, s.Jdot_v_trunk[3:], eq_A, eq_b, row)
+    row = _pd_row_targets(
+        s.J_trunk[3:], s.v, error, body[7:10], body[10:13], kp, kd, s.Jdot_v_trunk[3:], eq_A, eq_b, row
+    )
     if p.stack == STACK_PAPER003:
         level = _close_level(table, level, row, hard, soft)
 
@@ -502,18 +467,20 @@ def build_levels(
                 error[k] = block[1 + k] - s.p_contacts[i, k]
             a_ref = block[7:10] if mode == _FOOT else zero3
             J = s.J_contacts[3 * i : 3 * i + 3]
-            row = _pd_row_targets(J, s.v, error, block[4:7], a_ref, kp, kd, s.Jdot_v_contacts[3 * i : 3 * i + 3], eq_A, eq_b, row)
+            row = _pd_row_targets(
+                J, s.v, error, block[4:7], a_ref, kp, kd, s.Jdot_v_contacts[3 * i : 3 * i + 3], eq_A, eq_b, row
+            )
             if mode == _FOOT_POSE:
                 calf_error = np.empty(3)
-                orientation_error_W(axis_angle_matrix(block[7:10]), s.R_calf[i], calf_error)
+                orientation_error_W(axis_angle_matrix(block[7:10]), s.R_WC[i], calf_error)
                 kp, kd = p.calf_gains[0], p.calf_gains[1]
                 for k in range(2):
                     rate = 0.0
                     for j in range(nv):
-                        rate += s.J_calf[i, k, j] * s.v[j]
+                        rate += s.J_w_calf[i, k, j] * s.v[j]
                     eq_A[row, :] = 0.0
-                    eq_A[row, :nv] = s.J_calf[i, k]
-                    eq_b[row] = kp * calf_error[k] - kd * rate - s.bias_calf[i, k]
+                    eq_A[row, :nv] = s.J_w_calf[i, k]
+                    eq_b[row] = kp * calf_error[k] - kd * rate - s.Jdot_w_calf[i, k]
                     row += 1
         elif mode == _JOINTS or not no_motion[i]:
             kp, kd = p.leg_joint_gains[0], p.leg_joint_gains[1]

@@ -11,8 +11,12 @@ OPTIMAL = 1
 
 def _daqp(H, f, C, u, eps_prox):
     y, _, exitflag, _ = daqp.solve(
-        np.ascontiguousarray(H), np.ascontiguousarray(f), np.ascontiguousarray(C), np.ascontiguousarray(u),
-        np.full(len(u), -1e30), eps_prox=eps_prox,
+        np.ascontiguousarray(H),
+        np.ascontiguousarray(f),
+        np.ascontiguousarray(C),
+        np.ascontiguousarray(u),
+        np.full(len(u), -1e30),
+        eps_prox=eps_prox,
     )
     return np.asarray(y, float), (1 if exitflag in (1, 2) else 0)
 

@@ -62,7 +62,7 @@ from pydrake.multibody.tree import BodyIndex, JointActuatorIndex, JointIndex
 from pedi_drake import robot
 from pedi_drake.control.robot_snapshot import RobotSnapshot
 from pedi_drake.exceptions import PediError
-from pedi_drake.jit import kernel
+from pedi_drake.jit import kernel, new_record
 from pedi_drake.prongs import ProngDesign
 
 
@@ -108,53 +108,44 @@ class Go1Model(NamedTuple):
         return _model_from_plant(plant, plant_map, prongs)
 
 
-class Go1DynamicsOutput(NamedTuple):
-    """What `go1_dynamics` fills: the fields of `RobotSnapshot` (v in the plant's order) and the
-    calves' angular terms. Shapes use nq, nv, nc."""
+def output_dtype(nq: int, nv: int, nc: int) -> np.dtype:
+    """What `go1_dynamics` fills, as a record (`jit.new_record`): the fields of `RobotSnapshot` (v
+    in the plant's order) and the calves' angular terms."""
+    return np.dtype(
+        [
+            ("q", "f8", nq),  # plant positions, unit quaternion
+            ("v", "f8", nv),  # plant velocities
+            ("M", "f8", (nv, nv)),  # mass matrix, reflected rotor inertia included
+            ("h", "f8", nv),  # C(q, v) v - tau_g(q) + damping v [N m, N]
+            ("J_contacts", "f8", (3 * nc, nv)),  # translational Jacobians of the contact points, W
+            ("Jdot_v_contacts", "f8", 3 * nc),  # their bias accelerations, W [m/s^2]
+            ("p_contacts", "f8", (nc, 3)),  # contact points in W [m]
+            ("J_trunk", "f8", (6, nv)),  # trunk spatial Jacobian [angular; translational], W
+            ("Jdot_v_trunk", "f8", 6),  # trunk spatial bias acceleration [rad/s^2; m/s^2]
+            ("R_WB", "f8", (3, 3)),
+            ("p_WB", "f8", 3),  # [m]
+            ("p_com", "f8", 3),  # centre of mass in W [m]
+            ("J_com", "f8", (3, nv)),
+            ("Jdot_v_com", "f8", 3),  # [m/s^2]
+            ("V_trunk", "f8", 6),  # [w_WB; v_WB] [rad/s, m/s]
+            ("v_com", "f8", 3),  # [m/s]
+            ("q_joints", "f8", 12),  # the measured joints, Unitree order [rad]
+            ("v_joints", "f8", 12),  # [rad/s]
+            ("R_WC", "f8", (4, 3, 3)),  # calf orientations, Unitree leg order
+            ("J_w_calf", "f8", (4, 3, nv)),  # calf angular-velocity Jacobians, W
+            ("Jdot_w_calf", "f8", (4, 3)),  # calf angular bias accelerations, W [rad/s^2]
+        ]
+    )
 
-    q: np.ndarray  # (nq,) plant positions, unit quaternion
-    v: np.ndarray  # (nv,) plant velocities
-    M: np.ndarray  # (nv, nv) mass matrix, reflected rotor inertia included
-    h: np.ndarray  # (nv,) C(q, v) v - tau_g(q) + damping v [N m, N]
-    J_contacts: np.ndarray  # (3 nc, nv) translational Jacobians of the contact points, W
-    Jdot_v_contacts: np.ndarray  # (3 nc,) their bias accelerations, W [m/s^2]
-    p_contacts: np.ndarray  # (nc, 3) contact points in W [m]
-    J_trunk: np.ndarray  # (6, nv) trunk spatial Jacobian [angular; translational], W
-    Jdot_v_trunk: np.ndarray  # (6,) trunk spatial bias acceleration [rad/s^2; m/s^2]
-    R_WB: np.ndarray  # (3, 3)
-    p_WB: np.ndarray  # (3,) [m]
-    p_com: np.ndarray  # (3,) centre of mass in W [m]
-    J_com: np.ndarray  # (3, nv)
-    Jdot_v_com: np.ndarray  # (3,) [m/s^2]
-    V_trunk: np.ndarray  # (6,) [w_WB; v_WB] [rad/s, m/s]
-    v_com: np.ndarray  # (3,) [m/s]
-    R_WC: np.ndarray  # (4, 3, 3) calf orientations, Unitree leg order
-    J_w_calf: np.ndarray  # (4, 3, nv) calf angular-velocity Jacobians, W
-    Jdot_w_calf: np.ndarray  # (4, 3) calf angular bias accelerations, W [rad/s^2]
 
-    @staticmethod
-    def empty(nq: int, nv: int, nc: int) -> "Go1DynamicsOutput":
-        return Go1DynamicsOutput(
-            q=np.empty(nq),
-            v=np.empty(nv),
-            M=np.empty((nv, nv)),
-            h=np.empty(nv),
-            J_contacts=np.empty((3 * nc, nv)),
-            Jdot_v_contacts=np.empty(3 * nc),
-            p_contacts=np.empty((nc, 3)),
-            J_trunk=np.empty((6, nv)),
-            Jdot_v_trunk=np.empty(6),
-            R_WB=np.empty((3, 3)),
-            p_WB=np.empty(3),
-            p_com=np.empty(3),
-            J_com=np.empty((3, nv)),
-            Jdot_v_com=np.empty(3),
-            V_trunk=np.empty(6),
-            v_com=np.empty(3),
-            R_WC=np.empty((4, 3, 3)),
-            J_w_calf=np.empty((4, 3, nv)),
-            Jdot_w_calf=np.empty((4, 3)),
-        )
+def model_record(model: Go1Model) -> np.ndarray:
+    """`model` as a record (`jit.new_record`), the form `go1_dynamics` takes."""
+    fields = model._asdict()
+    dtype = np.dtype([(name, value.dtype, value.shape) for name, value in fields.items()])
+    record = new_record(dtype)
+    for name, value in fields.items():
+        record[0][name] = value
+    return record
 
 
 def _model_from_plant(plant: MultibodyPlant, plant_map: robot.Go1PlantMap, prongs: ProngDesign | None) -> Go1Model:
@@ -301,12 +292,13 @@ def _point_bias(V, A, r0, r1, r2):
 
 
 @kernel
-def go1_dynamics(model, base_state, q_joints, v_joints, out):
-    """Fills `out` (a Go1DynamicsOutput) from the estimate and the measured joints.
+def go1_dynamics(model_record, base_state, q_joints, v_joints, out_record):
+    """Fills the record `out_record` (`output_dtype`) from the estimate and the measured joints.
 
-    model: Go1Model; base_state (13,) (pedi_drake.estimation.base_state layout: quaternion wxyz,
+    model_record: the record of a Go1Model (`model_record`); base_state (13,) (pedi_drake.estimation.base_state layout: quaternion wxyz,
     p_WB [m], w_WB [rad/s] and v_WB [m/s] in W); q_joints, v_joints (12,) Unitree order [rad, rad/s].
     """
+    model, out = model_record[0], out_record[0]
     n = model.parent.shape[0]
     nv = out.v.shape[0]
     qs, vs = model.base_start[0], model.base_start[1]
@@ -322,6 +314,8 @@ def go1_dynamics(model, base_state, q_joints, v_joints, out):
         out.p_WB[k] = base_state[4 + k]
         out.v[vs + k] = base_state[7 + k]
         out.v[vs + 3 + k] = base_state[10 + k]
+    out.q_joints[:] = q_joints
+    out.v_joints[:] = v_joints
     for i in range(1, n):
         out.q[model.joint_q[i]] = q_joints[model.joint_unitree[i]]
         out.v[model.joint_v[i]] = v_joints[model.joint_unitree[i]]
@@ -604,26 +598,27 @@ class Go1Dynamics:
         self.prongs = prongs
         plant, self.plant_map = robot.make_go1_plant(robot.design_key(prongs))
         self.model = Go1Model.from_plant(plant, self.plant_map, prongs)
+        self.model_record = model_record(self.model)
         self.nq, self.nv = plant.num_positions(), plant.num_velocities()
         self.num_contacts = self.model.contact_body.shape[0]
         self.total_mass = float(self.model.mass.sum())
         self.last = self.new_output()  # the outputs of the last `update` (calf terms read from here)
         self.warm_up()
 
-    def new_output(self) -> Go1DynamicsOutput:
-        """Output arrays sized for this model (for callers that keep their own and call the kernel)."""
-        return Go1DynamicsOutput.empty(self.nq, self.nv, self.num_contacts)
+    def new_output(self) -> np.ndarray:
+        """An output record sized for this model (for callers that keep their own and call the kernel)."""
+        return new_record(output_dtype(self.nq, self.nv, self.num_contacts))
 
     def warm_up(self) -> None:
         """Compiles (or loads from cache) the kernel for these argument types: never inside a tick."""
         standing = np.concatenate([[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3], np.zeros(6)])
-        go1_dynamics(self.model, standing, robot.STANDING_Q.astype(float), np.zeros(robot.NUM_JOINTS), self.last)
+        go1_dynamics(self.model_record, standing, robot.STANDING_Q.astype(float), np.zeros(robot.NUM_JOINTS), self.last)
 
-    def compute(self, base_state: np.ndarray, q_joints: np.ndarray, v_joints: np.ndarray) -> Go1DynamicsOutput:
+    def compute(self, base_state: np.ndarray, q_joints: np.ndarray, v_joints: np.ndarray) -> np.ndarray:
         """Runs the kernel into fresh arrays (earlier results stay valid) and keeps them as `last`."""
         out = self.new_output()
         go1_dynamics(
-            self.model,
+            self.model_record,
             np.ascontiguousarray(base_state, dtype=float),
             np.ascontiguousarray(q_joints, dtype=float),
             np.ascontiguousarray(v_joints, dtype=float),
@@ -634,29 +629,29 @@ class Go1Dynamics:
 
     def update(self, base_state: np.ndarray, q_joints: np.ndarray, v_joints: np.ndarray) -> RobotSnapshot:
         """The dynamics terms at the estimate `base_state` (13,) and measured joints (12,) each."""
-        out = self.compute(base_state, q_joints, v_joints)
+        out = self.compute(base_state, q_joints, v_joints)[0]
         return RobotSnapshot(
-            q=out.q,
-            v=out.v,
-            M=out.M,
-            h=out.h,
-            J_contacts=out.J_contacts,
-            Jdot_v_contacts=out.Jdot_v_contacts,
-            p_contacts=out.p_contacts,
-            J_trunk=out.J_trunk,
-            Jdot_v_trunk=out.Jdot_v_trunk,
-            R_WB=out.R_WB,
-            p_WB=out.p_WB,
-            p_com=out.p_com,
-            J_com=out.J_com,
-            Jdot_v_com=out.Jdot_v_com,
+            q=out["q"],
+            v=out["v"],
+            M=out["M"],
+            h=out["h"],
+            J_contacts=out["J_contacts"],
+            Jdot_v_contacts=out["Jdot_v_contacts"],
+            p_contacts=out["p_contacts"],
+            J_trunk=out["J_trunk"],
+            Jdot_v_trunk=out["Jdot_v_trunk"],
+            R_WB=out["R_WB"],
+            p_WB=out["p_WB"],
+            p_com=out["p_com"],
+            J_com=out["J_com"],
+            Jdot_v_com=out["Jdot_v_com"],
             q_joints=np.array(q_joints, dtype=float),
             v_joints=np.array(v_joints, dtype=float),
-            V_trunk=out.V_trunk,
-            v_com=out.v_com,
+            V_trunk=out["V_trunk"],
+            v_com=out["v_com"],
         )
 
     def calf_orientation(self, leg: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(R_WC, J_w (3, nv), Jdot_w v (3,)) of leg `leg`'s calf at the last `update`."""
-        last = self.last
-        return last.R_WC[leg], last.J_w_calf[leg], last.Jdot_w_calf[leg]
+        last = self.last[0]
+        return last["R_WC"][leg], last["J_w_calf"][leg], last["Jdot_w_calf"][leg]

@@ -41,6 +41,7 @@ from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, PediError, QpInfeasible
+from pedi_drake.jit import new_record
 from pedi_drake.go1_command import COMMAND_SIZE, held_command
 from pedi_drake.prongs import ProngDesign
 
@@ -151,25 +152,14 @@ class WholeBodyController(LeafSystem):
         self.diagnostics_port = self.DeclareStateOutputPort("diagnostics", self.diagnostics_state)
 
     def _compiled_records(self) -> None:
-        """The compiled tick's constant records and its buffers (a snapshot, a row table)."""
+        """The compiled tick's constant records and its workspaces (a snapshot, a row table)."""
         nv, nc = self.model.nv, self.num_contacts
         self._stack_params = compiled_stack.stack_params(
             self.config, self.layout.v_joints, nv, nc, self.model.total_mass
         )
         self._tick_params = whole_body_tick.tick_params(self.config, self.hqp_settings, self.diag, MAX_LEVELS)
-        self._snapshot = compiled_stack.new_record(compiled_stack.snapshot_dtype(nv, nc))
-        self._table = compiled_stack.new_record(compiled_stack.table_dtype(nv, nc))
-
-    def _fill_snapshot(self, base, q, qd) -> None:
-        s = self.model.update(base, q, qd)
-        r = self._snapshot[0]
-        for name in (
-            "q", "v", "M", "h", "J_contacts", "Jdot_v_contacts", "p_contacts", "J_trunk", "Jdot_v_trunk",
-            "R_WB", "p_WB", "p_com", "J_com", "Jdot_v_com", "q_joints", "v_joints", "V_trunk", "v_com",
-        ):
-            r[name] = getattr(s, name)
-        for i in range(4):
-            r["R_calf"][i], r["J_calf"][i], r["bias_calf"][i] = self.model.calf_orientation(i)
+        self._snapshot = self.model.dynamics.new_output()
+        self._table = new_record(compiled_stack.table_dtype(nv, nc))
 
     def _update_compiled(self, context: Context, discrete_state: DiscreteValues) -> None:
         start = time.perf_counter()
@@ -187,12 +177,12 @@ class WholeBodyController(LeafSystem):
         polygon_x = self._optional(self.safety_polygon_port, context, _DEFAULT_POLYGON)
         mu_x = self._optional(self.friction_port, context, np.array([self.config.friction]))
         states = [context.get_discrete_state(index).value() for index in self._state_indices]
-        self._fill_snapshot(base, q, qd)
         outputs = [discrete_state.get_mutable_vector(index).get_mutable_value() for index in self._state_indices]
         solve_start = time.perf_counter()
         whole_body_tick.whole_body_tick(
             self._tick_params,
             self._stack_params,
+            self.model.dynamics.model_record,
             self._snapshot,
             base,
             q,

@@ -15,15 +15,17 @@ in Unitree order), ramp (nc), hold (8: initialised flag, p_WB, quaternion), diag
 """
 
 import math
+
 import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.control import compiled_hqp
+from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.compiled_stack import (
     MAX_LEVELS,
     build_levels,
-    new_record,
     capture_point,
+    new_record,
     orientation_error_W,
     polygon_halfplanes,
     rotation_matrix_wxyz,
@@ -217,6 +219,7 @@ def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
 def whole_body_tick(
     tick_params: np.ndarray,
     stack_params: np.ndarray,
+    dynamics_model: np.ndarray,
     snapshot: np.ndarray,
     base: np.ndarray,
     q: np.ndarray,
@@ -239,11 +242,12 @@ def whole_body_tick(
     hold: np.ndarray,
     diag: np.ndarray,
 ) -> float:
-    """One controller tick (WholeBodyController._update) from the snapshot `s` of the estimate
-    `base` and the measured joints `q`, `qd`: writes the next command, reference, ramp, hold and
-    diagnostics (all but the two timing entries) and returns the tick's status. The records are
-    one-element arrays of TICK_PARAMS_DTYPE, compiled_stack.STACK_PARAMS_DTYPE, snapshot_dtype and
-    table_dtype."""
+    """One controller tick (WholeBodyController._update) at the estimate `base` and the measured
+    joints `q`, `qd`: writes the next command, reference, ramp, hold and diagnostics (all but the
+    two timing entries) and returns the tick's status. The records are one-element arrays:
+    TICK_PARAMS_DTYPE, compiled_stack.STACK_PARAMS_DTYPE, go1_dynamics.model_record, and the
+    workspaces `snapshot` (go1_dynamics.output_dtype: the dynamics terms this tick used) and
+    `table_record` (compiled_stack.table_dtype: the levels' rows)."""
     tp, p, s, table = tick_params[0], stack_params[0], snapshot[0], table_record[0]
     nv, nc = p.nv, p.nc
     d = tp.diagnostics
@@ -255,6 +259,11 @@ def whole_body_tick(
         contact_set[i] = min(max(contact_set_in[i], 0.0), 1.0)
     if not (_all_finite(base) and _all_finite(q) and _all_finite(qd) and _all_finite(contact_set)):
         return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
+    if base[0] == 0.0 and base[1] == 0.0 and base[2] == 0.0 and base[3] == 0.0:
+        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
+    go1_dynamics(dynamics_model, base, q, qd, snapshot)
+    if not p.com_bias:
+        s.Jdot_v_com[:] = 0.0
     new_hold = last_hold.copy()
     new_ramp = last_ramp.copy()
     q_ref = last_reference[:12].copy()
@@ -332,7 +341,20 @@ def whole_body_tick(
     solved = _solve(tp, p, table, num_levels, False, x, residuals)
     if solved != compiled_hqp.STATUS_OK:
         num_levels = build_levels(
-            p, s, body, leg_x, new_ramp, no_motion, polygon_N[:rows], polygon_d[:rows], mu_x[0], ground, True, T, t0, table
+            p,
+            s,
+            body,
+            leg_x,
+            new_ramp,
+            no_motion,
+            polygon_N[:rows],
+            polygon_d[:rows],
+            mu_x[0],
+            ground,
+            True,
+            T,
+            t0,
+            table,
         )
         if num_levels > 0:
             # Sliding contacts that friction cannot stop at once: let them brake.
@@ -349,9 +371,7 @@ def whole_body_tick(
         # Integrate the QP's accelerations into the joint reference, kept near the measurement so
         # a long stall (e.g. contact with an obstacle) cannot wind up the PD.
         rate = qd_ref[k] + qdd * tp.period
-        qd_ref[k] = min(
-            max(rate, qd[k] - tp.max_reference_rate_deviation), qd[k] + tp.max_reference_rate_deviation
-        )
+        qd_ref[k] = min(max(rate, qd[k] - tp.max_reference_rate_deviation), qd[k] + tp.max_reference_rate_deviation)
         angle = q_ref[k] + qd_ref[k] * tp.period
         q_ref[k] = min(max(angle, q[k] - tp.max_reference_deviation), q[k] + tp.max_reference_deviation)
         command[k] = q_ref[k]
