@@ -336,8 +336,11 @@ def solve_weighted(
         e0, e1 = eq_start[level], eq_start[level + 1]
         A = eq_A[e0:e1]
         weight = level_weights[level]
-        H[:n, :n] += weight * (A.T @ A)
-        f[:n] -= weight * (A.T @ eq_b[e0:e1])
+        # Grouped as hqp.solve_weighted does: the weights span many decades, so the rounding of
+        # this sum is the solution's (the weighted QP is that ill-conditioned).
+        weighted_At = weight * A.T
+        H[:n, :n] += weighted_At @ A
+        f[:n] -= weighted_At @ eq_b[e0:e1]
         for i in range(soft_start[level], soft_start[level + 1]):
             H[n + i, n + i] = weight * soft_w[i] + regularization
     C = np.zeros((mh + ms, size))
