@@ -1,0 +1,846 @@
+"""Dense convex QP, compiled with numba and callable from other compiled kernels.
+
+    minimise   0.5 y'H y + f'y      over y (n,)
+    subject to C y <= u             (m rows; u_i >= 1e30 or +inf: no bound)
+
+with H symmetric positive SEMI-definite. The hierarchical QP's levels are such problems (H = A'A
+of a level's least squares, often singular, plus weights on soft violations), and each must be
+solved exactly, not regularised: a Tikhonov term would trade a level's own optimum for a smaller
+step, which breaks the strict priorities.
+
+Algorithm: proximal-point outer iterations around a dual active-set inner solver, with an exact
+step on the active face.
+
+1. Proximal point (Rockafellar 1976). For a weight eps > 0 and a centre y_k,
+
+       y_k+1 = argmin 0.5 y'H y + f'y + eps/2 ||y - y_k||^2   s.t.  C y <= u,
+
+   a strictly convex QP (Hessian G = H + eps I, factorised once per solve). Its KKT conditions are
+   those of the original problem except stationarity, whose residual is exactly
+   H y_k+1 + f + C'lam = -eps (y_k+1 - y_k): the iterates converge to a solution of the original
+   problem, and eps ||y_k+1 - y_k|| is the stationarity residual of the current iterate.
+
+2. Each strictly convex subproblem is solved by the dual active-set method of Goldfarb and Idnani
+   (1983). It keeps an active set A of linearly independent rows, the minimiser y of the
+   subproblem with the rows of A as equalities, and multipliers lam_A >= 0. With G = L L'
+   (Cholesky) and the QR factorisation L^-1 C_A' = Q [R; 0], the matrix J = L^-T Q = [J1 J2] gives
+   everything: J2 spans the null space of C_A, and for a violated row p (c_p'y > u_p), with
+   d = J'c_p = [d1; d2], the primal direction is z = -J2 d2 and the dual one r = R^-1 d1: along
+   y + t z, lam_A - t r, lam_p = t, the rows of A stay active, stationarity holds and the violation
+   of p falls as s_p - t ||d2||^2. The step is the smaller of the full step t2 = s_p / ||d2||^2
+   (p joins A) and the partial step t1 = min over r_j > 0 of lam_j / r_j (row j leaves A, then the
+   same p again). The dual objective never decreases and rises strictly with each full step, so
+   no active set repeats. J and R are updated by Givens rotations when a row joins or leaves
+   (O(n^2) each); a row whose d2 vanishes (dependent on A: redundant or degenerate rows) can only
+   be added after partial steps make room, and when it is dependent with no r_j > 0, row p with
+   the rows of A is a Farkas certificate of infeasibility: c_p = C_A'r with r <= 0 while
+   c_p'y > u_p where C_A y = u_A, so no y meets all of them.
+
+   Between outer iterations only the linear term f - eps y_k changes, so the factorisation of A
+   stays valid: each outer iteration restarts from the previous active set at the cost of
+   recomputing (y, lam_A) from it, dropping rows whose multiplier turned negative. A caller's
+   active set (the previous control tick's) warm-starts the first one the same way.
+
+3. Exact step. The proximal iterates approach the solution only linearly where H is small
+   compared with eps, but once the active set A is the optimal one the solution is that of an
+   equality-constrained QP. In the coordinates y = y_k+1 + J2 w its reduced Hessian is
+   J2'H J2 = I - eps J2'J2 (because J2'G J2 = I) and its gradient J2'(H y_k+1 + f), so a pivoted
+   Cholesky factorisation of that (n - q)-square matrix (semi-definite: zero pivots are the
+   directions in which the solution is not unique, left at zero) gives the face's minimiser y*.
+   Its multipliers follow from stationarity, lam* = -R^-1 J1'(H y* + f). If y* passes the KKT
+   test of the original problem (stationarity, primal feasibility, lam* >= 0, each to its
+   tolerance below) it is returned: an exact solution, typically after the first outer iteration.
+   Otherwise the proximal iterations go on from y_k+1.
+
+Stopping and status:
+
+* OPTIMAL: the exact step passed the KKT test, or the proximal step became small enough,
+  eps ||y_k+1 - y_k||_inf <= stationarity_tolerance * scale (y_k+1 is then feasible within
+  primal_tolerance, with multipliers >= 0 meeting complementarity, and stationary within that
+  residual). The scale is the largest of |f|_inf, |H y|_inf and |C_A'lam|_inf: gradient units.
+* INFEASIBLE: the certificate of step 2 (or a row with u_i = -inf).
+* UNBOUNDED: a proximal step that is a direction of recession (H d = 0, C d <= 0, f'd < 0), each
+  to a relative tolerance of 1e-9.
+* ITERATION_LIMIT: `max_iterations` inner steps (full, partial, and one per outer iteration)
+  used; y is the last iterate (feasible, not proven optimal).
+* NUMERICAL_FAILURE: non-finite input, H + eps I not positive definite (H not semi-definite), or
+  a non-finite iterate. y is then zero.
+
+y is never NaN. Where the solution is not unique the one returned is the exact step's (zero in
+the reduced Hessian's null directions from the proximal iterate), not necessarily DAQP's.
+
+The kernel works on caller-owned arrays: `make_workspace(n_max, m_max)` sizes them once for any
+problem up to that size, so a controller allocates nothing per tick.
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+
+from pedi_drake.jit import kernel
+
+# Status codes returned by `solve_dense_qp_kernel`.
+OPTIMAL = 1
+INFEASIBLE = -1
+UNBOUNDED = -2
+ITERATION_LIMIT = -3
+NUMERICAL_FAILURE = -4
+
+STATUS_NAMES = {
+    OPTIMAL: "optimal",
+    INFEASIBLE: "infeasible",
+    UNBOUNDED: "unbounded",
+    ITERATION_LIMIT: "iteration limit",
+    NUMERICAL_FAILURE: "numerical failure",
+}
+
+# Upper bounds at or beyond this are no bound (the convention of DAQP, which the controller used).
+INFINITE_BOUND = 1e30
+# A row whose component outside the active rows' span (in the metric of G) is below this fraction
+# of its norm is dependent on them: adding it would make R singular.
+_DEPENDENCY_TOLERANCE = 1e-10
+# Dual-step entries r_j below this fraction of max |r| are rounding of a zero (degenerate rows).
+_ZERO_TOLERANCE = 1e-13
+# Pivots of the reduced Hessian I - eps J2'J2 (eigenvalues in [0, 1]) below this are zero
+# curvature: H's curvature there is below about 1e-12 eps.
+_RANK_TOLERANCE = 1e-12
+# Relative tolerance of the recession-direction test (UNBOUNDED).
+_RECESSION_TOLERANCE = 1e-9
+
+# Rows of the matrix workspace (each n_max x n_max).
+_M_FACTOR = 0  # L, the Cholesky factor of H + eps I (lower)
+_M_J = 1  # J = L^-T Q
+_M_R = 2  # R (upper, q x q)
+_M_REDUCED = 3  # reduced Hessian of the exact step and its pivoted factor
+_NUM_MATRICES = 4
+# Rows of the vector workspace (each max(n_max, m_max) long).
+_V_D = 0  # d = J'c_p
+_V_Z = 1  # primal direction
+_V_R = 2  # dual direction over the active rows
+_V_LAMBDA = 3  # multipliers of the active rows, in active-set order
+_V_ROW_SCALE = 4  # 1 / ||c_i|| (1 for a zero row)
+_V_CENTRE = 5  # proximal centre y_k
+_V_LINEAR = 6  # linear term of the subproblem, f - eps y_k
+_V_W = 7  # scratch (n)
+_V_GRADIENT = 8  # H y + f
+_V_Y_EXACT = 9  # the exact step's point y*
+_V_LAMBDA_EXACT = 10  # its multipliers
+_NUM_VECTORS = 11
+# Rows of the integer workspace.
+_I_IS_ACTIVE = 0  # 1 for rows in the active set (m)
+_I_PERMUTATION = 1  # pivot order of the reduced Hessian (n)
+_NUM_INTEGER_ROWS = 2
+
+
+@dataclasses.dataclass(frozen=True)
+class DenseQpSettings:
+    """Settings of `solve` (the kernel takes them as plain numbers)."""
+
+    # Proximal weight eps [units of H]: larger converges in fewer outer iterations where H is
+    # small, smaller keeps H + eps I closer to H; the exact step makes the result independent of it.
+    prox_weight: float = 1e-5
+    # Largest accepted violation c_i'y - u_i [units of u].
+    primal_tolerance: float = 1e-9
+    # Most negative accepted multiplier of the exact step, times its row's norm, relative to the
+    # gradient's scale [-].
+    dual_tolerance: float = 1e-9
+    # Largest accepted stationarity residual, relative to the gradient's scale [-].
+    stationarity_tolerance: float = 1e-9
+    # Bound on inner steps (full and partial) plus outer iterations [-].
+    max_iterations: int = 1000
+
+
+@dataclasses.dataclass
+class DenseQpSolution:
+    """Result of `solve`."""
+
+    y: np.ndarray  # (n,) the solution (see `status`)
+    status: int  # OPTIMAL, INFEASIBLE, UNBOUNDED, ITERATION_LIMIT or NUMERICAL_FAILURE
+    multipliers: np.ndarray  # (m,) lam >= 0 of every row (zero off the active set)
+    active: np.ndarray  # (q,) indices of the active rows, linearly independent
+    iterations: int  # inner steps plus outer iterations used
+
+
+@dataclasses.dataclass
+class DenseQpWorkspace:
+    """Scratch arrays of the kernel for problems of up to n_max variables and m_max rows."""
+
+    matrices: np.ndarray  # (4, n_max, n_max)
+    vectors: np.ndarray  # (11, max(n_max, m_max))
+    integers: np.ndarray  # (2, max(n_max, m_max)) int64
+
+    @property
+    def n_max(self) -> int:
+        return self.matrices.shape[1]
+
+    @property
+    def m_max(self) -> int:
+        return self.vectors.shape[1]
+
+
+def make_workspace(n_max: int, m_max: int) -> DenseQpWorkspace:
+    """Workspace for any problem with n <= n_max variables and m <= m_max rows."""
+    length = max(n_max, m_max, 1)
+    return DenseQpWorkspace(
+        matrices=np.zeros((_NUM_MATRICES, n_max, n_max)),
+        vectors=np.zeros((_NUM_VECTORS, length)),
+        integers=np.zeros((_NUM_INTEGER_ROWS, length), dtype=np.int64),
+    )
+
+
+def solve(
+    H: np.ndarray,
+    f: np.ndarray,
+    C: np.ndarray,
+    u: np.ndarray,
+    settings: DenseQpSettings | None = None,
+    initial_active: np.ndarray | None = None,
+    workspace: DenseQpWorkspace | None = None,
+) -> DenseQpSolution:
+    """min 0.5 y'Hy + f'y s.t. C y <= u (see the module docstring); never raises on a bad problem:
+    the status says what happened.
+
+    `initial_active`: row indices to warm-start from (e.g. the previous solve's `active`).
+    """
+    settings = settings or DenseQpSettings()
+    H = np.ascontiguousarray(H, dtype=float)
+    f = np.ascontiguousarray(f, dtype=float)
+    u = np.ascontiguousarray(u, dtype=float)
+    n, m = len(f), len(u)
+    C = np.ascontiguousarray(C, dtype=float).reshape(m, n)
+    if H.shape != (n, n):
+        raise ValueError(f"H must be ({n}, {n}), got {H.shape}")
+    if workspace is None or workspace.n_max < n or workspace.m_max < m:
+        workspace = make_workspace(n, m)
+    y = np.zeros(n)
+    multipliers = np.zeros(m)
+    active = np.zeros(max(n, 1), dtype=np.int64)
+    num_initial = 0
+    if initial_active is not None:
+        initial = np.asarray(initial_active, dtype=np.int64)[:n]
+        num_initial = len(initial)
+        active[:num_initial] = initial
+    status, num_active, iterations = solve_dense_qp_kernel(
+        H,
+        f,
+        C,
+        u,
+        float(settings.prox_weight),
+        float(settings.primal_tolerance),
+        float(settings.dual_tolerance),
+        float(settings.stationarity_tolerance),
+        int(settings.max_iterations),
+        y,
+        multipliers,
+        active,
+        num_initial,
+        workspace.matrices,
+        workspace.vectors,
+        workspace.integers,
+    )
+    return DenseQpSolution(y, int(status), multipliers, active[:num_active].copy(), int(iterations))
+
+
+def solve_qp(
+    H: np.ndarray, f: np.ndarray, C: np.ndarray, u: np.ndarray, settings: DenseQpSettings | None = None
+) -> tuple[np.ndarray, int]:
+    """(y, status) of min 0.5 y'Hy + f'y s.t. C y <= u; status is OPTIMAL on success."""
+    solution = solve(H, f, C, u, settings)
+    return solution.y, solution.status
+
+
+@kernel
+def solve_dense_qp_kernel(
+    H,
+    f,
+    C,
+    u,
+    prox_weight,
+    primal_tolerance,
+    dual_tolerance,
+    stationarity_tolerance,
+    max_iterations,
+    y,
+    multipliers,
+    active,
+    num_initial_active,
+    matrices,
+    vectors,
+    integers,
+):
+    """min 0.5 y'Hy + f'y s.t. C y <= u, written into y (n,) and multipliers (m,).
+
+    active (>= n entries, int64): on entry its first `num_initial_active` entries are a warm-start
+    active set (invalid or dependent rows are skipped); on return its first q entries are the
+    final active set. matrices, vectors, integers: a `make_workspace` of at least this size.
+    Returns (status, q, iterations).
+    """
+    n = f.shape[0]
+    m = u.shape[0]
+    eps = prox_weight
+    L = matrices[_M_FACTOR]
+    J = matrices[_M_J]
+    R = matrices[_M_R]
+    d = vectors[_V_D]
+    lam = vectors[_V_LAMBDA]
+    row_scale = vectors[_V_ROW_SCALE]
+    centre = vectors[_V_CENTRE]
+    linear = vectors[_V_LINEAR]
+    is_active = integers[_I_IS_ACTIVE]
+    for i in range(m):
+        multipliers[i] = 0.0
+        is_active[i] = 0
+    for i in range(n):
+        y[i] = 0.0
+    if not _inputs_are_valid(H, f, C, u, eps):
+        return NUMERICAL_FAILURE, 0, 0
+    for i in range(m):
+        if u[i] == -math.inf:
+            return INFEASIBLE, 0, 0
+    if n == 0:
+        for i in range(m):
+            if u[i] < -primal_tolerance:
+                return INFEASIBLE, 0, 0
+        return OPTIMAL, 0, 0
+
+    # G = H + eps I = L L', and J = L^-T (Q = I while the active set is empty).
+    for i in range(n):
+        for j in range(n):
+            L[i, j] = H[i, j]
+        L[i, i] += eps
+    if not _cholesky_in_place(L, n):
+        return NUMERICAL_FAILURE, 0, 0
+    _inverse_transpose_lower(L, J, n)
+    for i in range(m):
+        norm = 0.0
+        for j in range(n):
+            norm += C[i, j] * C[i, j]
+        row_scale[i] = 1.0 / math.sqrt(norm) if norm > 0.0 else 1.0
+
+    # Warm start: the given rows that are valid and independent, in their order.
+    q = 0
+    for k in range(min(num_initial_active, n)):
+        p = active[k]
+        if p < 0 or p >= m or is_active[p] == 1 or u[p] >= INFINITE_BOUND:
+            continue
+        _transpose_times(J, C, p, d, n)
+        if _dependent(d, q, n):
+            continue
+        _add_to_factorisation(J, R, d, q, n)
+        active[q] = p
+        is_active[p] = 1
+        q += 1
+
+    for i in range(n):
+        centre[i] = 0.0
+    iterations = 0
+    while True:
+        iterations += 1
+        if iterations > max_iterations:
+            return ITERATION_LIMIT, q, iterations
+        for i in range(n):
+            linear[i] = f[i] - eps * centre[i]
+        q = _restart_from_active_set(J, R, C, u, linear, active, is_active, lam, q, n, y, vectors)
+        status, q, iterations = _dual_active_set(
+            C, u, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, J, R, vectors
+        )
+        if status != OPTIMAL:
+            _finish(status, y, multipliers, active, lam, q, n)
+            return status, q, iterations
+        if _exact_step_is_optimal(
+            H, f, C, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
+            J, R, matrices[_M_REDUCED], integers[_I_PERMUTATION], vectors,
+        ):  # fmt: skip
+            y_exact = vectors[_V_Y_EXACT]
+            lam_exact = vectors[_V_LAMBDA_EXACT]
+            for i in range(n):
+                y[i] = y_exact[i]
+            for k in range(q):
+                lam[k] = max(lam_exact[k], 0.0)
+            _finish(OPTIMAL, y, multipliers, active, lam, q, n)
+            return OPTIMAL, q, iterations
+        # Proximal step d = y_k+1 - y_k: its size is the stationarity residual / eps.
+        step = vectors[_V_W]
+        largest_step = 0.0
+        for i in range(n):
+            step[i] = y[i] - centre[i]
+            largest_step = max(largest_step, abs(step[i]))
+        if eps * largest_step <= stationarity_tolerance * _gradient_scale(H, f, C, y, active, lam, q, n, vectors):
+            _finish(OPTIMAL, y, multipliers, active, lam, q, n)
+            return OPTIMAL, q, iterations
+        if _is_recession_direction(H, f, C, u, step, n, m):
+            _finish(UNBOUNDED, y, multipliers, active, lam, q, n)
+            return UNBOUNDED, q, iterations
+        for i in range(n):
+            centre[i] = y[i]
+
+
+@kernel
+def _inputs_are_valid(H, f, C, u, eps):
+    """Whether H, f, C are finite, u has no NaN, and eps is finite and >= 0."""
+    if not (eps >= 0.0 and eps < math.inf):
+        return False
+    n = f.shape[0]
+    for i in range(n):
+        if not math.isfinite(f[i]):
+            return False
+        for j in range(n):
+            if not math.isfinite(H[i, j]):
+                return False
+    for i in range(u.shape[0]):
+        if math.isnan(u[i]):
+            return False
+        for j in range(n):
+            if not math.isfinite(C[i, j]):
+                return False
+    return True
+
+
+@kernel
+def _finish(status, y, multipliers, active, lam, q, n):
+    """Scatters the active multipliers into `multipliers`; zeroes y if it is not finite."""
+    for k in range(q):
+        multipliers[active[k]] = lam[k]
+    finite = True
+    for i in range(n):
+        if not math.isfinite(y[i]):
+            finite = False
+    if not finite or status == NUMERICAL_FAILURE:
+        for i in range(n):
+            y[i] = 0.0
+        for i in range(multipliers.shape[0]):
+            multipliers[i] = 0.0
+
+
+@kernel
+def _cholesky_in_place(A, n):
+    """A (its leading n x n block) <- L, lower triangular with L L' = A; False unless A is
+    numerically positive definite (the strict upper triangle is zeroed)."""
+    for j in range(n):
+        pivot = A[j, j]
+        for k in range(j):
+            pivot -= A[j, k] * A[j, k]
+        if not pivot > 0.0:
+            return False
+        diagonal = math.sqrt(pivot)
+        A[j, j] = diagonal
+        for i in range(j + 1, n):
+            value = A[i, j]
+            for k in range(j):
+                value -= A[i, k] * A[j, k]
+            A[i, j] = value / diagonal
+        for i in range(j):
+            A[i, j] = 0.0
+    return True
+
+
+@kernel
+def _inverse_transpose_lower(L, J, n):
+    """J <- L^-T for lower-triangular L: column by column, L x = e_c gives row c of J."""
+    for c in range(n):
+        for i in range(c):
+            J[c, i] = 0.0
+        for i in range(c, n):
+            value = 1.0 if i == c else 0.0
+            for k in range(c, i):
+                value -= L[i, k] * J[c, k]
+            J[c, i] = value / L[i, i]
+
+
+@kernel
+def _transpose_times(J, C, p, d, n):
+    """d <- J' c_p (row p of C)."""
+    for j in range(n):
+        value = 0.0
+        for i in range(n):
+            value += J[i, j] * C[p, i]
+        d[j] = value
+
+
+@kernel
+def _dependent(d, q, n):
+    """Whether the row with d = J'c is (numerically) in the span of the q active rows."""
+    total = 0.0
+    outside = 0.0
+    for j in range(n):
+        total += d[j] * d[j]
+        if j >= q:
+            outside += d[j] * d[j]
+    return outside <= _DEPENDENCY_TOLERANCE * _DEPENDENCY_TOLERANCE * total
+
+
+@kernel
+def _add_to_factorisation(J, R, d, q, n):
+    """Appends the row with d = J'c to the factorisation: rotations zero d[q+1:] (and turn the
+    columns of J with it); R gains the column d[:q+1]."""
+    for j in range(n - 1, q, -1):
+        a = d[j - 1]
+        b = d[j]
+        if b == 0.0:
+            continue
+        h = math.hypot(a, b)
+        c = a / h
+        s = b / h
+        d[j - 1] = h
+        d[j] = 0.0
+        for i in range(n):
+            t1 = J[i, j - 1]
+            t2 = J[i, j]
+            J[i, j - 1] = c * t1 + s * t2
+            J[i, j] = -s * t1 + c * t2
+    for i in range(q + 1):
+        R[i, q] = d[i]
+    for i in range(q + 1, n):
+        R[i, q] = 0.0
+
+
+@kernel
+def _drop_from_factorisation(J, R, active, is_active, lam, k, q, n):
+    """Removes active row number k (of q): R loses column k, rotations restore its triangle."""
+    is_active[active[k]] = 0
+    for c in range(k, q - 1):
+        active[c] = active[c + 1]
+        lam[c] = lam[c + 1]
+        for i in range(c + 2):
+            R[i, c] = R[i, c + 1]
+    for c in range(k, q - 1):
+        # Column c has one entry below the diagonal, R[c + 1, c]: rotate rows c, c + 1.
+        a = R[c, c]
+        b = R[c + 1, c]
+        if b == 0.0:
+            continue
+        h = math.hypot(a, b)
+        cos = a / h
+        sin = b / h
+        for j in range(c, q - 1):
+            t1 = R[c, j]
+            t2 = R[c + 1, j]
+            R[c, j] = cos * t1 + sin * t2
+            R[c + 1, j] = -sin * t1 + cos * t2
+        R[c + 1, c] = 0.0
+        for i in range(n):
+            t1 = J[i, c]
+            t2 = J[i, c + 1]
+            J[i, c] = cos * t1 + sin * t2
+            J[i, c + 1] = -sin * t1 + cos * t2
+    for i in range(q):
+        R[i, q - 1] = 0.0
+    return q - 1
+
+
+@kernel
+def _solve_upper(R, b, x, q):
+    """x <- R^-1 b for the leading q x q upper triangle of R."""
+    for i in range(q - 1, -1, -1):
+        value = b[i]
+        for j in range(i + 1, q):
+            value -= R[i, j] * x[j]
+        x[i] = value / R[i, i]
+
+
+@kernel
+def _restart_from_active_set(J, R, C, u, linear, active, is_active, lam, q, n, y, vectors):
+    """(y, lam) of min 0.5 y'G y + linear'y with the q active rows as equalities; rows with a
+    negative multiplier leave, most negative first, until all are >= 0. Returns the new q.
+
+    With w = L'y = Q [w1; w2]: C_A y = u_A gives R'w1 = u_A, and stationarity projected on Q2 and
+    Q1 gives w2 = -J2'linear and lam = -R^-1 (w1 + J1'linear); y = J1 w1 + J2 w2.
+    """
+    w = vectors[_V_W]
+    rhs = vectors[_V_D]
+    while True:
+        # R' w1 = u_A by forward substitution.
+        for i in range(q):
+            value = u[active[i]]
+            for j in range(i):
+                value -= R[j, i] * w[j]
+            w[i] = value / R[i, i]
+        for j in range(n):
+            value = 0.0
+            for i in range(n):
+                value += J[i, j] * linear[i]
+            if j >= q:
+                w[j] = -value
+            else:
+                rhs[j] = -(w[j] + value)
+        _solve_upper(R, rhs, lam, q)
+        most_negative = -1
+        smallest = 0.0
+        for k in range(q):
+            if lam[k] < smallest:
+                smallest = lam[k]
+                most_negative = k
+        if most_negative < 0:
+            break
+        q = _drop_from_factorisation(J, R, active, is_active, lam, most_negative, q, n)
+    for i in range(n):
+        value = 0.0
+        for j in range(n):
+            value += J[i, j] * w[j]
+        y[i] = value
+    return q
+
+
+@kernel
+def _dual_active_set(
+    C, u, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, J, R, vectors
+):
+    """Goldfarb-Idnani from a dual-feasible (y, active set, lam): adds the most violated row
+    (violation over row norm) until every row is met within primal_tolerance.
+    Returns (status, q, iterations)."""
+    d = vectors[_V_D]
+    z = vectors[_V_Z]
+    r = vectors[_V_R]
+    row_scale = vectors[_V_ROW_SCALE]
+    while True:
+        p = -1
+        worst = 0.0
+        for i in range(m):
+            if is_active[i] == 1 or u[i] >= INFINITE_BOUND:
+                continue
+            violation = -u[i]
+            for j in range(n):
+                violation += C[i, j] * y[j]
+            if violation > primal_tolerance and violation * row_scale[i] > worst:
+                worst = violation * row_scale[i]
+                p = i
+        if p < 0:
+            return OPTIMAL, q, iterations
+        lam_p = 0.0
+        while True:
+            iterations += 1
+            if iterations > max_iterations:
+                return ITERATION_LIMIT, q, iterations
+            _transpose_times(J, C, p, d, n)
+            dependent = _dependent(d, q, n)
+            _solve_upper(R, d, r, q)
+            largest_r = 0.0
+            for k in range(q):
+                largest_r = max(largest_r, abs(r[k]))
+            t_partial = math.inf
+            leaving = -1
+            for k in range(q):
+                if r[k] > _ZERO_TOLERANCE * largest_r:
+                    ratio = lam[k] / r[k]
+                    if ratio < t_partial:
+                        t_partial = ratio
+                        leaving = k
+            t_full = math.inf
+            if not dependent:
+                # z = -J2 d2; the violation falls by t ||d2||^2 along it.
+                norm2 = 0.0
+                for j in range(q, n):
+                    norm2 += d[j] * d[j]
+                for i in range(n):
+                    value = 0.0
+                    for j in range(q, n):
+                        value += J[i, j] * d[j]
+                    z[i] = -value
+                violation = -u[p]
+                for j in range(n):
+                    violation += C[p, j] * y[j]
+                t_full = max(violation, 0.0) / norm2
+            if t_partial == math.inf and t_full == math.inf:
+                return INFEASIBLE, q, iterations
+            t = min(t_partial, t_full)
+            if not dependent:
+                for i in range(n):
+                    y[i] += t * z[i]
+            for k in range(q):
+                lam[k] -= t * r[k]
+            lam_p += t
+            if t_full <= t_partial:
+                _add_to_factorisation(J, R, d, q, n)
+                active[q] = p
+                lam[q] = lam_p
+                is_active[p] = 1
+                q += 1
+                break
+            lam[leaving] = 0.0
+            q = _drop_from_factorisation(J, R, active, is_active, lam, leaving, q, n)
+
+
+@kernel
+def _gradient_scale(H, f, C, y, active, lam, q, n, vectors):
+    """max(1, |f|_inf, |H y|_inf, |C_A'lam|_inf): the scale of the stationarity residual."""
+    scale = 1.0
+    for i in range(n):
+        scale = max(scale, abs(f[i]))
+        hy = 0.0
+        for j in range(n):
+            hy += H[i, j] * y[j]
+        scale = max(scale, abs(hy))
+        ca = 0.0
+        for k in range(q):
+            ca += C[active[k], i] * lam[k]
+        scale = max(scale, abs(ca))
+    return scale
+
+
+@kernel
+def _exact_step_is_optimal(
+    H, f, C, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
+    J, R, reduced, permutation, vectors,
+):  # fmt: skip
+    """The minimiser y* of the original QP on the face C_A y = u_A, from y (see the module
+    docstring), into vectors[_V_Y_EXACT] with its multipliers; True if it meets the KKT
+    conditions of the original problem to the tolerances."""
+    y_exact = vectors[_V_Y_EXACT]
+    lam_exact = vectors[_V_LAMBDA_EXACT]
+    gradient = vectors[_V_GRADIENT]
+    g2 = vectors[_V_Z]
+    w = vectors[_V_W]
+    rhs = vectors[_V_D]
+    k = n - q
+    for i in range(n):
+        value = f[i]
+        for j in range(n):
+            value += H[i, j] * y[j]
+        gradient[i] = value
+        y_exact[i] = y[i]
+    if k > 0:
+        # Reduced Hessian I - eps J2'J2 and gradient J2'(H y + f).
+        for a in range(k):
+            value = 0.0
+            for i in range(n):
+                value += J[i, q + a] * gradient[i]
+            g2[a] = value
+            for b in range(a, k):
+                value = 0.0
+                for i in range(n):
+                    value += J[i, q + a] * J[i, q + b]
+                entry = -eps * value
+                if a == b:
+                    entry += 1.0
+                reduced[a, b] = entry
+                reduced[b, a] = entry
+        rank = _pivoted_cholesky_in_place(reduced, permutation, k)
+        # Basic solution: zero in the unpivoted (zero-curvature) directions.
+        for a in range(rank):
+            value = -g2[permutation[a]]
+            for b in range(a):
+                value -= reduced[a, b] * w[b]
+            w[a] = value / reduced[a, a]
+        for a in range(rank - 1, -1, -1):
+            value = w[a]
+            for b in range(a + 1, rank):
+                value -= reduced[b, a] * w[b]
+            w[a] = value / reduced[a, a]
+        for a in range(rank):
+            column = q + permutation[a]
+            for i in range(n):
+                y_exact[i] += J[i, column] * w[a]
+        for i in range(n):
+            value = f[i]
+            for j in range(n):
+                value += H[i, j] * y_exact[j]
+            gradient[i] = value
+    # lam* = -R^-1 J1'(H y* + f).
+    for a in range(q):
+        value = 0.0
+        for i in range(n):
+            value += J[i, a] * gradient[i]
+        rhs[a] = -value
+    _solve_upper(R, rhs, lam_exact, q)
+    # Stationarity: H y* + f + C_A'lam* = 0 within tolerance of the gradient's scale.
+    scale = 1.0
+    residual = 0.0
+    for i in range(n):
+        ca = 0.0
+        for a in range(q):
+            ca += C[active[a], i] * lam_exact[a]
+        scale = max(scale, abs(f[i]), abs(gradient[i] - f[i]), abs(ca))
+        residual = max(residual, abs(gradient[i] + ca))
+    # Dual feasibility in the same units: lam_j ||c_j|| is row j's share of the gradient.
+    row_scale = vectors[_V_ROW_SCALE]
+    for a in range(q):
+        if lam_exact[a] < -dual_tolerance * scale * row_scale[active[a]]:
+            return False
+    if not residual <= stationarity_tolerance * scale:
+        return False
+    for i in range(m):
+        if u[i] >= INFINITE_BOUND:
+            continue
+        violation = -u[i]
+        for j in range(n):
+            violation += C[i, j] * y_exact[j]
+        if not violation <= primal_tolerance:
+            return False
+    return True
+
+
+@kernel
+def _pivoted_cholesky_in_place(A, permutation, k):
+    """Semi-definite A (k x k, full symmetric) <- P'A P = L L' with diagonal pivoting, stopping at
+    pivots below _RANK_TOLERANCE (relative to 1, the scale of the reduced Hessian). L is left in
+    the lower triangle of the leading rank x rank block; permutation[a] is the original index of
+    pivot a. Returns the rank."""
+    for a in range(k):
+        permutation[a] = a
+    for j in range(k):
+        best = j
+        for i in range(j + 1, k):
+            if A[i, i] > A[best, best]:
+                best = i
+        if not A[best, best] > _RANK_TOLERANCE:
+            return j
+        if best != j:
+            for i in range(k):
+                t = A[i, j]
+                A[i, j] = A[i, best]
+                A[i, best] = t
+            for i in range(k):
+                t = A[j, i]
+                A[j, i] = A[best, i]
+                A[best, i] = t
+            t = permutation[j]
+            permutation[j] = permutation[best]
+            permutation[best] = t
+        diagonal = math.sqrt(A[j, j])
+        A[j, j] = diagonal
+        for i in range(j + 1, k):
+            A[i, j] /= diagonal
+        for b in range(j + 1, k):
+            for a in range(j + 1, k):
+                A[a, b] -= A[a, j] * A[b, j]
+    return k
+
+
+@kernel
+def _is_recession_direction(H, f, C, u, step, n, m):
+    """Whether step is a direction of unbounded descent: H step = 0, C step <= 0, f'step < 0
+    (each relative to the sizes involved)."""
+    norm = 0.0
+    for i in range(n):
+        norm = max(norm, abs(step[i]))
+    if norm == 0.0:
+        return False
+    descent = 0.0
+    f_norm = 0.0
+    for i in range(n):
+        descent += f[i] * step[i]
+        f_norm = max(f_norm, abs(f[i]))
+    if not descent < -_RECESSION_TOLERANCE * f_norm * norm:
+        return False
+    h_norm = 0.0
+    for i in range(n):
+        for j in range(n):
+            h_norm = max(h_norm, abs(H[i, j]))
+    for i in range(n):
+        value = 0.0
+        for j in range(n):
+            value += H[i, j] * step[j]
+        if abs(value) > _RECESSION_TOLERANCE * h_norm * norm:
+            return False
+    for i in range(m):
+        if u[i] >= INFINITE_BOUND:
+            continue
+        value = 0.0
+        c_norm = 0.0
+        for j in range(n):
+            value += C[i, j] * step[j]
+            c_norm = max(c_norm, abs(C[i, j]))
+        if value > _RECESSION_TOLERANCE * c_norm * norm:
+            return False
+    return True
