@@ -126,7 +126,8 @@ _V_W = 7  # scratch (n)
 _V_GRADIENT = 8  # H y + f
 _V_Y_EXACT = 9  # the exact step's point y*
 _V_LAMBDA_EXACT = 10  # its multipliers
-_NUM_VECTORS = 11
+_V_VALUES = 11  # C y - u (m)
+_NUM_VECTORS = 12
 # Rows of the integer workspace.
 _I_IS_ACTIVE = 0  # 1 for rows in the active set (m)
 _I_PERMUTATION = 1  # pivot order of the reduced Hessian (n)
@@ -167,7 +168,8 @@ class DenseQpWorkspace:
     """Scratch arrays of the kernel for problems of up to n_max variables and m_max rows."""
 
     matrices: np.ndarray  # (4, n_max, n_max)
-    vectors: np.ndarray  # (11, max(n_max, m_max))
+    transposed: np.ndarray  # (n_max, m_max): C' (contiguous columns of C make C y vectorisable)
+    vectors: np.ndarray  # (12, max(n_max, m_max))
     integers: np.ndarray  # (2, max(n_max, m_max)) int64
 
     @property
@@ -176,7 +178,7 @@ class DenseQpWorkspace:
 
     @property
     def m_max(self) -> int:
-        return self.vectors.shape[1]
+        return self.transposed.shape[1]
 
 
 def make_workspace(n_max: int, m_max: int) -> DenseQpWorkspace:
@@ -184,6 +186,7 @@ def make_workspace(n_max: int, m_max: int) -> DenseQpWorkspace:
     length = max(n_max, m_max, 1)
     return DenseQpWorkspace(
         matrices=np.zeros((_NUM_MATRICES, n_max, n_max)),
+        transposed=np.zeros((n_max, m_max)),
         vectors=np.zeros((_NUM_VECTORS, length)),
         integers=np.zeros((_NUM_INTEGER_ROWS, length), dtype=np.int64),
     )
@@ -236,6 +239,7 @@ def solve(
         active,
         num_initial,
         workspace.matrices,
+        workspace.transposed,
         workspace.vectors,
         workspace.integers,
     )
@@ -266,6 +270,7 @@ def solve_dense_qp_kernel(
     active,
     num_initial_active,
     matrices,
+    transposed,
     vectors,
     integers,
 ):
@@ -273,14 +278,15 @@ def solve_dense_qp_kernel(
 
     active (>= n entries, int64): on entry its first `num_initial_active` entries are a warm-start
     active set (invalid or dependent rows are skipped); on return its first q entries are the
-    final active set. matrices, vectors, integers: a `make_workspace` of at least this size.
+    final active set. matrices, transposed, vectors, integers: the arrays of a `make_workspace` of
+    at least this size.
     Returns (status, q, iterations).
     """
     n = f.shape[0]
     m = u.shape[0]
     eps = prox_weight
     L = matrices[_M_FACTOR]
-    J = matrices[_M_J]
+    Jt = matrices[_M_J]
     R = matrices[_M_R]
     d = vectors[_V_D]
     lam = vectors[_V_LAMBDA]
@@ -293,7 +299,8 @@ def solve_dense_qp_kernel(
         is_active[i] = 0
     for i in range(n):
         y[i] = 0.0
-    if not _inputs_are_valid(H, f, C, u, eps):
+    Ct = transposed
+    if not _check_and_transpose(H, f, C, u, eps, Ct, row_scale):
         return NUMERICAL_FAILURE, 0, 0
     for i in range(m):
         if u[i] == -math.inf:
@@ -304,19 +311,14 @@ def solve_dense_qp_kernel(
                 return INFEASIBLE, 0, 0
         return OPTIMAL, 0, 0
 
-    # G = H + eps I = L L', and J = L^-T (Q = I while the active set is empty).
+    # G = H + eps I = L L', and J = L^-T (Q = I while the active set is empty): Jt = L^-1.
     for i in range(n):
         for j in range(n):
             L[i, j] = H[i, j]
         L[i, i] += eps
     if not _cholesky_in_place(L, n):
         return NUMERICAL_FAILURE, 0, 0
-    _inverse_transpose_lower(L, J, n)
-    for i in range(m):
-        norm = 0.0
-        for j in range(n):
-            norm += C[i, j] * C[i, j]
-        row_scale[i] = 1.0 / math.sqrt(norm) if norm > 0.0 else 1.0
+    _inverse_lower(L, Jt, n)
 
     # Warm start: the given rows that are valid and independent, in their order.
     q = 0
@@ -324,10 +326,10 @@ def solve_dense_qp_kernel(
         p = active[k]
         if p < 0 or p >= m or is_active[p] == 1 or u[p] >= INFINITE_BOUND:
             continue
-        _transpose_times(J, C, p, d, n)
+        _times_row(Jt, C, p, d, n)
         if _dependent(d, q, n):
             continue
-        _add_to_factorisation(J, R, d, q, n)
+        _add_to_factorisation(Jt, R, d, vectors[_V_W], q, n)
         active[q] = p
         is_active[p] = 1
         q += 1
@@ -341,16 +343,16 @@ def solve_dense_qp_kernel(
             return ITERATION_LIMIT, q, iterations
         for i in range(n):
             linear[i] = f[i] - eps * centre[i]
-        q = _restart_from_active_set(J, R, C, u, linear, active, is_active, lam, q, n, y, vectors)
+        q = _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors)
         status, q, iterations = _dual_active_set(
-            C, u, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, J, R, vectors
+            C, Ct, u, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, Jt, R, vectors
         )
         if status != OPTIMAL:
             _finish(status, y, multipliers, active, lam, q, n)
             return status, q, iterations
         if _exact_step_is_optimal(
-            H, f, C, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
-            J, R, matrices[_M_REDUCED], integers[_I_PERMUTATION], vectors,
+            H, f, C, Ct, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
+            Jt, R, matrices[_M_REDUCED], integers[_I_PERMUTATION], vectors,
         ):  # fmt: skip
             y_exact = vectors[_V_Y_EXACT]
             lam_exact = vectors[_V_LAMBDA_EXACT]
@@ -360,7 +362,7 @@ def solve_dense_qp_kernel(
                 lam[k] = max(lam_exact[k], 0.0)
             _finish(OPTIMAL, y, multipliers, active, lam, q, n)
             return OPTIMAL, q, iterations
-        # Proximal step d = y_k+1 - y_k: its size is the stationarity residual / eps.
+        # Proximal step y_k+1 - y_k: its size is the stationarity residual / eps.
         step = vectors[_V_W]
         largest_step = 0.0
         for i in range(n):
@@ -369,7 +371,7 @@ def solve_dense_qp_kernel(
         if eps * largest_step <= stationarity_tolerance * _gradient_scale(H, f, C, y, active, lam, q, n, vectors):
             _finish(OPTIMAL, y, multipliers, active, lam, q, n)
             return OPTIMAL, q, iterations
-        if _is_recession_direction(H, f, C, u, step, n, m):
+        if _is_recession_direction(H, f, C, u, step, n, m, vectors):
             _finish(UNBOUNDED, y, multipliers, active, lam, q, n)
             return UNBOUNDED, q, iterations
         for i in range(n):
@@ -377,24 +379,63 @@ def solve_dense_qp_kernel(
 
 
 @kernel
-def _inputs_are_valid(H, f, C, u, eps):
-    """Whether H, f, C are finite, u has no NaN, and eps is finite and >= 0."""
+def _times_row(A, B, b, out, n):
+    """out <- A B[b]' for the leading n x n block of A (row b of B as a vector)."""
+    for i in range(n):
+        value = 0.0
+        for j in range(n):
+            value += A[i, j] * B[b, j]
+        out[i] = value
+
+
+@kernel
+def _symmetric_times(H, x, out, n):
+    """out <- H x for symmetric H, as a sum of H's rows (contiguous) scaled by x."""
+    for i in range(n):
+        out[i] = 0.0
+    for j in range(n):
+        xj = x[j]
+        if xj != 0.0:
+            for i in range(n):
+                out[i] += xj * H[j, i]
+
+
+@kernel
+def _check_and_transpose(H, f, C, u, eps, Ct, row_scale):
+    """Whether H, f, C are finite, u has no NaN, and eps is finite and >= 0; in the same pass
+    over C, Ct <- C' and row_scale <- 1 / ||c_i|| (1 for a zero row)."""
     if not (eps >= 0.0 and eps < math.inf):
         return False
+    # x * 0 is 0 for finite x and NaN otherwise: one sum tests every entry without a branch each.
+    check = 0.0
     n = f.shape[0]
     for i in range(n):
-        if not math.isfinite(f[i]):
-            return False
+        check += f[i] * 0.0
         for j in range(n):
-            if not math.isfinite(H[i, j]):
-                return False
+            check += H[i, j] * 0.0
     for i in range(u.shape[0]):
         if math.isnan(u[i]):
             return False
+        norm = 0.0
         for j in range(n):
-            if not math.isfinite(C[i, j]):
-                return False
-    return True
+            value = C[i, j]
+            Ct[j, i] = value
+            norm += value * value
+        check += norm * 0.0
+        row_scale[i] = 1.0 / math.sqrt(norm) if norm > 0.0 else 1.0
+    return check == 0.0
+
+
+@kernel
+def _constraint_values(Ct, u, x, values, n, m):
+    """values <- C x - u, as a sum of the columns of C (rows of Ct: contiguous, vectorised)."""
+    for i in range(m):
+        values[i] = -u[i]
+    for j in range(n):
+        xj = x[j]
+        if xj != 0.0:
+            for i in range(m):
+                values[i] += xj * Ct[j, i]
 
 
 @kernel
@@ -436,26 +477,20 @@ def _cholesky_in_place(A, n):
 
 
 @kernel
-def _inverse_transpose_lower(L, J, n):
-    """J <- L^-T for lower-triangular L: column by column, L x = e_c gives row c of J."""
-    for c in range(n):
-        for i in range(c):
-            J[c, i] = 0.0
-        for i in range(c, n):
-            value = 1.0 if i == c else 0.0
-            for k in range(c, i):
-                value -= L[i, k] * J[c, k]
-            J[c, i] = value / L[i, i]
-
-
-@kernel
-def _transpose_times(J, C, p, d, n):
-    """d <- J' c_p (row p of C)."""
-    for j in range(n):
-        value = 0.0
-        for i in range(n):
-            value += J[i, j] * C[p, i]
-        d[j] = value
+def _inverse_lower(L, X, n):
+    """X <- L^-1 for lower-triangular L by forward substitution on whole rows (L X = I:
+    X[i] = (e_i - sum over k < i of L[i, k] X[k]) / L[i, i], contiguous row sums)."""
+    for i in range(n):
+        for j in range(n):
+            X[i, j] = 0.0
+        X[i, i] = 1.0
+        for k in range(i):
+            factor = L[i, k]
+            for j in range(k + 1):
+                X[i, j] -= factor * X[k, j]
+        inverse = 1.0 / L[i, i]
+        for j in range(i + 1):
+            X[i, j] *= inverse
 
 
 @kernel
@@ -471,24 +506,33 @@ def _dependent(d, q, n):
 
 
 @kernel
-def _add_to_factorisation(J, R, d, q, n):
-    """Appends the row with d = J'c to the factorisation: rotations zero d[q+1:] (and turn the
-    columns of J with it); R gains the column d[:q+1]."""
-    for j in range(n - 1, q, -1):
-        a = d[j - 1]
-        b = d[j]
-        if b == 0.0:
-            continue
-        h = math.hypot(a, b)
-        c = a / h
-        s = b / h
-        d[j - 1] = h
-        d[j] = 0.0
+def _add_to_factorisation(Jt, R, d, w, q, n):
+    """Appends the row with d = J'c to the factorisation: a Householder reflection P maps d[q:]
+    to (alpha, 0, ..., 0) and turns J2 with it (J2 <- J2 P, so Jt's rows q.. <- P Jt's rows q..,
+    two passes of row sums); R gains the column d[:q+1]. w: scratch (n)."""
+    tail = 0.0
+    for j in range(q + 1, n):
+        tail += d[j] * d[j]
+    if tail > 0.0:
+        head = d[q]
+        sigma = math.sqrt(head * head + tail)
+        # alpha of the sign opposite to d[q]: v = d[q:] - alpha e_1 without cancellation.
+        alpha = -sigma if head >= 0.0 else sigma
+        d[q] = head - alpha  # d[q:] now holds v
+        scale = 2.0 / (d[q] * d[q] + tail)
         for i in range(n):
-            t1 = J[i, j - 1]
-            t2 = J[i, j]
-            J[i, j - 1] = c * t1 + s * t2
-            J[i, j] = -s * t1 + c * t2
+            w[i] = 0.0
+        for j in range(q, n):
+            vj = d[j]
+            for i in range(n):
+                w[i] += vj * Jt[j, i]
+        for j in range(q, n):
+            vj = scale * d[j]
+            for i in range(n):
+                Jt[j, i] -= vj * w[i]
+        d[q] = alpha
+        for j in range(q + 1, n):
+            d[j] = 0.0
     for i in range(q + 1):
         R[i, q] = d[i]
     for i in range(q + 1, n):
@@ -496,8 +540,9 @@ def _add_to_factorisation(J, R, d, q, n):
 
 
 @kernel
-def _drop_from_factorisation(J, R, active, is_active, lam, k, q, n):
-    """Removes active row number k (of q): R loses column k, rotations restore its triangle."""
+def _drop_from_factorisation(Jt, R, active, is_active, lam, k, q, n):
+    """Removes active row number k (of q): R loses column k, rotations restore its triangle.
+    Returns q - 1."""
     is_active[active[k]] = 0
     for c in range(k, q - 1):
         active[c] = active[c + 1]
@@ -520,10 +565,10 @@ def _drop_from_factorisation(J, R, active, is_active, lam, k, q, n):
             R[c + 1, j] = -sin * t1 + cos * t2
         R[c + 1, c] = 0.0
         for i in range(n):
-            t1 = J[i, c]
-            t2 = J[i, c + 1]
-            J[i, c] = cos * t1 + sin * t2
-            J[i, c + 1] = -sin * t1 + cos * t2
+            t1 = Jt[c, i]
+            t2 = Jt[c + 1, i]
+            Jt[c, i] = cos * t1 + sin * t2
+            Jt[c + 1, i] = -sin * t1 + cos * t2
     for i in range(q):
         R[i, q - 1] = 0.0
     return q - 1
@@ -540,7 +585,7 @@ def _solve_upper(R, b, x, q):
 
 
 @kernel
-def _restart_from_active_set(J, R, C, u, linear, active, is_active, lam, q, n, y, vectors):
+def _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors):
     """(y, lam) of min 0.5 y'G y + linear'y with the q active rows as equalities; rows with a
     negative multiplier leave, most negative first, until all are >= 0. Returns the new q.
 
@@ -559,7 +604,7 @@ def _restart_from_active_set(J, R, C, u, linear, active, is_active, lam, q, n, y
         for j in range(n):
             value = 0.0
             for i in range(n):
-                value += J[i, j] * linear[i]
+                value += Jt[j, i] * linear[i]
             if j >= q:
                 w[j] = -value
             else:
@@ -573,18 +618,20 @@ def _restart_from_active_set(J, R, C, u, linear, active, is_active, lam, q, n, y
                 most_negative = k
         if most_negative < 0:
             break
-        q = _drop_from_factorisation(J, R, active, is_active, lam, most_negative, q, n)
+        q = _drop_from_factorisation(Jt, R, active, is_active, lam, most_negative, q, n)
+    # y = J w = sum of the rows of Jt scaled by w.
     for i in range(n):
-        value = 0.0
-        for j in range(n):
-            value += J[i, j] * w[j]
-        y[i] = value
+        y[i] = 0.0
+    for j in range(n):
+        wj = w[j]
+        for i in range(n):
+            y[i] += wj * Jt[j, i]
     return q
 
 
 @kernel
 def _dual_active_set(
-    C, u, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, J, R, vectors
+    C, Ct, u, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, Jt, R, vectors
 ):
     """Goldfarb-Idnani from a dual-feasible (y, active set, lam): adds the most violated row
     (violation over row norm) until every row is met within primal_tolerance.
@@ -593,15 +640,15 @@ def _dual_active_set(
     z = vectors[_V_Z]
     r = vectors[_V_R]
     row_scale = vectors[_V_ROW_SCALE]
+    values = vectors[_V_VALUES]
     while True:
         p = -1
         worst = 0.0
+        _constraint_values(Ct, u, y, values, n, m)
         for i in range(m):
             if is_active[i] == 1 or u[i] >= INFINITE_BOUND:
                 continue
-            violation = -u[i]
-            for j in range(n):
-                violation += C[i, j] * y[j]
+            violation = values[i]
             if violation > primal_tolerance and violation * row_scale[i] > worst:
                 worst = violation * row_scale[i]
                 p = i
@@ -612,7 +659,7 @@ def _dual_active_set(
             iterations += 1
             if iterations > max_iterations:
                 return ITERATION_LIMIT, q, iterations
-            _transpose_times(J, C, p, d, n)
+            _times_row(Jt, C, p, d, n)
             dependent = _dependent(d, q, n)
             _solve_upper(R, d, r, q)
             largest_r = 0.0
@@ -628,18 +675,20 @@ def _dual_active_set(
                         leaving = k
             t_full = math.inf
             if not dependent:
-                # z = -J2 d2; the violation falls by t ||d2||^2 along it.
-                norm2 = 0.0
-                for j in range(q, n):
-                    norm2 += d[j] * d[j]
+                # z = -J2 d2: minus the rows q.. of Jt scaled by d; the violation falls by
+                # t ||d2||^2 along it.
                 for i in range(n):
-                    value = 0.0
-                    for j in range(q, n):
-                        value += J[i, j] * d[j]
-                    z[i] = -value
+                    z[i] = 0.0
+                for j in range(q, n):
+                    dj = d[j]
+                    for i in range(n):
+                        z[i] -= dj * Jt[j, i]
                 violation = -u[p]
                 for j in range(n):
                     violation += C[p, j] * y[j]
+                norm2 = 0.0
+                for j in range(q, n):
+                    norm2 += d[j] * d[j]
                 t_full = max(violation, 0.0) / norm2
             if t_partial == math.inf and t_full == math.inf:
                 return INFEASIBLE, q, iterations
@@ -651,37 +700,45 @@ def _dual_active_set(
                 lam[k] -= t * r[k]
             lam_p += t
             if t_full <= t_partial:
-                _add_to_factorisation(J, R, d, q, n)
+                _add_to_factorisation(Jt, R, d, vectors[_V_W], q, n)
                 active[q] = p
                 lam[q] = lam_p
                 is_active[p] = 1
                 q += 1
                 break
             lam[leaving] = 0.0
-            q = _drop_from_factorisation(J, R, active, is_active, lam, leaving, q, n)
+            q = _drop_from_factorisation(Jt, R, active, is_active, lam, leaving, q, n)
 
 
 @kernel
 def _gradient_scale(H, f, C, y, active, lam, q, n, vectors):
     """max(1, |f|_inf, |H y|_inf, |C_A'lam|_inf): the scale of the stationarity residual."""
+    hy = vectors[_V_GRADIENT]
+    ca = vectors[_V_Z]
+    _symmetric_times(H, y, hy, n)
+    _active_rows_times(C, active, lam, q, ca, n)
     scale = 1.0
     for i in range(n):
-        scale = max(scale, abs(f[i]))
-        hy = 0.0
-        for j in range(n):
-            hy += H[i, j] * y[j]
-        scale = max(scale, abs(hy))
-        ca = 0.0
-        for k in range(q):
-            ca += C[active[k], i] * lam[k]
-        scale = max(scale, abs(ca))
+        scale = max(scale, abs(f[i]), abs(hy[i]), abs(ca[i]))
     return scale
 
 
 @kernel
+def _active_rows_times(C, active, lam, q, out, n):
+    """out <- C_A' lam: the active rows scaled by their multipliers."""
+    for i in range(n):
+        out[i] = 0.0
+    for k in range(q):
+        lk = lam[k]
+        row = active[k]
+        for i in range(n):
+            out[i] += lk * C[row, i]
+
+
+@kernel
 def _exact_step_is_optimal(
-    H, f, C, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
-    J, R, reduced, permutation, vectors,
+    H, f, C, Ct, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
+    Jt, R, reduced, permutation, vectors,
 ):  # fmt: skip
     """The minimiser y* of the original QP on the face C_A y = u_A, from y (see the module
     docstring), into vectors[_V_Y_EXACT] with its multipliers; True if it meets the KKT
@@ -692,24 +749,23 @@ def _exact_step_is_optimal(
     g2 = vectors[_V_Z]
     w = vectors[_V_W]
     rhs = vectors[_V_D]
+    row_scale = vectors[_V_ROW_SCALE]
     k = n - q
+    _symmetric_times(H, y, gradient, n)
     for i in range(n):
-        value = f[i]
-        for j in range(n):
-            value += H[i, j] * y[j]
-        gradient[i] = value
+        gradient[i] += f[i]
         y_exact[i] = y[i]
     if k > 0:
         # Reduced Hessian I - eps J2'J2 and gradient J2'(H y + f).
         for a in range(k):
             value = 0.0
             for i in range(n):
-                value += J[i, q + a] * gradient[i]
+                value += Jt[q + a, i] * gradient[i]
             g2[a] = value
             for b in range(a, k):
                 value = 0.0
                 for i in range(n):
-                    value += J[i, q + a] * J[i, q + b]
+                    value += Jt[q + a, i] * Jt[q + b, i]
                 entry = -eps * value
                 if a == b:
                     entry += 1.0
@@ -728,44 +784,38 @@ def _exact_step_is_optimal(
                 value -= reduced[b, a] * w[b]
             w[a] = value / reduced[a, a]
         for a in range(rank):
-            column = q + permutation[a]
+            wa = w[a]
+            row = q + permutation[a]
             for i in range(n):
-                y_exact[i] += J[i, column] * w[a]
+                y_exact[i] += wa * Jt[row, i]
+        _symmetric_times(H, y_exact, gradient, n)
         for i in range(n):
-            value = f[i]
-            for j in range(n):
-                value += H[i, j] * y_exact[j]
-            gradient[i] = value
+            gradient[i] += f[i]
     # lam* = -R^-1 J1'(H y* + f).
     for a in range(q):
         value = 0.0
         for i in range(n):
-            value += J[i, a] * gradient[i]
+            value += Jt[a, i] * gradient[i]
         rhs[a] = -value
     _solve_upper(R, rhs, lam_exact, q)
     # Stationarity: H y* + f + C_A'lam* = 0 within tolerance of the gradient's scale.
+    ca = vectors[_V_R]
+    _active_rows_times(C, active, lam_exact, q, ca, n)
     scale = 1.0
     residual = 0.0
     for i in range(n):
-        ca = 0.0
-        for a in range(q):
-            ca += C[active[a], i] * lam_exact[a]
-        scale = max(scale, abs(f[i]), abs(gradient[i] - f[i]), abs(ca))
-        residual = max(residual, abs(gradient[i] + ca))
+        scale = max(scale, abs(f[i]), abs(gradient[i] - f[i]), abs(ca[i]))
+        residual = max(residual, abs(gradient[i] + ca[i]))
+    if not residual <= stationarity_tolerance * scale:
+        return False
     # Dual feasibility in the same units: lam_j ||c_j|| is row j's share of the gradient.
-    row_scale = vectors[_V_ROW_SCALE]
     for a in range(q):
         if lam_exact[a] < -dual_tolerance * scale * row_scale[active[a]]:
             return False
-    if not residual <= stationarity_tolerance * scale:
-        return False
+    values = vectors[_V_VALUES]
+    _constraint_values(Ct, u, y_exact, values, n, m)
     for i in range(m):
-        if u[i] >= INFINITE_BOUND:
-            continue
-        violation = -u[i]
-        for j in range(n):
-            violation += C[i, j] * y_exact[j]
-        if not violation <= primal_tolerance:
+        if u[i] < INFINITE_BOUND and not values[i] <= primal_tolerance:
             return False
     return True
 
@@ -801,46 +851,46 @@ def _pivoted_cholesky_in_place(A, permutation, k):
         A[j, j] = diagonal
         for i in range(j + 1, k):
             A[i, j] /= diagonal
-        for b in range(j + 1, k):
-            for a in range(j + 1, k):
-                A[a, b] -= A[a, j] * A[b, j]
+        # Trailing block (symmetric, kept whole for the pivot search and swaps), row by row.
+        for a in range(j + 1, k):
+            factor = A[a, j]
+            for b in range(j + 1, k):
+                A[a, b] -= factor * A[b, j]
     return k
 
 
 @kernel
-def _is_recession_direction(H, f, C, u, step, n, m):
+def _is_recession_direction(H, f, C, u, step, n, m, vectors):
     """Whether step is a direction of unbounded descent: H step = 0, C step <= 0, f'step < 0
     (each relative to the sizes involved)."""
     norm = 0.0
-    for i in range(n):
-        norm = max(norm, abs(step[i]))
-    if norm == 0.0:
-        return False
-    descent = 0.0
     f_norm = 0.0
     for i in range(n):
-        descent += f[i] * step[i]
+        norm = max(norm, abs(step[i]))
         f_norm = max(f_norm, abs(f[i]))
-    if not descent < -_RECESSION_TOLERANCE * f_norm * norm:
+    descent = 0.0
+    for i in range(n):
+        descent += f[i] * step[i]
+    if norm == 0.0 or not descent < -_RECESSION_TOLERANCE * f_norm * norm:
         return False
     h_norm = 0.0
     for i in range(n):
         for j in range(n):
             h_norm = max(h_norm, abs(H[i, j]))
+    curvature = vectors[_V_GRADIENT]
+    _symmetric_times(H, step, curvature, n)
     for i in range(n):
-        value = 0.0
-        for j in range(n):
-            value += H[i, j] * step[j]
-        if abs(value) > _RECESSION_TOLERANCE * h_norm * norm:
+        if abs(curvature[i]) > _RECESSION_TOLERANCE * h_norm * norm:
             return False
     for i in range(m):
         if u[i] >= INFINITE_BOUND:
             continue
-        value = 0.0
         c_norm = 0.0
         for j in range(n):
-            value += C[i, j] * step[j]
             c_norm = max(c_norm, abs(C[i, j]))
+        value = 0.0
+        for j in range(n):
+            value += C[i, j] * step[j]
         if value > _RECESSION_TOLERANCE * c_norm * norm:
             return False
     return True
