@@ -152,6 +152,9 @@ class DenseQpSettings:
     max_iterations: int = 1000
 
 
+_DEFAULT_SETTINGS = DenseQpSettings()
+
+
 @dataclasses.dataclass
 class DenseQpSolution:
     """Result of `solve`."""
@@ -206,7 +209,7 @@ def solve(
 
     `initial_active`: row indices to warm-start from (e.g. the previous solve's `active`).
     """
-    settings = settings or DenseQpSettings()
+    settings = settings or _DEFAULT_SETTINGS
     H = np.ascontiguousarray(H, dtype=float)
     f = np.ascontiguousarray(f, dtype=float)
     u = np.ascontiguousarray(u, dtype=float)
@@ -247,11 +250,43 @@ def solve(
 
 
 def solve_qp(
-    H: np.ndarray, f: np.ndarray, C: np.ndarray, u: np.ndarray, settings: DenseQpSettings | None = None
+    H: np.ndarray,
+    f: np.ndarray,
+    C: np.ndarray,
+    u: np.ndarray,
+    settings: DenseQpSettings = _DEFAULT_SETTINGS,
+    workspace: DenseQpWorkspace | None = None,
 ) -> tuple[np.ndarray, int]:
-    """(y, status) of min 0.5 y'Hy + f'y s.t. C y <= u; status is OPTIMAL on success."""
-    solution = solve(H, f, C, u, settings)
-    return solution.y, solution.status
+    """(y, status) of min 0.5 y'Hy + f'y s.t. C y <= u; status is OPTIMAL on success.
+
+    The lean path of `solve` (no multipliers, no warm start) for callers in Python that solve
+    many small QPs: float64 arrays are passed on as they are (C-contiguous ones compile once).
+    """
+    n = f.shape[0]
+    m = u.shape[0]
+    if workspace is None or workspace.n_max < n or workspace.m_max < m:
+        workspace = make_workspace(n, m)
+    y = np.empty(n)
+    status, _, _ = solve_dense_qp_kernel(
+        np.ascontiguousarray(H, dtype=float),
+        np.ascontiguousarray(f, dtype=float),
+        np.ascontiguousarray(C, dtype=float).reshape(m, n),
+        np.ascontiguousarray(u, dtype=float),
+        settings.prox_weight,
+        settings.primal_tolerance,
+        settings.dual_tolerance,
+        settings.stationarity_tolerance,
+        settings.max_iterations,
+        y,
+        np.empty(m),
+        np.empty(max(n, 1), dtype=np.int64),
+        0,
+        workspace.matrices,
+        workspace.transposed,
+        workspace.vectors,
+        workspace.integers,
+    )
+    return y, status
 
 
 @kernel
@@ -343,13 +378,18 @@ def solve_dense_qp_kernel(
             return ITERATION_LIMIT, q, iterations
         for i in range(n):
             linear[i] = f[i] - eps * centre[i]
-        q = _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors)
+        q = _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors, True)
         status, q, iterations = _dual_active_set(
             C, Ct, u, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, Jt, R, vectors
         )
         if status != OPTIMAL:
             _finish(status, y, multipliers, active, lam, q, n)
             return status, q, iterations
+        # The inner steps moved y by increments; recomputed from the factorisation it meets the
+        # active rows to rounding (an ill-conditioned vertex drifts by 1e-10 over 50 steps).
+        _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors, False)
+        for k in range(q):
+            lam[k] = max(lam[k], 0.0)
         if _exact_step_is_optimal(
             H, f, C, Ct, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
             Jt, R, matrices[_M_REDUCED], integers[_I_PERMUTATION], vectors,
@@ -585,9 +625,10 @@ def _solve_upper(R, b, x, q):
 
 
 @kernel
-def _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors):
-    """(y, lam) of min 0.5 y'G y + linear'y with the q active rows as equalities; rows with a
-    negative multiplier leave, most negative first, until all are >= 0. Returns the new q.
+def _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors, drop_negative):
+    """(y, lam) of min 0.5 y'G y + linear'y with the q active rows as equalities; with
+    `drop_negative`, rows with a negative multiplier leave, most negative first, until all are
+    >= 0. Returns the new q.
 
     With w = L'y = Q [w1; w2]: C_A y = u_A gives R'w1 = u_A, and stationarity projected on Q2 and
     Q1 gives w2 = -J2'linear and lam = -R^-1 (w1 + J1'linear); y = J1 w1 + J2 w2.
@@ -610,6 +651,8 @@ def _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, 
             else:
                 rhs[j] = -(w[j] + value)
         _solve_upper(R, rhs, lam, q)
+        if not drop_negative:
+            break
         most_negative = -1
         smallest = 0.0
         for k in range(q):
