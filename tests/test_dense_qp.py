@@ -443,3 +443,23 @@ def test_recorded_controller_qps_are_solved_to_daqp_s_solution(controller_qps):
             assert np.abs(solution.y - y_ref).max() <= 1e-6 * scale, (index, qp.level)
             assert np.abs(solution.y - qp.y_daqp).max() <= 1e-4 * scale, (index, qp.level)
     assert unique >= 50
+
+
+def test_a_proximal_weight_far_above_the_curvature_changes_neither_solution_nor_much_the_count():
+    """eps = 100 puts H (eigenvalues 0 to about 50) far below the proximal weight in most
+    directions, where proximal steps alone move a small fraction of the way each: the primal steps
+    to each face's minimiser (or along a descent ray) keep the count small, and the exact step
+    makes the solution the same as with eps = 1e-5 (the controller's, and DAQP's here)."""
+    rng = np.random.default_rng(RNG_SEED + 11)
+    for k in range(60):
+        n = int(rng.integers(6, 30))
+        H, f, C, u = random_problem(
+            rng, n, int(rng.integers(10, 60)), rank=int(rng.integers(0, n)), hqp_like=k % 2 == 0
+        )
+        solution = solve(H, f, C, u, DenseQpSettings(prox_weight=100.0))
+        assert_kkt(H, f, C, u, solution)
+        assert solution.iterations <= 2 * (n + len(u)), k
+        y_ref, _ = daqp_reference(H, f, C, u)
+        scale = max(1.0, np.abs(y_ref).max())
+        qp = _Qp(H, f, C, u)
+        assert objective(qp, solution.y) == pytest.approx(objective(qp, y_ref), rel=1e-7, abs=1e-9 * scale), k

@@ -8,7 +8,7 @@ import math
 
 STACKS = ("paper000", "paper003")
 HQP_MODES = ("strict", "weighted")
-QP_BACKENDS = ("daqp", "osqp")
+QP_BACKENDS = ("daqp", "dense_qp", "osqp")
 
 
 @dataclasses.dataclass
@@ -32,7 +32,8 @@ class WholeBodyControllerConfig:
     # Weighted mode: weight of each level of the stack, top first [-]. Empty: 100^(L-1-k) for the
     # L levels of the stack (physics 1e6 ... regularisation 1 for paper000).
     level_weights: list[float] = dataclasses.field(default_factory=list)
-    # QP backend: "daqp" (dense active set, called directly) or "osqp" (MathematicalProgram, baseline).
+    # QP backend: "daqp" (dense active set, called directly), "dense_qp" (pedi_drake.control.dense_qp,
+    # compiled with numba, the same exact solutions) or "osqp" (MathematicalProgram, baseline).
     qp_backend: str = "daqp"
     # paper003 only: also keep the capture point in the safety polygon in its first level.
     paper003_balance: bool = True

@@ -9,7 +9,12 @@ solved exactly, not regularised: a Tikhonov term would trade a level's own optim
 step, which breaks the strict priorities.
 
 Algorithm: proximal-point outer iterations around a dual active-set inner solver, with an exact
-step on the active face.
+step on the active face and primal active-set steps between outer iterations. Why these: a dual
+active-set method needs no feasible starting point (no phase 1), is exact once its active set is
+right, costs O(n^2) per change of the active set (the controller's levels have 6 to 45
+variables, 30 to 110 rows and rarely more than 15 active), and restarts from a given active set
+(the previous tick's). It needs a positive definite Hessian, which the proximal term supplies
+without changing the problem's solution, unlike a Tikhonov term.
 
 1. Proximal point (Rockafellar 1976). For a weight eps > 0 and a centre y_k,
 
@@ -30,8 +35,9 @@ step on the active face.
    of p falls as s_p - t ||d2||^2. The step is the smaller of the full step t2 = s_p / ||d2||^2
    (p joins A) and the partial step t1 = min over r_j > 0 of lam_j / r_j (row j leaves A, then the
    same p again). The dual objective never decreases and rises strictly with each full step, so
-   no active set repeats. J and R are updated by Givens rotations when a row joins or leaves
-   (O(n^2) each); a row whose d2 vanishes (dependent on A: redundant or degenerate rows) can only
+   no active set repeats. J and R are updated in O(n^2) when a row joins (a Householder
+   reflection of J2 that maps d2 to a multiple of its first axis) or leaves (Givens rotations
+   that restore R's triangle); a row whose d2 vanishes (dependent on A: redundant or degenerate rows) can only
    be added after partial steps make room, and when it is dependent with no r_j > 0, row p with
    the rows of A is a Farkas certificate of infeasibility: c_p = C_A'r with r <= 0 while
    c_p'y > u_p where C_A y = u_A, so no y meets all of them.
@@ -39,7 +45,9 @@ step on the active face.
    Between outer iterations only the linear term f - eps y_k changes, so the factorisation of A
    stays valid: each outer iteration restarts from the previous active set at the cost of
    recomputing (y, lam_A) from it, dropping rows whose multiplier turned negative. A caller's
-   active set (the previous control tick's) warm-starts the first one the same way.
+   active set (the previous control tick's) warm-starts the first one the same way. The same
+   recomputation ends each inner solve: the steps move y by increments, whose rounding would
+   otherwise leave an ill-conditioned vertex 1e-10 off its rows.
 
 3. Exact step. The proximal iterates approach the solution only linearly where H is small
    compared with eps, but once the active set A is the optimal one the solution is that of an
@@ -49,20 +57,38 @@ step on the active face.
    directions in which the solution is not unique, left at zero) gives the face's minimiser y*.
    Its multipliers follow from stationarity, lam* = -R^-1 J1'(H y* + f). If y* passes the KKT
    test of the original problem (stationarity, primal feasibility, lam* >= 0, each to its
-   tolerance below) it is returned: an exact solution, typically after the first outer iteration.
-   Otherwise the proximal iterations go on from y_k+1.
+   tolerance below) it is returned: an exact solution, typically after the first outer iteration
+   (9 in 10 of the recorded controller QPs).
+
+4. Primal active-set steps (the classic primal method, e.g. Nocedal and Wright, ch. 16.5) from
+   the feasible y_k+1 when y* fails that test. Where the curvature is far below eps the proximal
+   steps move about |gradient| / eps each, 1e-6 of the way in a controller QP that needed 30 000
+   outer iterations without these steps. So, until a step cannot change the face:
+   * y* violates rows: y moves towards y* until the first row blocks, and that row joins A (the
+     objective is convex on the segment with its minimum at y*, so it falls);
+   * y* is feasible but a multiplier is negative: y = y*, and that row leaves A;
+   * the reduced system is inconsistent (the objective falls without bound on the face): y moves
+     along d = -sum (g2'n_j) n_j over the null vectors n_j of the reduced Hessian (zero
+     curvature, slope -sum (g2'n_j)^2) until the first row blocks, which joins A; if none does,
+     d is a direction of unbounded descent. Each step ends with a new exact step.
+   The proximal iterations then go on from this better feasible point; its active set warm-starts
+   the next inner solve (rows whose multiplier there is negative leave first).
 
 Stopping and status:
 
 * OPTIMAL: the exact step passed the KKT test, or the proximal step became small enough,
   eps ||y_k+1 - y_k||_inf <= stationarity_tolerance * scale (y_k+1 is then feasible within
   primal_tolerance, with multipliers >= 0 meeting complementarity, and stationary within that
-  residual). The scale is the largest of |f|_inf, |H y|_inf and |C_A'lam|_inf: gradient units.
+  residual). The scale is the largest of 1, |f|_inf, |H y|_inf and |C_A'lam|_inf [units of f]:
+  a gradient below the tolerance in absolute terms counts as zero. Without that floor a level
+  whose tasks are already met (H and f of rounding size, 1e-33 and 1e-18 in the controller) would
+  chase its rounding: the proximal steps along a linear objective of size |f| are |f| / eps long.
 * INFEASIBLE: the certificate of step 2 (or a row with u_i = -inf).
-* UNBOUNDED: a proximal step that is a direction of recession (H d = 0, C d <= 0, f'd < 0), each
-  to a relative tolerance of 1e-9.
-* ITERATION_LIMIT: `max_iterations` inner steps (full, partial, and one per outer iteration)
-  used; y is the last iterate (feasible, not proven optimal).
+* UNBOUNDED: a direction of recession (H d = 0, C d <= 0, f'd < 0, each to a relative tolerance
+  of 1e-9): a proximal step, or the descent ray of step 4 that no row blocks.
+* ITERATION_LIMIT: `max_iterations` inner steps (full, partial, primal, and one per outer
+  iteration) used; y is the last iterate, not proven optimal (and, stopped inside an inner solve, not
+  feasible either).
 * NUMERICAL_FAILURE: non-finite input, H + eps I not positive definite (H not semi-definite), or
   a non-finite iterate. y is then zero.
 
@@ -108,6 +134,12 @@ _RANK_TOLERANCE = 1e-12
 # Relative tolerance of the recession-direction test (UNBOUNDED).
 _RECESSION_TOLERANCE = 1e-9
 
+# Outcomes of the exact step.
+_EXACT_OPTIMAL = 0
+_EXACT_FACE_MINIMISER = 1
+_EXACT_RAY = 2
+_EXACT_NOT_STATIONARY = 3
+
 # Rows of the matrix workspace (each n_max x n_max).
 _M_FACTOR = 0  # L, the Cholesky factor of H + eps I (lower)
 _M_J = 1  # J = L^-T Q
@@ -127,7 +159,9 @@ _V_GRADIENT = 8  # H y + f
 _V_Y_EXACT = 9  # the exact step's point y*
 _V_LAMBDA_EXACT = 10  # its multipliers
 _V_VALUES = 11  # C y - u (m)
-_NUM_VECTORS = 12
+_V_VALUES_EXACT = 12  # C y* - u (m)
+_V_RAY = 13  # a direction of zero curvature and descent on the face (n)
+_NUM_VECTORS = 14
 # Rows of the integer workspace.
 _I_IS_ACTIVE = 0  # 1 for rows in the active set (m)
 _I_PERMUTATION = 1  # pivot order of the reduced Hessian (n)
@@ -172,7 +206,7 @@ class DenseQpWorkspace:
 
     matrices: np.ndarray  # (4, n_max, n_max)
     transposed: np.ndarray  # (n_max, m_max): C' (contiguous columns of C make C y vectorisable)
-    vectors: np.ndarray  # (12, max(n_max, m_max))
+    vectors: np.ndarray  # (14, max(n_max, m_max))
     integers: np.ndarray  # (2, max(n_max, m_max)) int64
 
     @property
@@ -272,11 +306,11 @@ def solve_qp(
         np.ascontiguousarray(f, dtype=float),
         np.ascontiguousarray(C, dtype=float).reshape(m, n),
         np.ascontiguousarray(u, dtype=float),
-        settings.prox_weight,
-        settings.primal_tolerance,
-        settings.dual_tolerance,
-        settings.stationarity_tolerance,
-        settings.max_iterations,
+        float(settings.prox_weight),
+        float(settings.primal_tolerance),
+        float(settings.dual_tolerance),
+        float(settings.stationarity_tolerance),
+        int(settings.max_iterations),
         y,
         np.empty(m),
         np.empty(max(n, 1), dtype=np.int64),
@@ -287,6 +321,12 @@ def solve_qp(
         workspace.integers,
     )
     return y, status
+
+
+def warm_up() -> None:
+    """Compiles the kernel (or loads it from numba's cache) for the arrays `solve` and `solve_qp`
+    pass: call it in a constructor, so that no control tick compiles it."""
+    solve(np.eye(2), -np.ones(2), np.ones((1, 2)), np.ones(1), initial_active=np.zeros(1, dtype=np.int64))
 
 
 @kernel
@@ -375,6 +415,7 @@ def solve_dense_qp_kernel(
     while True:
         iterations += 1
         if iterations > max_iterations:
+            _finish(ITERATION_LIMIT, y, multipliers, active, lam, q, n)
             return ITERATION_LIMIT, q, iterations
         for i in range(n):
             linear[i] = f[i] - eps * centre[i]
@@ -390,16 +431,12 @@ def solve_dense_qp_kernel(
         _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors, False)
         for k in range(q):
             lam[k] = max(lam[k], 0.0)
-        if _exact_step_is_optimal(
+        outcome = _exact_step(
             H, f, C, Ct, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
             Jt, R, matrices[_M_REDUCED], integers[_I_PERMUTATION], vectors,
-        ):  # fmt: skip
-            y_exact = vectors[_V_Y_EXACT]
-            lam_exact = vectors[_V_LAMBDA_EXACT]
-            for i in range(n):
-                y[i] = y_exact[i]
-            for k in range(q):
-                lam[k] = max(lam_exact[k], 0.0)
+        )  # fmt: skip
+        if outcome == _EXACT_OPTIMAL:
+            _take_exact_step(y, lam, vectors, q, n)
             _finish(OPTIMAL, y, multipliers, active, lam, q, n)
             return OPTIMAL, q, iterations
         # Proximal step y_k+1 - y_k: its size is the stationarity residual / eps.
@@ -414,8 +451,145 @@ def solve_dense_qp_kernel(
         if _is_recession_direction(H, f, C, u, step, n, m, vectors):
             _finish(UNBOUNDED, y, multipliers, active, lam, q, n)
             return UNBOUNDED, q, iterations
+        # Primal active-set steps from the (feasible) proximal iterate, each to the minimiser y* of
+        # the objective on the current face: where y* violates a row, as far towards it as the rows
+        # allow, and the row that stops the step joins the face; where y* is feasible but a
+        # multiplier is negative, to y*, and that row leaves. Where the objective falls without
+        # bound on the face, along a direction of zero curvature and descent to the first row in
+        # the way, which joins the face. The objective never rises. Where H is far smaller than eps
+        # the proximal steps alone would crawl (|gradient| / eps a step). They stop when a step
+        # cannot change the face; the proximal iterations then go on from here.
+        primal_steps = 0
+        while (outcome == _EXACT_FACE_MINIMISER or outcome == _EXACT_RAY) and primal_steps < n + m:
+            primal_steps += 1
+            iterations += 1
+            if iterations > max_iterations:
+                _finish(ITERATION_LIMIT, y, multipliers, active, lam, q, n)
+                return ITERATION_LIMIT, q, iterations
+            if outcome == _EXACT_RAY:
+                blocking = _move_along(
+                    Ct, u, y, vectors[_V_RAY], vectors[_V_VALUES], vectors[_V_VALUES_EXACT], vectors[_V_ROW_SCALE], n, m
+                )
+                if blocking < 0:
+                    # Nothing stops a descent of zero curvature: a certificate of unboundedness.
+                    _finish(UNBOUNDED, y, multipliers, active, lam, q, n)
+                    return UNBOUNDED, q, iterations
+            else:
+                blocking = _move_towards(
+                    Ct, u, y, vectors[_V_Y_EXACT], vectors[_V_VALUES_EXACT], vectors[_V_VALUES], n, m, primal_tolerance
+                )
+            if blocking >= 0:
+                _times_row(Jt, C, blocking, d, n)
+                if _dependent(d, q, n):
+                    break
+                _add_to_factorisation(Jt, R, d, vectors[_V_W], q, n)
+                active[q] = blocking
+                is_active[blocking] = 1
+                lam[q] = 0.0
+                q += 1
+            else:
+                leaving = _most_negative_multiplier(vectors[_V_LAMBDA_EXACT], vectors[_V_ROW_SCALE], active, q)
+                if leaving < 0:
+                    break
+                q = _drop_from_factorisation(Jt, R, active, is_active, lam, leaving, q, n)
+            outcome = _exact_step(
+                H, f, C, Ct, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
+                Jt, R, matrices[_M_REDUCED], integers[_I_PERMUTATION], vectors,
+            )  # fmt: skip
+            if outcome == _EXACT_OPTIMAL:
+                _take_exact_step(y, lam, vectors, q, n)
+                _finish(OPTIMAL, y, multipliers, active, lam, q, n)
+                return OPTIMAL, q, iterations
         for i in range(n):
             centre[i] = y[i]
+
+
+@kernel
+def _take_exact_step(y, lam, vectors, q, n):
+    """y <- y*, lam <- max(lam*, 0) of the exact step."""
+    y_exact = vectors[_V_Y_EXACT]
+    lam_exact = vectors[_V_LAMBDA_EXACT]
+    for i in range(n):
+        y[i] = y_exact[i]
+    for k in range(q):
+        lam[k] = max(lam_exact[k], 0.0)
+
+
+@kernel
+def _descent_ray(Jt, factor, permutation, g2, rank, k, q, n, ray, scratch):
+    """ray <- J2 d for d = -(sum over the null vectors n_j of the reduced Hessian of (g2'n_j) n_j):
+    zero curvature, slope -sum (g2'n_j)^2. factor: its pivoted Cholesky factor of that rank; the
+    null vector of free pivot j is [x; e_j] (pivot order) with L11' x = -L21' e_j. Returns whether
+    the slope is negative."""
+    direction = scratch  # in pivot order, k entries
+    for a in range(k):
+        direction[a] = 0.0
+    x = ray  # scratch for the null vectors' leading parts until the ray is formed
+    slope = 0.0
+    for j in range(rank, k):
+        for a in range(rank - 1, -1, -1):
+            value = -factor[j, a]
+            for b in range(a + 1, rank):
+                value -= factor[b, a] * x[b]
+            x[a] = value / factor[a, a]
+        along = g2[permutation[j]]
+        for a in range(rank):
+            along += g2[permutation[a]] * x[a]
+        for a in range(rank):
+            direction[a] -= along * x[a]
+        direction[j] -= along
+        slope -= along * along
+    for i in range(n):
+        ray[i] = 0.0
+    for a in range(k):
+        da = direction[a]
+        row = q + permutation[a]
+        for i in range(n):
+            ray[i] += da * Jt[row, i]
+    return slope < 0.0
+
+
+@kernel
+def _move_along(Ct, u, x, direction, values, direction_values, row_scale, n, m):
+    """x <- x + t direction, t up to the first row that blocks it (x feasible). Returns that row,
+    or -1 if none does (rows whose slope is below 1e-9 of |c_i| |direction| count as level)."""
+    _constraint_values(Ct, u, x, values, n, m)
+    norm = 0.0
+    for i in range(n):
+        norm += direction[i] * direction[i]
+    norm = math.sqrt(norm)
+    for i in range(m):
+        direction_values[i] = 0.0
+    for j in range(n):
+        dj = direction[j]
+        if dj != 0.0:
+            for i in range(m):
+                direction_values[i] += dj * Ct[j, i]
+    t = math.inf
+    blocking = -1
+    for i in range(m):
+        if u[i] < INFINITE_BOUND and direction_values[i] * row_scale[i] > _RECESSION_TOLERANCE * norm:
+            ratio = max(-values[i], 0.0) / direction_values[i]
+            if ratio < t:
+                t = ratio
+                blocking = i
+    if blocking >= 0:
+        for i in range(n):
+            x[i] += t * direction[i]
+    return blocking
+
+
+@kernel
+def _most_negative_multiplier(lam, row_scale, active, q):
+    """Position in the active set of the most negative multiplier (times its row's norm), or -1."""
+    leaving = -1
+    smallest = 0.0
+    for k in range(q):
+        value = lam[k] / row_scale[active[k]]
+        if value < smallest:
+            smallest = value
+            leaving = k
+    return leaving
 
 
 @kernel
@@ -779,13 +953,38 @@ def _active_rows_times(C, active, lam, q, out, n):
 
 
 @kernel
-def _exact_step_is_optimal(
+def _move_towards(Ct, u, x, target, target_values, values, n, m, primal_tolerance):
+    """x <- x + alpha (target - x), with the largest alpha in [0, 1] that keeps every row met
+    (x feasible; target_values = C target - u; values: scratch). Returns the row that limits
+    alpha below 1, or -1."""
+    _constraint_values(Ct, u, x, values, n, m)
+    alpha = 1.0
+    blocking = -1
+    for i in range(m):
+        if u[i] < INFINITE_BOUND and target_values[i] > primal_tolerance:
+            # The row is met at x and not at the target: it blocks where c'x reaches u.
+            ratio = max(-values[i], 0.0) / (target_values[i] - values[i])
+            if ratio < alpha:
+                alpha = ratio
+                blocking = i
+    if alpha > 0.0:
+        for i in range(n):
+            x[i] += alpha * (target[i] - x[i])
+    return blocking
+
+
+@kernel
+def _exact_step(
     H, f, C, Ct, u, eps, primal_tolerance, dual_tolerance, stationarity_tolerance, y, active, q, n, m,
     Jt, R, reduced, permutation, vectors,
 ):  # fmt: skip
     """The minimiser y* of the original QP on the face C_A y = u_A, from y (see the module
-    docstring), into vectors[_V_Y_EXACT] with its multipliers; True if it meets the KKT
-    conditions of the original problem to the tolerances."""
+    docstring), into vectors[_V_Y_EXACT] with its multipliers, and C y* - u into
+    vectors[_V_VALUES_EXACT]. Returns _EXACT_OPTIMAL if y* meets the KKT conditions of the
+    original problem to the tolerances, _EXACT_FACE_MINIMISER if it only minimises the objective on
+    the face (some multiplier negative or some row violated), _EXACT_RAY if the objective falls
+    without bound on the face (a direction of zero curvature and descent is then in
+    vectors[_V_RAY]), else _EXACT_NOT_STATIONARY."""
     y_exact = vectors[_V_Y_EXACT]
     lam_exact = vectors[_V_LAMBDA_EXACT]
     gradient = vectors[_V_GRADIENT]
@@ -794,6 +993,7 @@ def _exact_step_is_optimal(
     rhs = vectors[_V_D]
     row_scale = vectors[_V_ROW_SCALE]
     k = n - q
+    rank = 0
     _symmetric_times(H, y, gradient, n)
     for i in range(n):
         gradient[i] += f[i]
@@ -850,17 +1050,19 @@ def _exact_step_is_optimal(
         scale = max(scale, abs(f[i]), abs(gradient[i] - f[i]), abs(ca[i]))
         residual = max(residual, abs(gradient[i] + ca[i]))
     if not residual <= stationarity_tolerance * scale:
-        return False
+        if rank < k and _descent_ray(Jt, reduced, permutation, g2, rank, k, q, n, vectors[_V_RAY], w):
+            return _EXACT_RAY
+        return _EXACT_NOT_STATIONARY
+    values = vectors[_V_VALUES_EXACT]
+    _constraint_values(Ct, u, y_exact, values, n, m)
     # Dual feasibility in the same units: lam_j ||c_j|| is row j's share of the gradient.
     for a in range(q):
         if lam_exact[a] < -dual_tolerance * scale * row_scale[active[a]]:
-            return False
-    values = vectors[_V_VALUES]
-    _constraint_values(Ct, u, y_exact, values, n, m)
+            return _EXACT_FACE_MINIMISER
     for i in range(m):
         if u[i] < INFINITE_BOUND and not values[i] <= primal_tolerance:
-            return False
-    return True
+            return _EXACT_FACE_MINIMISER
+    return _EXACT_OPTIMAL
 
 
 @kernel
