@@ -142,7 +142,7 @@ _EXACT_NOT_STATIONARY = 3
 
 # Rows of the matrix workspace (each n_max x n_max).
 _M_FACTOR = 0  # L, the Cholesky factor of H + eps I (lower)
-_M_J = 1  # J = L^-T Q
+_M_J = 1  # Jt = J' = Q'L^-1: J by rows, so that its column operations run along contiguous memory
 _M_R = 2  # R (upper, q x q)
 _M_REDUCED = 3  # reduced Hessian of the exact step and its pivoted factor
 _NUM_MATRICES = 4
@@ -182,7 +182,7 @@ class DenseQpSettings:
     dual_tolerance: float = 1e-9
     # Largest accepted stationarity residual, relative to the gradient's scale [-].
     stationarity_tolerance: float = 1e-9
-    # Bound on inner steps (full and partial) plus outer iterations [-].
+    # Bound on inner steps (full, partial and primal) plus outer iterations [-].
     max_iterations: int = 1000
 
 
@@ -293,8 +293,9 @@ def solve_qp(
 ) -> tuple[np.ndarray, int]:
     """(y, status) of min 0.5 y'Hy + f'y s.t. C y <= u; status is OPTIMAL on success.
 
-    The lean path of `solve` (no multipliers, no warm start) for callers in Python that solve
-    many small QPs: float64 arrays are passed on as they are (C-contiguous ones compile once).
+    The lean path of `solve` (no multipliers, no warm start, no shape checks) for callers in
+    Python that solve many small QPs; the arrays reach the kernel as C-contiguous float64 (one
+    compiled signature, loaded by `warm_up`).
     """
     n = f.shape[0]
     m = u.shape[0]
