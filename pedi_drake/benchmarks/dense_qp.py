@@ -1,7 +1,7 @@
 """The dense QP solver (pedi_drake.control.dense_qp) against DAQP on QPs recorded from the controller.
 
     python -m pedi_drake.benchmarks.dense_qp [--fixture tests/fixtures/controller_qps.npz]
-        [--repeats 9] [--batch 20] [--out benchmarks/results/dense_qp.json]
+        [--repeats 9] [--batch 20] [--controller-ticks 4000] [--out benchmarks/results/dense_qp.json]
 
 For every recorded level QP of the hierarchical whole-body controller (min 0.5 y'Hy + f'y s.t.
 C y <= u, with the y DAQP returned in the controller) it measures the CPU time of one solve:
@@ -15,7 +15,12 @@ C y <= u, with the y DAQP returned in the controller) it measures the CPU time o
 Each QP's time is the median over `--repeats` batches (the solvers interleaved, so they share
 the machine's load); the table gives the median and p99 of that over all recorded QPs, and the
 accuracy: the largest difference from DAQP's solution (relative to max(1, |y|_inf)) on the QPs
-whose solution is unique, and the largest objective difference on all of them. Writes JSON.
+whose solution is unique, and the largest objective difference on all of them.
+
+Then, in the controller: the controller side replays the first `--controller-ticks` ticks of
+tests/fixtures/controller_side_reference.npz (hit_target_front, as in
+pedi_drake.benchmarks.controller_latency) once per backend, and the CPU time spent in the level QP
+solves (hqp._solve_dense_qp, Python wrapper included) is summed per tick. Writes JSON.
 
     python -m pedi_drake.benchmarks.dense_qp --record tests/fixtures/controller_qps.npz
 
@@ -40,6 +45,7 @@ from pedi_drake.control import dense_qp, hqp
 from pedi_drake.jit import kernel
 
 DEFAULT_FIXTURE = Path(__file__).resolve().parents[2] / "tests" / "fixtures" / "controller_qps.npz"
+CONTROLLER_REFERENCE = DEFAULT_FIXTURE.with_name("controller_side_reference.npz")
 # Mission and simulated duration [s]: standing up, lifting a leg and reaching (hit_target_front,
 # paper 000's stack); leaning on the prongs and lifting both front legs (prong_push_box, paper 003).
 RECORDED_MISSIONS = {"hit_target_front": 8.0, "prong_push_box": 10.0}
@@ -254,11 +260,44 @@ def accuracy(qps: list[RecordedQp]) -> dict:
     }
 
 
+def qp_time_in_controller(backend: str, ticks: int) -> dict:
+    """CPU time of the level QP solves in `ticks` replayed controller ticks (see the docstring)."""
+    from pedi_drake.benchmarks.controller_latency import Replay
+
+    reference = np.load(CONTROLLER_REFERENCE)
+    status = reference["status"].astype(float)
+    ticks = min(ticks, len(status) - 1)
+    replay = Replay(str(reference["mission"]), float(reference["period"]), status, qp_backend=backend)
+    spent: list[float] = []
+    original = hqp._solve_dense_qp
+
+    def timed(*args, **kwargs):
+        start = time.thread_time()
+        try:
+            return original(*args, **kwargs)
+        finally:
+            spent.append(time.thread_time() - start)
+
+    hqp._solve_dense_qp = timed
+    try:
+        replay.run(ticks)
+    finally:
+        hqp._solve_dense_qp = original
+    return {
+        "ticks": ticks,
+        "solves_per_tick": len(spent) / ticks,
+        "qp_cpu_ms_per_tick": 1e3 * sum(spent) / ticks,
+        "per_solve_median_us": 1e6 * float(np.median(spent)) if spent else 0.0,
+        "per_solve_p99_us": 1e6 * float(np.percentile(spent, 99)) if spent else 0.0,
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--fixture", type=Path, default=DEFAULT_FIXTURE)
     parser.add_argument("--repeats", type=int, default=9, help="timed batches per QP (median)")
     parser.add_argument("--batch", type=int, default=20, help="solves per timed batch")
+    parser.add_argument("--controller-ticks", type=int, default=4000, help="replayed controller ticks (0: none)")
     parser.add_argument("--out", default="benchmarks/results/dense_qp.json")
     parser.add_argument("--record", type=Path, help="record the controller QPs to this file and stop")
     args = parser.parse_args()
@@ -290,11 +329,34 @@ def main() -> None:
     for name, row in rows.items():
         print(f"{name:<28}{row['median_us']:>10.1f}{row['p99_us']:>9.1f}{row['max_us']:>9.1f}")
     print("Accuracy:", json.dumps(checked))
+    in_controller = {}
+    if args.controller_ticks > 0:
+        for backend in ("daqp", "dense_qp"):
+            in_controller[backend] = qp_time_in_controller(backend, args.controller_ticks)
+        ticks = in_controller["daqp"]["ticks"]
+        print(f"In the controller ({ticks} replayed ticks of hit_target_front): level QP solves, CPU time")
+        header = f"{'backend':<12}{'solves/tick':>12}{'ms/tick':>9}{'median us':>10}{'p99 us':>9}"
+        print(header)
+        print("-" * len(header))
+        for backend, row in in_controller.items():
+            print(
+                f"{backend:<12}{row['solves_per_tick']:>12.2f}{row['qp_cpu_ms_per_tick']:>9.3f}"
+                f"{row['per_solve_median_us']:>10.1f}{row['per_solve_p99_us']:>9.1f}"
+            )
     print(f"Machine: {platform.processor() or platform.machine()}, Python {platform.python_version()}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(
-        json.dumps({"per_solve": rows, "accuracy": checked, "repeats": args.repeats, "batch": args.batch}, indent=2)
+        json.dumps(
+            {
+                "per_solve": rows,
+                "accuracy": checked,
+                "in_controller": in_controller,
+                "repeats": args.repeats,
+                "batch": args.batch,
+            },
+            indent=2,
+        )
     )
     print(f"wrote {out}")
 

@@ -472,9 +472,12 @@ def solve_dense_qp_kernel(
                     Ct, u, y, vectors[_V_RAY], vectors[_V_VALUES], vectors[_V_VALUES_EXACT], vectors[_V_ROW_SCALE], n, m
                 )
                 if blocking < 0:
-                    # Nothing stops a descent of zero curvature: a certificate of unboundedness.
-                    _finish(UNBOUNDED, y, multipliers, active, lam, q, n)
-                    return UNBOUNDED, q, iterations
+                    # Nothing stops a descent of zero curvature: unbounded, if the descent is more
+                    # than rounding (the test of a proximal step); else the proximal steps decide.
+                    if _is_recession_direction(H, f, C, u, vectors[_V_RAY], n, m, vectors):
+                        _finish(UNBOUNDED, y, multipliers, active, lam, q, n)
+                        return UNBOUNDED, q, iterations
+                    break
             else:
                 blocking = _move_towards(
                     Ct, u, y, vectors[_V_Y_EXACT], vectors[_V_VALUES_EXACT], vectors[_V_VALUES], n, m, primal_tolerance
