@@ -245,6 +245,17 @@ def test_a_descent_direction_without_a_bound_is_unbounded():
         assert flag == DAQP_UNBOUNDED
 
 
+def test_a_workspace_too_small_is_refused():
+    H, f, C, u = np.eye(3), np.ones(3), np.ones((2, 3)), np.ones(2)
+    y = np.full(3, 7.0)
+    small = dense_qp.make_workspace(2, 2)
+    status, _, _ = dense_qp.solve_dense_qp_kernel(
+        H, f, C, u, 1e-5, 1e-9, 1e-9, 1e-9, 100, y, np.zeros(2), np.zeros(3, dtype=np.int64), 0,
+        small.matrices, small.transposed, small.vectors, small.integers,
+    )  # fmt: skip
+    assert status == NUMERICAL_FAILURE
+
+
 def test_bad_numbers_fail_without_nan():
     H, f, C, u = np.eye(3), np.ones(3), np.ones((2, 3)), np.ones(2)
     for bad in ("H", "f", "C", "u"):
@@ -317,7 +328,8 @@ def test_a_wrong_warm_start_is_harmless():
 def test_the_kernel_equals_its_python_source():
     if not jit.ENABLED:
         pytest.skip("PEDI_DRAKE_JIT=0: the kernel is its Python source")
-    kernel_ = dense_qp.solve_dense_qp_kernel
+    # The kernel's body (the kernel itself only adds a guard against exceptions).
+    kernel_ = dense_qp._solve
     assert kernel_.py_func is not kernel_
     rng = np.random.default_rng(RNG_SEED + 9)
     statuses = set()

@@ -126,7 +126,8 @@ INFINITE_BOUND = 1e30
 # A row whose component outside the active rows' span (in the metric of G) is below this fraction
 # of its norm is dependent on them: adding it would make R singular.
 _DEPENDENCY_TOLERANCE = 1e-10
-# Dual-step entries r_j below this fraction of max |r| are rounding of a zero (degenerate rows).
+# Dual-step entries r_j ||c_j|| below this fraction of their largest are rounding of a zero
+# (degenerate rows).
 _ZERO_TOLERANCE = 1e-13
 # Pivots of the reduced Hessian I - eps J2'J2 (eigenvalues in [0, 1]) below this are zero
 # curvature: H's curvature there is below about 1e-12 eps.
@@ -163,9 +164,10 @@ _V_VALUES_EXACT = 12  # C y* - u (m)
 _V_RAY = 13  # a direction of zero curvature and descent on the face (n)
 _NUM_VECTORS = 14
 # Rows of the integer workspace.
-_I_IS_ACTIVE = 0  # 1 for rows in the active set (m)
+_I_IS_ACTIVE = 0  # 1 for rows in the active set, _IMPLIED for rows left out as implied by it (m)
 _I_PERMUTATION = 1  # pivot order of the reduced Hessian (n)
 _NUM_INTEGER_ROWS = 2
+_IMPLIED = 2
 
 
 @dataclasses.dataclass(frozen=True)
@@ -356,10 +358,65 @@ def solve_dense_qp_kernel(
     active set (invalid or dependent rows are skipped); on return its first q entries are the
     final active set. matrices, transposed, vectors, integers: the arrays of a `make_workspace` of
     at least this size.
-    Returns (status, q, iterations).
+    Returns (status, q, iterations). Never raises: an exception in the compiled code (a division
+    by zero that a check missed would raise one in numba) is NUMERICAL_FAILURE with y = 0.
     """
+    try:
+        return _solve(
+            H, f, C, u, prox_weight, primal_tolerance, dual_tolerance, stationarity_tolerance, max_iterations, y,
+            multipliers, active, num_initial_active, matrices, transposed, vectors, integers,
+        )  # fmt: skip
+    except Exception:
+        for i in range(f.shape[0]):
+            y[i] = 0.0
+        for i in range(u.shape[0]):
+            multipliers[i] = 0.0
+        return NUMERICAL_FAILURE, 0, 0
+
+
+@kernel
+def _solve(
+    H,
+    f,
+    C,
+    u,
+    prox_weight,
+    primal_tolerance,
+    dual_tolerance,
+    stationarity_tolerance,
+    max_iterations,
+    y,
+    multipliers,
+    active,
+    num_initial_active,
+    matrices,
+    transposed,
+    vectors,
+    integers,
+):
+    """The body of `solve_dense_qp_kernel`."""
     n = f.shape[0]
     m = u.shape[0]
+    # Arrays too small would be written past their ends (compiled code checks no bounds).
+    if (
+        H.shape[0] != n
+        or H.shape[1] != n
+        or C.shape[0] != m
+        or C.shape[1] != n
+        or y.shape[0] < n
+        or multipliers.shape[0] < m
+        or active.shape[0] < n
+        or matrices.shape[0] < _NUM_MATRICES
+        or matrices.shape[1] < n
+        or matrices.shape[2] < n
+        or transposed.shape[0] < n
+        or transposed.shape[1] < m
+        or vectors.shape[0] < _NUM_VECTORS
+        or vectors.shape[1] < max(n, m)
+        or integers.shape[0] < _NUM_INTEGER_ROWS
+        or integers.shape[1] < max(n, m)
+    ):
+        return NUMERICAL_FAILURE, 0, 0
     eps = prox_weight
     L = matrices[_M_FACTOR]
     Jt = matrices[_M_J]
@@ -422,8 +479,9 @@ def solve_dense_qp_kernel(
             linear[i] = f[i] - eps * centre[i]
         q = _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors, True)
         status, q, iterations = _dual_active_set(
-            C, Ct, u, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, Jt, R, vectors
-        )
+            C, Ct, u, linear, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, Jt, R,
+            vectors,
+        )  # fmt: skip
         if status != OPTIMAL:
             _finish(status, y, multipliers, active, lam, q, n)
             return status, q, iterations
@@ -852,11 +910,12 @@ def _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, 
 
 @kernel
 def _dual_active_set(
-    C, Ct, u, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, Jt, R, vectors
-):
-    """Goldfarb-Idnani from a dual-feasible (y, active set, lam): adds the most violated row
-    (violation over row norm) until every row is met within primal_tolerance.
-    Returns (status, q, iterations)."""
+    C, Ct, u, linear, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, Jt, R,
+    vectors,
+):  # fmt: skip
+    """Goldfarb-Idnani from a dual-feasible (y, active set, lam) of the subproblem with linear
+    term `linear`: adds the most violated row (violation over row norm) until every row is met
+    within primal_tolerance. Returns (status, q, iterations)."""
     d = vectors[_V_D]
     z = vectors[_V_Z]
     r = vectors[_V_R]
@@ -867,7 +926,7 @@ def _dual_active_set(
         worst = 0.0
         _constraint_values(Ct, u, y, values, n, m)
         for i in range(m):
-            if is_active[i] == 1 or u[i] >= INFINITE_BOUND:
+            if is_active[i] != 0 or u[i] >= INFINITE_BOUND:
                 continue
             violation = values[i]
             if violation > primal_tolerance and violation * row_scale[i] > worst:
@@ -883,13 +942,15 @@ def _dual_active_set(
             _times_row(Jt, C, p, d, n)
             dependent = _dependent(d, q, n)
             _solve_upper(R, d, r, q)
+            # r_j ||c_j|| is row j's share of c_p in the combination c_p = C_A'r (+ the part
+            # outside): the zero test compares those shares, so that row scaling cannot hide one.
             largest_r = 0.0
             for k in range(q):
-                largest_r = max(largest_r, abs(r[k]))
+                largest_r = max(largest_r, abs(r[k]) / row_scale[active[k]])
             t_partial = math.inf
             leaving = -1
             for k in range(q):
-                if r[k] > _ZERO_TOLERANCE * largest_r:
+                if r[k] / row_scale[active[k]] > _ZERO_TOLERANCE * largest_r:
                     ratio = lam[k] / r[k]
                     if ratio < t_partial:
                         t_partial = ratio
@@ -912,7 +973,23 @@ def _dual_active_set(
                     norm2 += d[j] * d[j]
                 t_full = max(violation, 0.0) / norm2
             if t_partial == math.inf and t_full == math.inf:
-                return INFEASIBLE, q, iterations
+                # c_p = C_A'r with every r_j <= 0: on the face c_p'y = r'u_A, and since
+                # C_A y <= u_A gives c_p'y >= r'u_A everywhere, row p is infeasible with the rows
+                # of A by r'u_A - u_p. Where that is within the tolerance, p's violation is the
+                # rounding of y at a degenerate vertex (rows of very different norms through one
+                # point): p is implied by A, and is left out until A changes.
+                margin = -u[p]
+                for k in range(q):
+                    margin += r[k] * u[active[k]]
+                if margin > primal_tolerance:
+                    return INFEASIBLE, q, iterations
+                is_active[p] = _IMPLIED
+                # Partial steps moved multiplier onto p; from A alone (y, lam) are recomputed.
+                before = q
+                q = _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors, True)
+                if q != before:
+                    _clear_implied(is_active, m)
+                break
             t = min(t_partial, t_full)
             if not dependent:
                 for i in range(n):
@@ -926,9 +1003,19 @@ def _dual_active_set(
                 lam[q] = lam_p
                 is_active[p] = 1
                 q += 1
+                _clear_implied(is_active, m)
                 break
             lam[leaving] = 0.0
             q = _drop_from_factorisation(Jt, R, active, is_active, lam, leaving, q, n)
+            _clear_implied(is_active, m)
+
+
+@kernel
+def _clear_implied(is_active, m):
+    """Rows left out as implied by the active set are candidates again (the set changed)."""
+    for i in range(m):
+        if is_active[i] == _IMPLIED:
+            is_active[i] = 0
 
 
 @kernel
@@ -965,7 +1052,7 @@ def _move_towards(Ct, u, x, target, target_values, values, n, m, primal_toleranc
     alpha = 1.0
     blocking = -1
     for i in range(m):
-        if u[i] < INFINITE_BOUND and target_values[i] > primal_tolerance:
+        if u[i] < INFINITE_BOUND and target_values[i] > primal_tolerance and target_values[i] > values[i]:
             # The row is met at x and not at the target: it blocks where c'x reaches u.
             ratio = max(-values[i], 0.0) / (target_values[i] - values[i])
             if ratio < alpha:
