@@ -40,7 +40,10 @@ without changing the problem's solution, unlike a Tikhonov term.
    that restore R's triangle); a row whose d2 vanishes (dependent on A: redundant or degenerate rows) can only
    be added after partial steps make room, and when it is dependent with no r_j > 0, row p with
    the rows of A is a Farkas certificate of infeasibility: c_p = C_A'r with r <= 0 while
-   c_p'y > u_p where C_A y = u_A, so no y meets all of them.
+   c_p'y > u_p where C_A y = u_A, so no y meets all of them, by the margin r'u_A - u_p. A margin
+   within the primal tolerance is no certificate: the violation is the rounding of y at a
+   degenerate vertex (many rows of very different norms through one point), row p is implied by
+   A, and it is left out until A changes.
 
    Between outer iterations only the linear term f - eps y_k changes, so the factorisation of A
    stays valid: each outer iteration restarts from the previous active set at the cost of
@@ -89,8 +92,9 @@ Stopping and status:
 * ITERATION_LIMIT: `max_iterations` inner steps (full, partial, primal, and one per outer
   iteration) used; y is the last iterate, not proven optimal (and, stopped inside an inner solve, not
   feasible either).
-* NUMERICAL_FAILURE: non-finite input, H + eps I not positive definite (H not semi-definite), or
-  a non-finite iterate. y is then zero.
+* NUMERICAL_FAILURE: non-finite input, H + eps I not positive definite (H not semi-definite), a
+  non-finite iterate, arrays too small for the problem, or any exception in the compiled code
+  (the kernel never raises). y is then zero.
 
 y is never NaN. Where the solution is not unique the one returned is the exact step's (zero in
 the reduced Hessian's null directions from the proximal iterate), not necessarily DAQP's.
