@@ -481,6 +481,7 @@ def _solve(
             return ITERATION_LIMIT, q, iterations
         for i in range(n):
             linear[i] = f[i] - eps * centre[i]
+        _clear_implied(is_active, m)
         q = _restart_from_active_set(Jt, R, u, linear, active, is_active, lam, q, n, y, vectors, True)
         status, q, iterations = _dual_active_set(
             C, Ct, u, linear, primal_tolerance, max_iterations, iterations, y, active, is_active, lam, q, n, m, Jt, R,
