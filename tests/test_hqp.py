@@ -62,6 +62,12 @@ def brute_force_sequential(levels: list[Level], n: int) -> list[float]:
     return costs
 
 
+@pytest.fixture(params=["daqp", "dense_qp"])
+def settings(request) -> HqpSettings:
+    """The level QPs by DAQP (the default) and by pedi_drake.control.dense_qp."""
+    return HqpSettings(backend=request.param)
+
+
 def level_cost(level: Level, x: np.ndarray) -> float:
     return sum(t.weight * np.sum((t.A @ x - t.b) ** 2) for t in level.equalities) + sum(
         t.weight * np.sum(np.maximum(t.G @ x - t.h, 0) ** 2) for t in level.inequalities if not t.hard
@@ -69,11 +75,11 @@ def level_cost(level: Level, x: np.ndarray) -> float:
 
 
 @pytest.mark.parametrize("seed", range(12))
-def test_strict_priority_matches_brute_force_sequential(seed):
+def test_strict_priority_matches_brute_force_sequential(seed, settings):
     rng = np.random.default_rng(seed)
     n = 12
     levels = random_levels(rng, n)
-    solution = solve_hqp(levels, n)
+    solution = solve_hqp(levels, n, settings)
     expected = brute_force_sequential(levels, n)
     for level, cost in zip(levels, expected, strict=True):
         assert level_cost(level, solution.x) == pytest.approx(cost, rel=1e-4, abs=1e-5)
@@ -84,13 +90,13 @@ def test_strict_priority_matches_brute_force_sequential(seed):
 
 
 @pytest.mark.parametrize("seed", range(8))
-def test_lower_level_never_degrades_a_higher_one(seed):
+def test_lower_level_never_degrades_a_higher_one(seed, settings):
     rng = np.random.default_rng(100 + seed)
     n = 12
     levels = random_levels(rng, n)
-    full = solve_hqp(levels, n)
+    full = solve_hqp(levels, n, settings)
     for k in range(1, len(levels) + 1):
-        truncated = solve_hqp(levels[:k], n)
+        truncated = solve_hqp(levels[:k], n, settings)
         assert level_cost(levels[k - 1], full.x) == pytest.approx(
             level_cost(levels[k - 1], truncated.x), rel=1e-5, abs=1e-6
         )
@@ -127,48 +133,48 @@ def test_equality_only_levels_match_nullspace_projection():
     np.testing.assert_allclose(solve_hqp(levels, n).x, x3, atol=1e-6)
 
 
-def test_redundant_rows_do_not_break_the_solver():
+def test_redundant_rows_do_not_break_the_solver(settings):
     n = 4
     A = np.array([[1.0, 0, 0, 0], [2.0, 0, 0, 0], [0, 1.0, 0, 0]])
     levels = [
         Level("dup", [EqualityTask("dup", A, np.array([1.0, 2.0, 3.0]))]),
         Level("reg", [EqualityTask("reg", np.eye(n), np.ones(n) * 5)]),
     ]
-    x = solve_hqp(levels, n).x
+    x = solve_hqp(levels, n, settings).x
     np.testing.assert_allclose(x, [1.0, 3.0, 5.0, 5.0], atol=1e-6)
 
 
-def test_infeasible_hard_constraints_raise_qp_infeasible():
+def test_infeasible_hard_constraints_raise_qp_infeasible(settings):
     n = 2
     G = np.array([[1.0, 0.0], [-1.0, 0.0]])
     h = np.array([-1.0, -1.0])  # x0 <= -1 and x0 >= 1
     levels = [Level("bad", [EqualityTask("e", np.eye(n), np.zeros(n))], [InequalityTask("box", G, h)])]
     with pytest.raises(QpInfeasible):
-        solve_hqp(levels, n)
+        solve_hqp(levels, n, settings)
     with pytest.raises(QpInfeasible):
-        solve_weighted(levels, n, [1.0])
+        solve_weighted(levels, n, [1.0], settings)
 
 
-def test_soft_inequality_conflict_resolved_by_priority():
+def test_soft_inequality_conflict_resolved_by_priority(settings):
     # Level 0 wants x <= -1 (soft), level 1 wants x = 3: strict keeps x = -1, weighted compromises.
     levels = [
         Level("limit", [], [InequalityTask("x<=-1", np.array([[1.0]]), np.array([-1.0]), hard=False)]),
         Level("target", [EqualityTask("x=3", np.array([[1.0]]), np.array([3.0]))]),
     ]
-    assert solve_hqp(levels, 1).x[0] == pytest.approx(-1.0, abs=1e-6)
-    weighted = solve_weighted(levels, 1, [1.0, 1.0]).x[0]
+    assert solve_hqp(levels, 1, settings).x[0] == pytest.approx(-1.0, abs=1e-6)
+    weighted = solve_weighted(levels, 1, [1.0, 1.0], settings).x[0]
     assert weighted == pytest.approx(1.0, abs=1e-6)  # argmin (x+1)^2 + (x-3)^2
-    assert solve_weighted(levels, 1, [1e4, 1.0]).x[0] == pytest.approx(-1.0 + 4.0 / 1.0001e4, abs=1e-6)
+    assert solve_weighted(levels, 1, [1e4, 1.0], settings).x[0] == pytest.approx(-1.0 + 4.0 / 1.0001e4, abs=1e-6)
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_weighted_mode_matches_brute_force_weighted_qp(seed):
+def test_weighted_mode_matches_brute_force_weighted_qp(seed, settings):
     rng = np.random.default_rng(200 + seed)
     n = 12
     # A last identity level makes the weighted optimum unique, so solutions can be compared.
     levels = random_levels(rng, n, 3) + [Level("reg", [EqualityTask("reg", np.eye(n), np.zeros(n))])]
     weights = [100.0, 10.0, 1.0, 0.01]
-    solution = solve_weighted(levels, n, weights)
+    solution = solve_weighted(levels, n, weights, settings)
     prog = MathematicalProgram()
     x = prog.NewContinuousVariables(n, "x")
     for level, weight in zip(levels, weights, strict=True):
@@ -192,7 +198,7 @@ def test_weighted_mode_matches_brute_force_weighted_qp(seed):
 
 @pytest.mark.parametrize("target, expected", [(0.5, 0.5), (2.0, 1.0)])
 @pytest.mark.parametrize("rows", ["square", "tall"])
-def test_an_unconstrained_optimum_is_kept_only_when_it_meets_the_constraints(target, expected, rows):
+def test_an_unconstrained_optimum_is_kept_only_when_it_meets_the_constraints(target, expected, rows, settings):
     # x0 <= 1 (hard) above a target x = (target, 0): inside the bound the least-squares step is the
     # answer (taken without the QP), beyond it the QP stops x0 at the bound. "tall" repeats a row,
     # the shape of the controller's regularisation level (solved by its normal equations).
@@ -202,4 +208,4 @@ def test_an_unconstrained_optimum_is_kept_only_when_it_meets_the_constraints(tar
         Level("bound", [], [InequalityTask("x0<=1", np.array([[1.0, 0.0]]), np.array([1.0]))]),
         Level("target", [EqualityTask("target", A, b)]),
     ]
-    np.testing.assert_allclose(solve_hqp(levels, 2).x, [expected, 0.0], atol=1e-6)
+    np.testing.assert_allclose(solve_hqp(levels, 2, settings).x, [expected, 0.0], atol=1e-6)

@@ -21,6 +21,10 @@ from pedi_drake.prongs import ProngDesign
 from pedi_drake.scenario import RobotConfig
 from pedi_drake.station.initial_state import initial_trunk_pose
 
+# The level QP backends every closed-loop property must hold with: DAQP (the default) and
+# pedi_drake.control.dense_qp (OSQP, the slow baseline, only in the benchmark).
+BACKENDS = ("daqp", "dense_qp")
+
 
 def standing_controller(config: WholeBodyControllerConfig | None = None):
     controller = WholeBodyController(config or WholeBodyControllerConfig())
@@ -44,8 +48,9 @@ def tick(controller, context, n: int = 1):
     )
 
 
-def test_unconnected_references_stand_in_place():
-    controller, context = standing_controller()
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_unconnected_references_stand_in_place(backend):
+    controller, context = standing_controller(WholeBodyControllerConfig(qp_backend=backend))
     command, diag = tick(controller, context, 3)
     layout = controller.diag
     assert diag[layout["status"]][0] == STATUS_OK
@@ -57,9 +62,10 @@ def test_unconnected_references_stand_in_place():
     assert np.all(np.abs(command[48:60]) < 0.5 * robot.EFFORT_LIMIT)
 
 
-def test_infeasible_qp_holds_last_good_command_and_recovers():
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_infeasible_qp_holds_last_good_command_and_recovers(backend):
     # 200 N minimum per loaded foot cannot be produced within the knee torque limits.
-    config = WholeBodyControllerConfig(min_normal_force=200.0, contact_ramp_time=0.02)
+    config = WholeBodyControllerConfig(min_normal_force=200.0, contact_ramp_time=0.02, qp_backend=backend)
     controller, context = standing_controller(config)
     controller.contact_set_port.FixValue(context, np.zeros(4))
     good, diag = tick(controller, context, 2)
@@ -107,9 +113,9 @@ def test_contact_removal_ramps_the_force_down():
     assert np.max(steps) <= bound_step + 0.5
 
 
-@pytest.fixture(scope="module")
-def three_leg():
-    return run_demo("three_leg_hold")
+@pytest.fixture(scope="module", params=BACKENDS)
+def three_leg(request):
+    return run_demo("three_leg_hold", demo_scenario("three_leg_hold", qp_backend=request.param))
 
 
 def test_three_leg_hold_meets_floors(three_leg):
@@ -127,9 +133,12 @@ def test_three_leg_contact_switch_has_no_force_jump(three_leg):
     assert three_leg.max_force_jump < 5.0
 
 
-def test_stand_on_four_legs_at_1khz_in_weighted_mode():
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_stand_on_four_legs_at_1khz_in_weighted_mode(backend):
     scenario = demo_scenario("stand")
-    scenario.whole_body = dataclasses.replace(scenario.whole_body, period=0.001, hqp_mode="weighted")
+    scenario.whole_body = dataclasses.replace(
+        scenario.whole_body, period=0.001, hqp_mode="weighted", qp_backend=backend
+    )
     r = run_demo("stand", scenario)
     assert r.mission_succeeded and not r.fell and r.qp_failures == 0
     assert r.stance_slip_whole_run < 0.002
@@ -144,20 +153,22 @@ def test_five_targets_reached():
     assert r.max_torque_ratio <= 1.0
 
 
-def test_prongs_carry_the_trunk_with_both_front_feet_lifted():
-    r = run_demo("prongs")
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_prongs_carry_the_trunk_with_both_front_feet_lifted(backend):
+    r = run_demo("prongs", demo_scenario("prongs", qp_backend=backend))
     assert r.mission_succeeded and not r.fell and r.qp_failures == 0
     assert r.prong_load > 20.0
     assert max(r.foot_errors) < 0.005
     assert r.max_torque_ratio <= 1.0
 
 
-def test_sliding_prongs_that_friction_cannot_stop_brake_at_the_limit_instead_of_failing():
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_sliding_prongs_that_friction_cannot_stop_brake_at_the_limit_instead_of_failing(backend):
     # Trunk and loaded prong tips slide at 1.5 m/s (a push): stopping the tips, which are fixed to
     # the trunk, at the no-motion task's rate needs more horizontal force than friction allows, so
     # the strict stack is infeasible. The controller then demotes contact no-motion below the
     # force limits rather than fail: the contacts brake at the friction limit.
-    controller = WholeBodyController(WholeBodyControllerConfig(), ProngDesign())
+    controller = WholeBodyController(WholeBodyControllerConfig(qp_backend=backend), ProngDesign())
     context = controller.CreateDefaultContext()
     X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
     sliding = np.concatenate([X.rotation().ToQuaternion().wxyz(), X.translation(), np.zeros(3), [1.5, 0.0, 0.0]])

@@ -1,7 +1,7 @@
 """Latency of the controller side of a hardware run, against a replay of recorded status messages.
 
     python -m pedi_drake.benchmarks.controller_latency [--mission hit_target_front] [--period 0.002]
-        [--out benchmarks/results/controller_latency.json]
+        [--qp-backend daqp] [--out benchmarks/results/controller_latency.json]
 
 1. Records: the mission in simulation (seed 0); the status the robot would have sent at every
    tick (q, qd, tau_est, IMU, foot sensors) is read from the run's logs.
@@ -70,8 +70,8 @@ STAGES = (
 )
 
 
-def _scenario(mission: str, period: float, lcm_url: str = ""):
-    periods = f"whole_body: {{period: {period}}}, kalman: {{period: {period}}}"
+def _scenario(mission: str, period: float, lcm_url: str = "", qp_backend: str = "daqp"):
+    periods = f"whole_body: {{period: {period}, qp_backend: {qp_backend}}}, kalman: {{period: {period}}}"
     text = f"{{{periods}, go1_driver: {{safety: {{period: {period}}}}}}}"
     scenario = load_scenario(scenario_text=text)
     scenario.mission, scenario.controller = mission, "whole_body"
@@ -118,11 +118,12 @@ def _distribution(x_ms: np.ndarray) -> dict:
 
 
 class Replay:
-    """The hardware diagram on an in-process bus, fed the recorded status tick by tick."""
+    """The hardware diagram on an in-process bus, fed the recorded status tick by tick
+    (`qp_backend`: the whole-body controller's level QP solver)."""
 
-    def __init__(self, mission: str, period: float, samples: np.ndarray):
+    def __init__(self, mission: str, period: float, samples: np.ndarray, qp_backend: str = "daqp"):
         self.period, self.samples = period, samples
-        self.scenario = _scenario(mission, period, "memq://")
+        self.scenario = _scenario(mission, period, "memq://", qp_backend)
         self.built = MakePedipulationDiagram(self.scenario, hardware=True)
         self.diagram = self.built.diagram
         self.link = hardware_link(self.diagram)
@@ -292,6 +293,7 @@ def main() -> None:
     parser.add_argument("--out", default="benchmarks/results/controller_latency.json")
     parser.add_argument("--record-reference", type=Path, help="write the reference ticks here and stop")
     parser.add_argument("--reference-ticks", type=int, default=4000)
+    parser.add_argument("--qp-backend", default="daqp", help="the replayed controller's level QP solver")
     args = parser.parse_args()
     if args.record_reference:
         record_reference(args.mission, args.period, args.reference_ticks, args.record_reference)
@@ -305,12 +307,12 @@ def main() -> None:
     ticks = len(samples) - 1
     period_ms = 1e3 * args.period
 
-    default_gc = Replay(args.mission, args.period, samples).run(ticks)
-    replay = Replay(args.mission, args.period, samples)
+    default_gc = Replay(args.mission, args.period, samples, args.qp_backend).run(ticks)
+    replay = Replay(args.mission, args.period, samples, args.qp_backend)
     with hardware_run(replay.diagram, shutdown_damping_duration=0.0):
         frozen_gc = replay.run(ticks)
     with stage_timers(ticks) as stage_times:
-        timed = Replay(args.mission, args.period, samples)
+        timed = Replay(args.mission, args.period, samples, args.qp_backend)
     timed_run = timed.run(ticks, stage_times)
     stages = {}
     for name, _, _ in STAGES:
@@ -321,7 +323,10 @@ def main() -> None:
 
     rows = {"python_gc": _summary(default_gc, period_ms), "hardware_run_gc": _summary(frozen_gc, period_ms)}
     load_end = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
-    print(f"controller side of {args.mission} at {1 / args.period:.0f} Hz, {ticks} replayed ticks")
+    print(
+        f"controller side of {args.mission} at {1 / args.period:.0f} Hz, {ticks} replayed ticks, "
+        f"level QPs by {args.qp_backend}"
+    )
     print(f"load average (1, 5, 15 min) at the start {load_start}, at the end {load_end}")
     print(f"bare plant (station_fixed_cmd): {baseline_ms:.3f} ms per {period_ms:.1f} ms step (RTF {baseline_rtf:.2f})")
     header = f"{'pass':<18}{'median':>8}{'p99':>8}{'p99.9':>8}{'max':>9}{'miss/1e4':>10}{'median/plant':>14}"
@@ -360,6 +365,7 @@ def main() -> None:
             {
                 "mission": args.mission,
                 "period_s": args.period,
+                "qp_backend": args.qp_backend,
                 "machine": machine,
                 "loadavg_start": load_start,
                 "loadavg_end": load_end,

@@ -8,7 +8,7 @@ import math
 
 STACKS = ("paper000", "paper003")
 HQP_MODES = ("strict", "weighted")
-QP_BACKENDS = ("compiled", "daqp", "osqp")
+QP_BACKENDS = ("compiled", "daqp", "dense_qp", "osqp")
 
 
 @dataclasses.dataclass
@@ -34,7 +34,8 @@ class WholeBodyControllerConfig:
     level_weights: list[float] = dataclasses.field(default_factory=list)
     # How a tick is computed: "compiled" (the whole tick in one compiled call, with the project's
     # dense QP solver: whole_body_tick.py), or the reference implementation in Python with its
-    # level QPs solved by "daqp" (dense active set) or "osqp" (MathematicalProgram, the baseline).
+    # level QPs solved by "daqp" (dense active set, called directly), "dense_qp" (the compiled
+    # solver, pedi_drake.control.dense_qp) or "osqp" (MathematicalProgram, the baseline).
     qp_backend: str = "daqp"
     # paper003 only: also keep the capture point in the safety polygon in its first level.
     paper003_balance: bool = True
