@@ -342,7 +342,6 @@ def build_levels(
         eq_b[row] = -s.h[u]
         row += 1
     zero3 = np.zeros(3)
-    contact_velocity = np.empty(3)
     for i in range(nc):
         if not no_motion[i]:
             continue

@@ -36,7 +36,7 @@ class WholeBodyControllerConfig:
     # dense QP solver: whole_body_tick.py), or the reference implementation in Python with its
     # level QPs solved by "daqp" (dense active set, called directly), "dense_qp" (the compiled
     # solver, pedi_drake.control.dense_qp) or "osqp" (MathematicalProgram, the baseline).
-    qp_backend: str = "daqp"
+    qp_backend: str = "compiled"
     # paper003 only: also keep the capture point in the safety polygon in its first level.
     paper003_balance: bool = True
 

@@ -295,8 +295,9 @@ def _point_bias(V, A, r0, r1, r2):
 def go1_dynamics(model_record, base_state, q_joints, v_joints, out_record):
     """Fills the record `out_record` (`output_dtype`) from the estimate and the measured joints.
 
-    model_record: the record of a Go1Model (`model_record`); base_state (13,) (pedi_drake.estimation.base_state layout: quaternion wxyz,
-    p_WB [m], w_WB [rad/s] and v_WB [m/s] in W); q_joints, v_joints (12,) Unitree order [rad, rad/s].
+    model_record: the record of a Go1Model (`model_record`); base_state (13,)
+    (pedi_drake.estimation.base_state layout: quaternion wxyz, p_WB [m], w_WB [rad/s] and v_WB
+    [m/s] in W); q_joints, v_joints (12,) Unitree order [rad, rad/s].
     """
     model, out = model_record[0], out_record[0]
     n = model.parent.shape[0]

@@ -55,22 +55,29 @@ def householder_rows(A: np.ndarray, Q: np.ndarray, R: np.ndarray) -> None:
     for i in range(m):
         for j in range(m):
             R[i, j] = W[j, i] if j >= i else 0.0
-    # Q = H_0 H_1 ... H_{m-1}, accumulated from the last reflector back (each touches rows k..).
+    # Q = H_0 H_1 ... H_{m-1}, accumulated from the last reflector back (each touches rows k..):
+    # Q <- Q - tau v (v^T Q), with v^T Q summed row by row so every inner loop runs along a row.
     for i in range(n):
         for j in range(n):
             Q[i, j] = 1.0 if i == j else 0.0
+    w = np.empty(n)
     for k in range(m - 1, -1, -1):
         t = tau[k]
         if t == 0.0:
             continue
         for j in range(k, n):
-            dot = Q[k, j]
-            for i in range(k + 1, n):
-                dot += W[k, i] * Q[i, j]
-            dot *= t
-            Q[k, j] -= dot
-            for i in range(k + 1, n):
-                Q[i, j] -= dot * W[k, i]
+            w[j] = Q[k, j]
+        for i in range(k + 1, n):
+            v = W[k, i]
+            for j in range(k, n):
+                w[j] += v * Q[i, j]
+        for j in range(k, n):
+            w[j] *= t
+            Q[k, j] -= w[j]
+        for i in range(k + 1, n):
+            v = W[k, i]
+            for j in range(k, n):
+                Q[i, j] -= v * w[j]
 
 
 @kernel

@@ -41,8 +41,8 @@ from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, PediError, QpInfeasible
-from pedi_drake.jit import new_record
 from pedi_drake.go1_command import COMMAND_SIZE, held_command
+from pedi_drake.jit import new_record
 from pedi_drake.prongs import ProngDesign
 
 STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0

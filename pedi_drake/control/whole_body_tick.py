@@ -20,7 +20,6 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.control import compiled_hqp
-from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.compiled_stack import (
     MAX_LEVELS,
     build_levels,
@@ -31,6 +30,7 @@ from pedi_drake.control.compiled_stack import (
     rotation_matrix_wxyz,
     torque_map,
 )
+from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.references import SAFETY_POLYGON_MAX_VERTICES
 from pedi_drake.jit import kernel
 
