@@ -68,6 +68,42 @@ def test_bound_command_kernel_equals_its_python_source_bit_for_bit():
     assert flags_seen == (1 << len(safety._BOUND_FLAGS)) - 1  # the inputs reached every branch
 
 
+def test_safety_filter_step_kernel_equals_its_python_source_bit_for_bit():
+    """Sequences of filter ticks, compiled and interpreted from the same state: soft start, bounds,
+    NaN in the command or the measurements, stale status, hung loops and E-stops."""
+    config = Go1SafetyConfig()
+    filt = safety.Go1SafetyFilter(config)
+    kernel = safety._filter_step_kernel
+    rng = np.random.default_rng(RNG_SEED)
+    fired_latches = set()
+    for sequence in range(40):
+        published, memory = np.zeros(60), np.zeros(safety._MEMORY_SIZE)
+        now = 0.0
+        for k in range(60):
+            command = _random_command(rng)
+            if rng.uniform() < 0.05:
+                command[rng.integers(60)] = np.nan
+            q, qd = robot.STANDING_Q + rng.normal(0, 0.8, 12), rng.normal(0, 10, 12)
+            if rng.uniform() < 0.03:
+                qd[rng.integers(12)] = np.inf
+            silence = rng.uniform(0, 1.1 * config.status_timeout, 2) if sequence % 4 == 1 else np.zeros(2)
+            estop = np.array([float(sequence % 4 == 2 and rng.uniform() < 0.05)])
+            rc_estop = np.array([float(sequence % 4 == 3 and rng.uniform() < 0.05)])
+            hung = rng.uniform() < 0.02  # longer than the loop-silence limit, even while warming up
+            now += config.period + (config.warmup_command_timeout + 0.01 if hung else 0.0)
+            inputs = (command, q, qd, silence, estop, rc_estop, now, k * config.period, *filt._settings)
+            compiled_state, reference_state = (published.copy(), memory.copy()), (published.copy(), memory.copy())
+            compiled = kernel(*compiled_state, *inputs)
+            reference = kernel.py_func(*reference_state, *inputs)
+            assert compiled == reference
+            for a, b in zip(compiled_state, reference_state, strict=True):
+                np.testing.assert_array_equal(a, b)
+            published, memory = compiled_state
+            if compiled[1] >= 0:
+                fired_latches.add(safety.INTERVENTIONS[compiled[1]])
+    assert fired_latches == set(safety.LATCHING)  # the inputs reached every latch
+
+
 def test_foot_kinematics_kernel_equals_its_python_source_bit_for_bit():
     rng = np.random.default_rng(RNG_SEED)
     offsets = leg_odometry._offsets()

@@ -65,7 +65,7 @@ STAGES = (
     ("mission", MissionManager, ("_update", "_calc_body", "_calc_legs")),
     ("ik", LegIkSystem, ("_update",)),
     ("control", WholeBodyController, ("_update",)),
-    ("safety", Go1SafetyFilter, ("_update", "_calc_command")),
+    ("safety", Go1SafetyFilter, ("_update",)),
     ("send", Go1CommandSender, ("_publish",)),
 )
 
