@@ -101,12 +101,14 @@ class Inbox:
         self.values: np.ndarray | None = None
         self.received = 0
         self.rejected = [0] * len(REJECT_REASONS)
+        self._dropped = 0  # sum(self.rejected), kept so that a snapshot does not add it up
         self.receipt_time = -math.inf
 
     def _reject(self, reason: str, detail: str = "") -> None:
         i = _REASON_INDEX[reason]
         with self._lock:
             self.rejected[i] += 1
+            self._dropped += 1
             count = self.rejected[i]
         # First occurrence, then every power of ten: counted always, never a flood of log lines.
         if count == 1 or math.log10(count).is_integer():
@@ -145,13 +147,13 @@ class Inbox:
         """(newest values or None, messages received, messages rejected, receipt time [s])."""
         with self._lock:
             self._taken = True
-            return self.values, self.received, sum(self.rejected), self.receipt_time
+            return self.values, self.received, self._dropped, self.receipt_time
 
     def counts(self) -> dict:
         with self._lock:
             return {
                 "received": self.received,
-                "dropped": sum(self.rejected),
+                "dropped": self._dropped,
                 "rejected": {reason: n for reason, n in zip(REJECT_REASONS, self.rejected, strict=True) if n},
             }
 
@@ -237,6 +239,7 @@ class Go1Link:
         self._guard_published = 0
         self._shutdown_published = 0
         self._message_id = 0
+        self._encoder = c.CommandEncoder()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -321,22 +324,36 @@ class Go1Link:
 
     # -- sending -----------------------------------------------------------------------------
 
-    def _publish(self, command: np.ndarray, t_us: int) -> None:
-        data = c.encode_command(command, timestamp_us=t_us, message_id=self._message_id)
+    def _publish(self, command: np.ndarray, t_us: int) -> bool:
+        """Puts `command` on the wire; False (nothing sent) when a value of it is not finite."""
+        data = self._encoder.encode(command, t_us, self._message_id)
+        if data is None:
+            return False
         self._message_id += 1
         self._transport.publish(c.COMMAND_CHANNEL, data)
+        return True
 
     def _damping(self) -> np.ndarray:
         values = self.leg_control.snapshot()[0]
         q, qd = (values[0:12], values[12:24]) if values is not None else (np.zeros(12), np.zeros(12))
         return damping_command(q, qd, self._limits, self._config.safety.damping_kd)
 
-    def publish_command(self, command: np.ndarray, t: float) -> None:
+    def publish_command(self, command: np.ndarray, t: float) -> bool:
         """Publishes the loop's (bounded) command of diagram time `t` [s] and stamps its lateness.
 
-        After the guard latched, damping goes out instead: the loop's command is no longer trusted.
+        A command with a non-finite value is refused: False, nothing sent or stamped (the guard
+        then damps if the loop stays silent). After the guard latched, damping goes out instead:
+        the loop's command is no longer trusted.
         """
         now = self._clock()
+        with self._publish_lock:
+            if self.guard_latched is not None:
+                if not np.isfinite(command).all():
+                    return False
+                command = self._damping()
+            if not self._publish(command, int(round(t * 1e6))):
+                return False
+            self._last_publish = now
         timing = self._timing
         scheduled_offset = t / self.realtime_rate
         if timing.anchor is None or now - scheduled_offset < timing.anchor:
@@ -346,11 +363,7 @@ class Go1Link:
         if timing.last_departure is not None:
             timing.interdeparture.append(now - timing.last_departure)
         timing.last_departure = now
-        with self._publish_lock:
-            self._last_publish = now
-            if self.guard_latched is not None:
-                command = self._damping()
-            self._publish(command, int(round(t * 1e6)))
+        return True
 
     def _guard(self) -> None:
         """Runs on the receive thread after every look: damping when the loop went silent."""
