@@ -88,10 +88,11 @@ def test_safety_filter_step_kernel_equals_its_python_source_bit_for_bit():
                 qd[rng.integers(12)] = np.inf
             silence = rng.uniform(0, 1.1 * config.status_timeout, 2) if sequence % 4 == 1 else np.zeros(2)
             estop = np.array([float(sequence % 4 == 2 and rng.uniform() < 0.05)])
-            rc_estop = np.array([float(sequence % 4 == 3 and rng.uniform() < 0.05)])
+            remote_estop = float(sequence % 4 == 3 and rng.uniform() < 0.05)
             hung = rng.uniform() < 0.02  # longer than the loop-silence limit, even while warming up
             now += config.period + (config.warmup_command_timeout + 0.01 if hung else 0.0)
-            inputs = (command, q, qd, silence, estop, rc_estop, now, k * config.period, *filt._settings)
+            status = safety.robot_status_vector(q, qd, silence, remote_estop)
+            inputs = (command, status, estop, now, k * config.period, filt._bounds, filt._settings)
             compiled_state, reference_state = (published.copy(), memory.copy()), (published.copy(), memory.copy())
             compiled = kernel(*compiled_state, *inputs)
             reference = kernel.py_func(*reference_state, *inputs)

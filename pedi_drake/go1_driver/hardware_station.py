@@ -71,10 +71,7 @@ def MakeHardwareStation(config: Go1DriverConfig, link: Go1Link) -> Diagram:
     safety = builder.AddNamedSystem("safety", Go1SafetyFilter(config.safety, num_status_channels=2))
     sender = builder.AddNamedSystem("command_sender", Go1CommandSender(link, period=period))
 
-    builder.Connect(status.GetOutputPort("silence"), safety.GetInputPort("status_silence"))
-    builder.Connect(status.GetOutputPort("position_measured"), safety.GetInputPort("position_measured"))
-    builder.Connect(status.GetOutputPort("velocity_measured"), safety.GetInputPort("velocity_measured"))
-    builder.Connect(status.GetOutputPort("estop"), safety.GetInputPort("rc_estop"))
+    builder.Connect(status.GetOutputPort("robot_status"), safety.GetInputPort("robot_status"))
     builder.Connect(safety.GetOutputPort("command"), sender.GetInputPort("command"))
 
     builder.ExportInput(safety.GetInputPort("command"), "go1.command")

@@ -275,6 +275,16 @@ def bound_command(
 _NO_PREVIOUS = np.zeros(12)
 
 
+def robot_status_size(num_status_channels: int) -> int:
+    """The size of Go1SafetyFilter's robot_status input for `num_status_channels` watched channels."""
+    return 24 + num_status_channels + 1
+
+
+def robot_status_vector(q: np.ndarray, qd: np.ndarray, silence: np.ndarray, remote_estop: float) -> np.ndarray:
+    """Go1SafetyFilter's robot_status input: [q (12) [rad], qd (12) [rad/s], silence (n) [s], remote E-stop]."""
+    return np.concatenate([np.asarray(q, float), np.asarray(qd, float), np.asarray(silence, float), [remote_estop]])
+
+
 def command_timeout(config: Go1SafetyConfig, elapsed: float) -> float:
     """The loop-silence limit [s] after `elapsed` [s] of the loop (longer while it warms up)."""
     return config.warmup_command_timeout if elapsed < config.warmup_duration else config.command_timeout
@@ -341,40 +351,39 @@ _STATUS_TIMEOUT, _CONTROLLER_SILENCE = _I["status_timeout"], _I["controller_sile
 _ESTOP_PORT, _ESTOP_REMOTE = _I["estop_port"], _I["estop_remote"]
 
 
+# The filter's settings as its compiled tick takes them (one array: each argument of a compiled
+# call costs a type check), by index.
+_KP_MAX, _KD_MAX, _MAX_TARGET_STEP, _DAMPING_KD = 0, 1, 2, 3
+_STATUS_TIMEOUT_S, _COMMAND_TIMEOUT_S, _WARMUP_COMMAND_TIMEOUT_S, _WARMUP_DURATION_S = 4, 5, 6, 7
+_SOFT_START_DURATION_S = 8
+
+
+def _settings_vector(config: Go1SafetyConfig, limits: SafetyLimits) -> np.ndarray:
+    settings = np.empty(9)
+    settings[_KP_MAX], settings[_KD_MAX] = limits.kp_max, limits.kd_max
+    settings[_MAX_TARGET_STEP], settings[_DAMPING_KD] = limits.max_target_step, config.damping_kd
+    settings[_STATUS_TIMEOUT_S], settings[_COMMAND_TIMEOUT_S] = config.status_timeout, config.command_timeout
+    settings[_WARMUP_COMMAND_TIMEOUT_S] = config.warmup_command_timeout
+    settings[_WARMUP_DURATION_S] = config.warmup_duration
+    settings[_SOFT_START_DURATION_S] = config.soft_start_duration
+    return settings
+
+
 @kernel
-def _filter_step_kernel(
-    published,
-    memory,
-    command,
-    q,
-    qd,
-    silence,
-    estop,
-    rc_estop,
-    now,
-    t,
-    q_lower,
-    q_upper,
-    qd_max,
-    effort,
-    kp_max,
-    kd_max,
-    step,
-    damping_kd,
-    status_timeout,
-    command_timeout,
-    warmup_command_timeout,
-    warmup_duration,
-    soft_start_duration,
-):
+def _filter_step_kernel(published, memory, command, robot_status, estop, now, t, bounds, settings):
     """One tick of `Go1SafetyFilter` on its state, in place: (bits of the interventions to log,
     index of the intervention that latched damping in this tick or -1).
 
     published (60): the last published command, overwritten by this tick's; memory: the filter's
-    memory (layout above). Inputs: the controller's command (60), q [rad], qd [rad/s] (12), the
-    status channels' silences [s], estop and rc_estop (1; > 0.5 latches), the wall clock `now`
-    [s] and the context time `t` [s]; then the limits and the Go1SafetyConfig settings.
+    memory (layout above). Inputs: the controller's command (60), the filter's robot_status
+    ([q (12) [rad], qd (12) [rad/s], silence of each status channel [s], remote E-stop]), estop
+    (1; > 0.5 latches), the wall clock `now` [s] and the context time `t` [s]; `bounds` (4, 12):
+    SafetyLimits' q_lower, q_upper, qd_max and effort; `settings`: by the indices above.
     """
+    q_lower, q_upper, qd_max, effort = bounds[0], bounds[1], bounds[2], bounds[3]
+    kd_max = settings[_KD_MAX]
+    q, qd = robot_status[0:12], robot_status[12:24]
+    num_channels = robot_status.shape[0] - 25
     fired = 0
     status_ok = True
     for j in range(12):
@@ -389,19 +398,20 @@ def _filter_step_kernel(
         memory[_STARTED] = 1.0
     else:
         # The loop-silence limit (longer while the loop warms up), as `command_timeout`.
-        limit = warmup_command_timeout if t - memory[_T_START] < warmup_duration else command_timeout
+        warming_up = t - memory[_T_START] < settings[_WARMUP_DURATION_S]
+        limit = settings[_WARMUP_COMMAND_TIMEOUT_S] if warming_up else settings[_COMMAND_TIMEOUT_S]
         if now - memory[_LAST_WALL] > limit:
             fired |= 1 << _CONTROLLER_SILENCE
     memory[_LAST_WALL] = now
 
     # The receive thread's judgement, not `now - receipt`: a late tick does not make the robot
     # look silent, and the robot's real silence trips within status_timeout + one look.
-    for i in range(silence.shape[0]):
-        if not silence[i] <= status_timeout:  # NaN counts as silent
+    for i in range(num_channels):
+        if not robot_status[24 + i] <= settings[_STATUS_TIMEOUT_S]:  # NaN counts as silent
             fired |= 1 << _STATUS_TIMEOUT
     if estop[0] > 0.5:
         fired |= 1 << _ESTOP_PORT
-    if rc_estop[0] > 0.5:
+    if robot_status[24 + num_channels] > 0.5:
         fired |= 1 << _ESTOP_REMOTE
     latched = -1
     if memory[_LATCH] == 0.0:
@@ -422,15 +432,26 @@ def _filter_step_kernel(
         fired |= 1 << _NONFINITE_COMMAND
     if memory[_LATCH] != 0.0 or not status_ok or not command_ok:
         fired |= 1 << _DAMPING
-        safe = _damping_kernel(q_des_previous, qd, q_lower, q_upper, effort, kd_max, damping_kd)
+        safe = _damping_kernel(q_des_previous, qd, q_lower, q_upper, effort, kd_max, settings[_DAMPING_KD])
     else:
         elapsed = t - memory[_T_START]
-        if elapsed < soft_start_duration:
+        if elapsed < settings[_SOFT_START_DURATION_S]:
             fired |= 1 << _SOFT_START
-            fraction = _smooth_fraction_kernel(elapsed, soft_start_duration)
+            fraction = _smooth_fraction_kernel(elapsed, settings[_SOFT_START_DURATION_S])
             command = _soft_start_kernel(command, memory[_Q_START : _Q_START + 12], fraction)
         safe, bits = _bound_command_kernel(
-            command, q, qd, q_lower, q_upper, qd_max, effort, kp_max, kd_max, step, q_des_previous, True
+            command,
+            q,
+            qd,
+            q_lower,
+            q_upper,
+            qd_max,
+            effort,
+            settings[_KP_MAX],
+            kd_max,
+            settings[_MAX_TARGET_STEP],
+            q_des_previous,
+            True,
         )
         for k in range(len(_BOUND_FLAG_INDICES)):
             if bits >> k & 1:
@@ -446,15 +467,16 @@ def _filter_step_kernel(
 
 
 class Go1SafetyFilter(LeafSystem):
-    """command (60) + measured state + status receipt times + E-stops -> safe command (60).
+    """command (60) + the robot's status + E-stop -> safe command (60).
 
     Inputs:
       command (60): the controller's `go1.command`.
-      position_measured (12) [rad], velocity_measured (12) [rad/s]: from leg_control_data.
-      status_silence (n): how long each status channel has been silent [s], judged by the receive
-        thread's clock (Go1Link.silence); the watchdog trips on the longest.
+      robot_status (24 + n + 1): what the filter reads from the robot, in one vector (one port
+        evaluation a tick): [q (12) [rad], qd (12) [rad/s] (leg_control_data), silence (n): how
+        long each status channel has been silent [s], judged by the receive thread's clock
+        (Go1Link.silence; the watchdog trips on the longest), remote E-stop (1): > 0.5 latches
+        damping (the remote's button)].
       estop (1, optional): > 0.5 latches damping.
-      rc_estop (1, optional): > 0.5 latches damping (the remote's button).
     Outputs:
       command (60): the bounded command, from the state (what the sender publishes).
       status (1 + len(INTERVENTIONS)): [latched reason (0 none, else 1 + index in INTERVENTIONS),
@@ -474,48 +496,22 @@ class Go1SafetyFilter(LeafSystem):
         # The wall clock is a dependency (injectable for tests), not state.
         self._clock = clock
         self._command = self.DeclareVectorInputPort("command", COMMAND_SIZE)
-        self._q = self.DeclareVectorInputPort("position_measured", 12)
-        self._qd = self.DeclareVectorInputPort("velocity_measured", 12)
-        self._status_silence = self.DeclareVectorInputPort("status_silence", num_status_channels)
+        self._robot_status = self.DeclareVectorInputPort("robot_status", robot_status_size(num_status_channels))
         self._estop = self.DeclareVectorInputPort("estop", 1)
-        self._rc_estop = self.DeclareVectorInputPort("rc_estop", 1)
         self._no_estop = np.zeros(1)
         limits = self._limits
-        # The step's settings, in the order of `_filter_step_kernel`.
-        self._settings = (
-            limits.q_lower,
-            limits.q_upper,
-            limits.qd_max,
-            limits.effort,
-            limits.kp_max,
-            limits.kd_max,
-            limits.max_target_step,
-            float(config.damping_kd),
-            float(config.status_timeout),
-            float(config.command_timeout),
-            float(config.warmup_command_timeout),
-            float(config.warmup_duration),
-            float(config.soft_start_duration),
-        )
+        self._bounds = np.array([limits.q_lower, limits.q_upper, limits.qd_max, limits.effort])
+        self._settings = _settings_vector(config, limits)
         initial = damping_command(robot.STANDING_Q, np.zeros(12), limits, config.damping_kd)
         self._published = self.DeclareDiscreteState(initial)
         self._memory = self.DeclareDiscreteState(_MEMORY_SIZE)
         # Compiled here (or loaded from numba's cache), not in the first control tick.
         bound_command(initial, robot.STANDING_Q, np.zeros(12), limits, robot.STANDING_Q)
+        robot_status = robot_status_vector(robot.STANDING_Q, np.zeros(12), np.zeros(num_status_channels), 0.0)
         memory = np.zeros(_MEMORY_SIZE)
         for command in (initial, np.full(COMMAND_SIZE, np.nan)):
             _filter_step_kernel(
-                initial.copy(),
-                memory,
-                command,
-                robot.STANDING_Q,
-                np.zeros(12),
-                np.zeros(num_status_channels),
-                self._no_estop,
-                self._no_estop,
-                0.0,
-                0.0,
-                *self._settings,
+                initial.copy(), memory, command, robot_status, self._no_estop, 0.0, 0.0, self._bounds, self._settings
             )
         self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
         self.DeclareStateOutputPort("command", self._published)
@@ -526,19 +522,17 @@ class Go1SafetyFilter(LeafSystem):
         return self._limits
 
     def _update(self, context, discrete_state: DiscreteValues) -> None:
-        estop, rc_estop = self._estop, self._rc_estop
+        estop = self._estop
         log, latched = _filter_step_kernel(
             discrete_state.get_mutable_value(self._published),
             discrete_state.get_mutable_value(self._memory),
             self._command.Eval(context),
-            self._q.Eval(context),
-            self._qd.Eval(context),
-            self._status_silence.Eval(context),
+            self._robot_status.Eval(context),
             estop.Eval(context) if estop.HasValue(context) else self._no_estop,
-            rc_estop.Eval(context) if rc_estop.HasValue(context) else self._no_estop,
             self._clock(),
             context.get_time(),
-            *self._settings,
+            self._bounds,
+            self._settings,
         )
         if log or latched >= 0:
             self._log(discrete_state.get_value(self._memory), log, latched, context.get_time())

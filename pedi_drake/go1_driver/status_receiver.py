@@ -8,15 +8,16 @@ only. Messages of the wrong size or fingerprint, that fail to decode or carry Na
 counted by reason: a foreign publisher on the channel can never crash the driver.
 
 `MakeLcmReceiver` puts a Selector (Drake's, compiled) behind the receiver that splits the latched
-vector into named outputs: a tick runs one Python call for all the channels, and none when the
-outputs are evaluated.
+vector into named outputs (and bundles of them): a tick runs one Python call for all the
+channels, and none when the outputs are evaluated.
 
 `MakeStatusReceiver` builds the driver's receiver of its three status channels (Unitree motor
 order throughout):
   leg_control_data      -> position_measured [rad], velocity_measured [rad/s], torque_estimated [N m]
   state_estimator_data  -> imu (quat w,x,y,z; gyro [rad/s]; accelerometer [m/s^2]), foot_contact (raw)
   rc_command            -> estop (1 while a configured switch of the remote is on)
-with silence (2) of the first two and message_counts (6) of all three.
+with silence (2) of the first two, message_counts (6) of all three, and robot_status, the bundle
+Go1SafetyFilter reads.
 """
 
 import dataclasses
@@ -137,10 +138,12 @@ def MakeLcmReceiver(
     link: Go1Link | None = None,
     period: float,
     wait_timeout: float = 0.0,
+    bundles: dict[str, Sequence[str]] | None = None,
 ) -> Diagram:
     """A Go1LcmReceiver of `channels` (see it for the arguments) whose outputs are its named parts:
     every channel's `outputs`, silence (the watched channels' [s]) and message_counts ([received,
-    dropped] per channel), split off the latched vector by a Selector."""
+    dropped] per channel), split off the latched vector by a Selector; and each of `bundles`
+    (output name -> names of those parts, concatenated in that order)."""
     builder = DiagramBuilder()
     receiver = builder.AddNamedSystem(
         "latch", Go1LcmReceiver(channels, link=link, period=period, wait_timeout=wait_timeout)
@@ -149,8 +152,13 @@ def MakeLcmReceiver(
     latched = SelectorParams.InputPortParams()
     latched.name, latched.size = "latched", receiver.latched.size()
     params.inputs = [latched]
+    selections = receiver.output_selections()
+    for name, parts in (bundles or {}).items():
+        if name in selections:
+            raise ValueError(f"MakeLcmReceiver: the bundle {name!r} has the name of an output")
+        selections[name] = [index for part in parts for index in selections[part]]
     outputs = []
-    for name, indices in receiver.output_selections().items():
+    for name, indices in selections.items():
         output = SelectorParams.OutputPortParams()
         output.name = name
         selections = []
@@ -174,8 +182,9 @@ def MakeLcmReceiver(
 def MakeStatusReceiver(link: Go1Link, *, period: float, wait_timeout: float = 0.0) -> Diagram:
     """leg_control_data, state_estimator_data and rc_command of `link` -> position_measured,
     velocity_measured, torque_estimated (12 each), imu (10: quat w,x,y,z, gyro, accelerometer),
-    foot_contact (4), estop (1), silence (2: leg_control_data, state_estimator_data [s]) and
-    message_counts (6, in the order of constants.STATUS_CHANNELS).
+    foot_contact (4), estop (1), silence (2: leg_control_data, state_estimator_data [s]),
+    message_counts (6, in the order of constants.STATUS_CHANNELS) and robot_status (27:
+    position_measured, velocity_measured, silence, estop: Go1SafetyFilter's input).
 
     Initialisation waits up to `wait_timeout` [s] for the first leg_control_data and
     state_estimator_data; the remote is optional (its silence trips nothing).
@@ -198,4 +207,7 @@ def MakeStatusReceiver(link: Go1Link, *, period: float, wait_timeout: float = 0.
         # 1 while any of the link's E-stop switch fields is on.
         ReceiverChannel(link.rc_command, np.zeros(1), {"estop": slice(0, 1)}, watched=False),
     )
-    return MakeLcmReceiver(channels, link=link, period=period, wait_timeout=wait_timeout)
+    robot_status = ("position_measured", "velocity_measured", "silence", "estop")
+    return MakeLcmReceiver(
+        channels, link=link, period=period, wait_timeout=wait_timeout, bundles={"robot_status": robot_status}
+    )
