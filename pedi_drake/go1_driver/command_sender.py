@@ -26,9 +26,11 @@ class Go1CommandSender(LeafSystem):
         # The I/O boundary, kept here so a run can reach it at shutdown (`hardware_link`).
         self.link = link
         self._command = self.DeclareVectorInputPort("command", COMMAND_SIZE)
+        # Made once: Drake copies the status a handler returns.
+        self._succeeded = EventStatus.Succeeded()
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
 
     def _publish(self, context) -> EventStatus:
         if not self.link.publish_command(self._command.Eval(context), context.get_time()):
             return EventStatus.Failed(self, "refusing to publish a non-finite go1.command")
-        return EventStatus.Succeeded()
+        return self._succeeded

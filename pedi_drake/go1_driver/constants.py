@@ -6,7 +6,6 @@ conversion between the station's 60-vector `go1.command` and the wire order of
 """
 
 import math
-import struct
 import sys
 
 import numpy as np
@@ -87,16 +86,15 @@ def command_to_message(command: np.ndarray, timestamp_us: int = 0, message_id: i
 # The encoded pd_tau_targets_lcmt after its fingerprint: five double[12] in wire order (480 bytes),
 # then timestamp_us, id, robot_id (int64) and se_contactState (double[4]); lcm-gen's layout, big-endian.
 _COMMAND_VALUES_OFFSET = 8
-_COMMAND_INTEGERS = struct.Struct(">3q")
 _COMMAND_INTEGERS_OFFSET = _COMMAND_VALUES_OFFSET + 8 * 60
 # numba reads module constants at compile time: the byte order of this machine's doubles.
 _LITTLE_ENDIAN = sys.byteorder == "little"
 
 
 @kernel
-def _encode_values_kernel(command, buffer):
-    """Writes the 60 values of `command` in wire order, big-endian, into buffer[8:488] (uint8);
-    False (and the buffer partly written) when one is not finite."""
+def _encode_command_kernel(command, timestamp_us, message_id, buffer):
+    """Writes the 60 values of `command` in wire order, then timestamp_us and message_id, big-endian,
+    into buffer[8:504] (uint8); False (and the buffer partly written) when a value is not finite."""
     values = np.empty(60)
     for i in range(60):
         value = command[_WIRE_ORDER[i]]
@@ -107,6 +105,9 @@ def _encode_values_kernel(command, buffer):
     for i in range(60):
         for b in range(8):
             buffer[_COMMAND_VALUES_OFFSET + 8 * i + b] = raw[8 * i + (7 - b if _LITTLE_ENDIAN else b)]
+    for k, integer in enumerate((timestamp_us, message_id)):
+        for b in range(8):
+            buffer[_COMMAND_INTEGERS_OFFSET + 8 * k + b] = (integer >> (56 - 8 * b)) & 0xFF
     return True
 
 
@@ -127,9 +128,8 @@ class CommandEncoder:
 
     def encode(self, command: np.ndarray, timestamp_us: int = 0, message_id: int = 0) -> bytes | None:
         """The encoded message for a 60-vector `go1.command`, or None when a value of it is not finite."""
-        if not _encode_values_kernel(command, self._bytes):
+        if not _encode_command_kernel(command, timestamp_us, message_id, self._bytes):
             return None
-        _COMMAND_INTEGERS.pack_into(self._buffer, _COMMAND_INTEGERS_OFFSET, int(timestamp_us), int(message_id), 0)
         return bytes(self._buffer)
 
 

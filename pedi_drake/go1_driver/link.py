@@ -180,13 +180,14 @@ def _estop_vector(fields: tuple[str, ...]) -> Callable[[object], np.ndarray]:
 
 @dataclasses.dataclass
 class _Timing:
-    """The loop's publications: lateness against the tick's schedule, and inter-departure times [s]."""
+    """The loop's publications: the wall time of each [s] and its offset from its tick's schedule
+    (wall time - diagram time / realtime rate) [s]. Lateness follows in `report`: the offset less
+    the earliest offset so far (the Simulator never runs ahead of its schedule, so the earliest
+    tick sets the schedule's anchor); inter-departure times are the differences of the times."""
 
     # array('d'): 8 bytes a tick and no Python objects for the garbage collector to walk.
-    lateness: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
-    interdeparture: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
-    anchor: float | None = None  # wall time of diagram time 0 on the schedule [s]
-    last_departure: float | None = None
+    departures: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
+    offsets: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
 
 
 def _distribution_ms(values) -> dict | None:
@@ -354,15 +355,8 @@ class Go1Link:
             if not self._publish(command, int(round(t * 1e6))):
                 return False
             self._last_publish = now
-        timing = self._timing
-        scheduled_offset = t / self.realtime_rate
-        if timing.anchor is None or now - scheduled_offset < timing.anchor:
-            # The Simulator never runs ahead of its schedule: an earlier tick sets the anchor.
-            timing.anchor = now - scheduled_offset
-        timing.lateness.append(now - (timing.anchor + scheduled_offset))
-        if timing.last_departure is not None:
-            timing.interdeparture.append(now - timing.last_departure)
-        timing.last_departure = now
+        self._timing.departures.append(now)
+        self._timing.offsets.append(now - t / self.realtime_rate)
         return True
 
     def _guard(self) -> None:
@@ -404,7 +398,8 @@ class Go1Link:
 
     def report(self) -> dict:
         """Messages by channel (received, dropped, rejected by reason), the loop's timing, the guard."""
-        lateness = np.asarray(self._timing.lateness)
+        offsets = np.asarray(self._timing.offsets)
+        lateness = offsets - np.minimum.accumulate(offsets) if len(offsets) else offsets
         misses = int(np.count_nonzero(lateness > self._period))
         return {
             "messages": {inbox.channel: inbox.counts() for inbox in self.inboxes},
@@ -415,7 +410,7 @@ class Go1Link:
                 "deadline_misses": misses,
                 "deadline_misses_per_1000": 1000.0 * misses / len(lateness) if len(lateness) else 0.0,
                 "longest_miss_ms": float(1e3 * lateness.max()) if misses else 0.0,
-                "command_interdeparture_ms": _distribution_ms(self._timing.interdeparture),
+                "command_interdeparture_ms": _distribution_ms(np.diff(np.asarray(self._timing.departures))),
             },
             "guard": {
                 "latched": self.guard_latched,
