@@ -261,6 +261,7 @@ def test_kalman_step_kernel_equals_its_python_source():
         True,
         filt._process_noise_std,
         filt._measurement_noise_std,
+        filt._plausible_q,
     )
     state = [np.zeros(ke.FILTER_STATE_SIZE), np.zeros(ke.BASE_STATE_SIZE)]
     for k in range(300):

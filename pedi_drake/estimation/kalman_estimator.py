@@ -48,8 +48,6 @@ FILTER_STATE_SIZE = 1 + NUM_STATES + NUM_STATES * NUM_STATES
 # A joint angle further than this outside its limits is no real sample (all zeros before the
 # first leg_control_data: the calf cannot be at 0) [rad].
 _PLAUSIBLE_SLACK = 0.2
-_PLAUSIBLE_LOWER = robot.Q_LOWER - _PLAUSIBLE_SLACK
-_PLAUSIBLE_UPPER = robot.Q_UPPER + _PLAUSIBLE_SLACK
 # The initial covariance's standard deviations: trunk position [m], velocity [m/s], feet [m].
 _INITIAL_STD = (0.01, 0.1, 0.01)
 
@@ -427,13 +425,15 @@ def _step_kernel(
     use_height,
     process_noise_std,
     measurement_noise_std,
+    plausible_q,
 ):
     """One tick of the estimator on its state, in place: True when the estimate was updated.
 
     filter_state (1 + 18 + 18 * 18): [initialised flag, x, P row by row]; base_state (13): the
     output (see base_state.py). Both are left as they are (the last estimate held) when a sample
-    is not usable: a non-finite input, an unusable IMU quaternion, implausible joint angles
-    before the first estimate (no leg_control_data yet), or a correction that failed.
+    is not usable: a non-finite input, an unusable IMU quaternion, joint angles outside
+    `plausible_q` (2, 12: lower, upper [rad]) before the first estimate (no leg_control_data
+    yet), or a correction that failed.
     """
     usable, quaternion, R = _imu_kernel(imu)
     if not usable:
@@ -447,7 +447,7 @@ def _step_kernel(
     initialised = filter_state[0] != 0.0
     if not initialised:
         for i in range(12):
-            if not (_PLAUSIBLE_LOWER[i] <= q[i] <= _PLAUSIBLE_UPPER[i]):
+            if not (plausible_q[0, i] <= q[i] <= plausible_q[1, i]):
                 return False
     w_B = imu[4:7]
     in_contact = _contact_kernel(foot_sensor, schedule, threshold)
@@ -521,6 +521,7 @@ class FloatingBaseKalmanFilter:
             [c.foot_position_noise, c.foot_velocity_noise, c.ground_height_noise, c.resting_velocity_noise]
         )
         self._use_height = bool(c.ground_height_measurement)
+        self._plausible_q = np.array([robot.Q_LOWER - _PLAUSIBLE_SLACK, robot.Q_UPPER + _PLAUSIBLE_SLACK])
 
     def warm_up(self) -> None:
         """Runs one predict, update and step of every kind, so the compiled kernels are compiled (or
@@ -646,6 +647,7 @@ class FloatingBaseKalmanFilter:
             self._use_height,
             self._process_noise_std,
             self._measurement_noise_std,
+            self._plausible_q,
         )
 
     @staticmethod

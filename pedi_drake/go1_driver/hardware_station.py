@@ -4,7 +4,7 @@
     leg_control_data      -> go1.position_measured, go1.velocity_measured, go1.torque_estimated
     state_estimator_data  -> go1.imu, go1.foot_contact (raw sensor value)
     rc_command            -> the remote's E-stop button
-all on the scenario's LCM bus "go1" through one LcmInterfaceSystem. Driver-only ports:
+all on the scenario's LCM bus "go1" (one receiver latches the three status channels). Driver-only ports:
     input  driver.estop (1, optional): > 0.5 latches damping
     output driver.status (1 + len(INTERVENTIONS)): latched reason and intervention counters
     output driver.message_counts (6): [received, dropped] for leg_control_data,
