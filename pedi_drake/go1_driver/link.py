@@ -223,6 +223,7 @@ class Go1Link:
         self._config = config
         self._period = config.safety.period
         self._limits = SafetyLimits.from_config(config.safety)
+        self._shortest_command_timeout = min(config.safety.command_timeout, config.safety.warmup_command_timeout)
         self._threaded = threaded
         self._clock = clock
         self._publish_lock = threading.Lock()
@@ -364,6 +365,10 @@ class Go1Link:
         if self._last_publish is None or self._stop.is_set():
             return
         now = self._clock()
+        if self.guard_latched is None and now - self._last_publish <= self._shortest_command_timeout:
+            # The loop published lately: nothing to do, and no wait for the lock the loop holds
+            # while it publishes (this look may have been woken by that very publication).
+            return
         with self._publish_lock:
             silent = now - self._last_publish
             elapsed = self._message_id * self._period
