@@ -1,6 +1,6 @@
 """CPU time per tick of the Go1 driver and the Kalman estimator on their own, replaying recorded ticks.
 
-    python -m pedi_drake.benchmarks.driver_tick [--ticks 4000] [--evict-mb 0]
+    python -m pedi_drake.benchmarks.driver_tick [--ticks 4000] [--evict-mb 0] [--wake-on-command]
         [--out benchmarks/results/driver_tick.json]
 
 The hardware station (status receiver, safety filter, command sender, on an in-process bus with
@@ -13,6 +13,10 @@ STAGES, the loop thread's CPU time in each handler), and so is their sum per tic
 Without the whole-body controller between two ticks, the code and data of these stages stay in
 the processor's caches: the numbers are their cost when warm. `--evict-mb N` walks through N MB
 of memory before every tick, as a controller's tick would, to show the cost when cold.
+`--wake-on-command` subscribes to the command channel on the link's bus, as controller_latency's
+replay does to record what was sent: the link's receive thread then wakes at every publication
+of the loop (on a real bus nothing in the driver's process subscribes to it, and LCM does not
+wake the thread for a channel without a subscriber).
 """
 
 import argparse
@@ -46,7 +50,7 @@ def _distribution(x_ms: np.ndarray) -> dict:
     }
 
 
-def run(ticks: int, evict_mb: float) -> dict:
+def run(ticks: int, evict_mb: float, wake_on_command: bool = False) -> dict:
     """Times `ticks` replayed ticks; returns {stage: distribution [ms]} and the sum's."""
     reference = np.load(FIXTURE)
     status, commands = reference["status"].astype(float), reference["commands"].astype(float)
@@ -85,6 +89,8 @@ def run(ticks: int, evict_mb: float) -> dict:
                 raise RuntimeError(f"replayed status of tick {k} was not received")
             time.sleep(0.00005)
 
+    if wake_on_command:
+        link.transport.subscribe(c.COMMAND_CHANNEL, lambda _channel, _data: None)
     link.start()
     try:
         publish(0)
@@ -102,18 +108,24 @@ def run(ticks: int, evict_mb: float) -> dict:
     stages = {name: times[name] for name, _, _ in STAGES if name in DRIVER_STAGES}
     result = {name: _distribution(per_tick) for name, per_tick in stages.items()}
     result["sum"] = _distribution(sum(stages.values()))
-    return {"ticks": ticks, "evict_mb": evict_mb, "stage_cpu_ms_per_tick": result}
+    return {"ticks": ticks, "evict_mb": evict_mb, "wake_on_command": wake_on_command, "stage_cpu_ms_per_tick": result}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--ticks", type=int, default=4000)
     parser.add_argument("--evict-mb", type=float, default=0.0, help="memory walked through before each tick [MB]")
+    parser.add_argument(
+        "--wake-on-command", action="store_true", help="subscribe to the command channel (as the replay does)"
+    )
     parser.add_argument("--out", default="benchmarks/results/driver_tick.json")
     args = parser.parse_args()
     load = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
-    result = run(args.ticks, args.evict_mb)
-    print(f"driver and estimator alone, {result['ticks']} replayed ticks, {args.evict_mb:g} MB evicted before each")
+    result = run(args.ticks, args.evict_mb, args.wake_on_command)
+    wake = ", the link's thread woken by every command" if args.wake_on_command else ""
+    print(
+        f"driver and estimator alone, {result['ticks']} replayed ticks, {args.evict_mb:g} MB evicted before each{wake}"
+    )
     print(f"load average (1, 5, 15 min) at the start {load}")
     print(f"  {'stage':<10}{'median':>9}{'p99':>9}{'p99.9':>9}{'max':>9}  CPU time per tick [ms]")
     for name, row in result["stage_cpu_ms_per_tick"].items():
