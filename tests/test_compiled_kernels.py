@@ -250,19 +250,7 @@ def test_kalman_step_kernel_equals_its_python_source():
     rng = np.random.default_rng(RNG_SEED)
     tips = np.array([[0.1, 0.05, -0.1], [0.1, -0.05, -0.1]])
     filt = ke.FloatingBaseKalmanFilter(ke.KalmanEstimatorConfig(), ke.imu_offset_B(), prong_tips_B=tips)
-    constants = (
-        0.002,
-        10.0,
-        np.array([0.3, -0.1]),
-        filt.p_BI,
-        filt._offsets,
-        filt._tips,
-        filt.foot_radius,
-        True,
-        filt._process_noise_std,
-        filt._measurement_noise_std,
-        filt._plausible_q,
-    )
+    constants = (np.array([0.3, -0.1]), *filt._step_constants)
     state = [np.zeros(ke.FILTER_STATE_SIZE), np.zeros(ke.BASE_STATE_SIZE)]
     for k in range(300):
         quaternion = rng.normal(size=4)

@@ -8,7 +8,8 @@ the link's receive thread) and the Kalman estimator, fed the status and the comm
 controller side's reference (tests/fixtures/controller_side_reference.npz): before each tick the
 recorded status is published and the recorded command set as the station's go1.command. The
 stages receive, estimate, safety and send are timed as `controller_latency` times them (its
-STAGES, the loop thread's CPU time in each handler), and so is their sum per tick.
+STAGES, the loop thread's CPU time in each handler), and so are their sum and the whole tick;
+what the tick costs beyond the stages is Drake's framework (event dispatch, port evaluation).
 
 Without the whole-body controller between two ticks, the code and data of these stages stay in
 the processor's caches: the numbers are their cost when warm. `--evict-mb N` walks through N MB
@@ -76,6 +77,7 @@ def run(ticks: int, evict_mb: float, wake_on_command: bool = False) -> dict:
     context = simulator.get_mutable_context()
     command_port = diagram.GetInputPort("go1.command")
     evict = np.ones(max(1, int(evict_mb * 1e6 / 8)))
+    tick_ms = np.zeros(ticks)
 
     def publish(k: int) -> None:
         leg, state = status_messages(status[k], k)
@@ -102,12 +104,16 @@ def run(ticks: int, evict_mb: float, wake_on_command: bool = False) -> dict:
             if evict_mb > 0:
                 evict += 1.0
             times["tick"] = k
+            start = time.thread_time()
             simulator.AdvanceTo((k + 1) * period)
+            tick_ms[k] = 1e3 * (time.thread_time() - start)
     finally:
         link.close()
     stages = {name: times[name] for name, _, _ in STAGES if name in DRIVER_STAGES}
     result = {name: _distribution(per_tick) for name, per_tick in stages.items()}
     result["sum"] = _distribution(sum(stages.values()))
+    result["tick"] = _distribution(tick_ms)
+    result["framework"] = _distribution(tick_ms - sum(stages.values()))
     return {"ticks": ticks, "evict_mb": evict_mb, "wake_on_command": wake_on_command, "stage_cpu_ms_per_tick": result}
 
 

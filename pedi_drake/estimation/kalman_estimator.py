@@ -415,9 +415,9 @@ def _step_kernel(
     qd,
     foot_sensor,
     schedule,
+    xy,
     dt,
     threshold,
-    xy,
     p_BI,
     offsets,
     tips_B,
@@ -522,6 +522,19 @@ class FloatingBaseKalmanFilter:
         )
         self._use_height = bool(c.ground_height_measurement)
         self._plausible_q = np.array([robot.Q_LOWER - _PLAUSIBLE_SLACK, robot.Q_UPPER + _PLAUSIBLE_SLACK])
+        # `_step_kernel`'s arguments after the tick's inputs, in its order.
+        self._step_constants = (
+            float(c.period),
+            float(c.foot_contact_threshold),
+            self.p_BI,
+            self._offsets,
+            self._tips,
+            self.foot_radius,
+            self._use_height,
+            self._process_noise_std,
+            self._measurement_noise_std,
+            self._plausible_q,
+        )
 
     def warm_up(self) -> None:
         """Runs one predict, update and step of every kind, so the compiled kernels are compiled (or
@@ -629,26 +642,7 @@ class FloatingBaseKalmanFilter:
         go1.foot_contact (4), and the contact schedule (4 feet, then one per prong; empty: none);
         `xy` [m]: where the trunk starts (see `initial_state`).
         """
-        return _step_kernel(
-            filter_state,
-            base_state,
-            imu,
-            q,
-            qd,
-            foot_sensor,
-            schedule,
-            self.config.period,
-            self.config.foot_contact_threshold,
-            xy,
-            self.p_BI,
-            self._offsets,
-            self._tips,
-            self.foot_radius,
-            self._use_height,
-            self._process_noise_std,
-            self._measurement_noise_std,
-            self._plausible_q,
-        )
+        return _step_kernel(filter_state, base_state, imu, q, qd, foot_sensor, schedule, xy, *self._step_constants)
 
     @staticmethod
     def contact_flags(foot_sensor: np.ndarray, schedule: np.ndarray | None, threshold: float) -> np.ndarray:

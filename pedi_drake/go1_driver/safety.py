@@ -535,10 +535,10 @@ class Go1SafetyFilter(LeafSystem):
             self._settings,
         )
         if log or latched >= 0:
-            self._log(discrete_state.get_value(self._memory), log, latched, context.get_time())
+            self._log_interventions(discrete_state.get_value(self._memory), log, latched, context.get_time())
 
     @staticmethod
-    def _log(memory: np.ndarray, log: int, latched: int, t: float) -> None:
+    def _log_interventions(memory: np.ndarray, log: int, latched: int, t: float) -> None:
         if latched >= 0:
             _log.error("Go1 driver: %s, damping latched", INTERVENTIONS[latched])
         for i, name in enumerate(INTERVENTIONS):
