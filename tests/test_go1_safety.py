@@ -17,6 +17,7 @@ from pedi_drake.go1_driver.safety import (
     SafetyLimits,
     bound_command,
     damping_command,
+    robot_status_vector,
 )
 
 CONFIG = Go1SafetyConfig()
@@ -54,23 +55,23 @@ class Harness:
         self.filter = Go1SafetyFilter(config, clock=lambda: self.context.get_time() + self.wall_offset)
         self.simulator = Simulator(self.filter)
         self.context = self.simulator.get_mutable_context()
+        self.remote_estop = 0.0
         self.set_inputs(pack_command(robot.STANDING_Q, 0, 40, 1, 0), robot.STANDING_Q, np.zeros(12))
         self.status_time = 0.0
         self.filter.GetInputPort("estop").FixValue(self.context, [0.0])
 
     def set_inputs(self, command, q, qd) -> None:
         self.filter.GetInputPort("command").FixValue(self.context, command)
-        self.filter.GetInputPort("position_measured").FixValue(self.context, q)
-        self.filter.GetInputPort("velocity_measured").FixValue(self.context, qd)
+        self.q, self.qd = q, qd
 
     def step(self, n: int = 1, fresh_status: bool = True) -> np.ndarray:
         for _ in range(n):
             t = self.context.get_time()
             if fresh_status:
                 self.status_time = t + self.wall_offset
-            self.filter.GetInputPort("status_silence").FixValue(
-                self.context, [t + self.wall_offset - self.status_time] * 2
-            )
+            silence = [t + self.wall_offset - self.status_time] * 2
+            status = robot_status_vector(self.q, self.qd, silence, self.remote_estop)
+            self.filter.GetInputPort("robot_status").FixValue(self.context, status)
             self.simulator.AdvanceTo(t + PERIOD)
         return self.command()
 
@@ -235,10 +236,9 @@ def test_estop_port_latches_damping():
 
 def test_remote_estop_latches_damping():
     harness = Harness()
-    harness.filter.GetInputPort("rc_estop").FixValue(harness.context, [0.0])
     harness.step(10)
     assert not is_damping(harness.command())
-    harness.filter.GetInputPort("rc_estop").FixValue(harness.context, [1.0])
+    harness.remote_estop = 1.0
     assert is_damping(harness.step())
     assert harness.latched() == "estop_remote"
 

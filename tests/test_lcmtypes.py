@@ -51,12 +51,25 @@ def test_command_field_order_on_the_wire():
 
 def test_the_drivers_command_encoder_writes_lcm_gens_bytes():
     rng = np.random.default_rng(7)
+    encoder = c.CommandEncoder()
     for _ in range(500):
         command = rng.normal(size=60) * 10.0 ** rng.uniform(-6, 3, 60)
         stamp, message_id = int(rng.integers(0, 2**40)), int(rng.integers(0, 2**31))
-        data = c.encode_command(command, stamp, message_id)
+        data = encoder.encode(command, stamp, message_id)
         assert data == c.command_to_message(command, stamp, message_id).encode()
         np.testing.assert_array_equal(c.message_to_command(pd_tau_targets_lcmt.decode(data)), command)
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_the_drivers_command_encoder_gives_no_bytes_for_a_non_finite_command(bad):
+    encoder = c.CommandEncoder()
+    for index in (0, 30, 59):
+        command = np.ones(60)
+        command[index] = bad
+        assert encoder.encode(command, 1, 2) is None
+    # A finite command after a refused one is encoded whole.
+    command = np.arange(60, dtype=float)
+    assert encoder.encode(command, 1, 2) == c.command_to_message(command, 1, 2).encode()
 
 
 def test_status_round_trip_in_float32():

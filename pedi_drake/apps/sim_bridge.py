@@ -43,7 +43,7 @@ from pedi_drake.go1_driver.config import Go1BridgeConfig
 from pedi_drake.go1_driver.hardware_station import go1_lcm_url
 from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimator_lcmt
 from pedi_drake.go1_driver.link import Inbox
-from pedi_drake.go1_driver.status_receiver import Go1LcmReceiver
+from pedi_drake.go1_driver.status_receiver import MakeLcmReceiver, ReceiverChannel
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.scenario import Scenario, load_scenario
 from pedi_drake.station_interface import MakeStation
@@ -185,7 +185,10 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
     lcm.Subscribe(c.COMMAND_CHANNEL, inbox.handle)
     receiver = builder.AddNamedSystem(
         "command_receiver",
-        Go1LcmReceiver(inbox, np.zeros(COMMAND_SIZE), {"command": slice(0, COMMAND_SIZE)}, period=c.BRIDGE_PERIOD),
+        MakeLcmReceiver(
+            [ReceiverChannel(inbox, np.zeros(COMMAND_SIZE), {"command": slice(0, COMMAND_SIZE)})],
+            period=c.BRIDGE_PERIOD,
+        ),
     )
     hold = builder.AddNamedSystem("command_hold", Go1BridgeCommandHold())
     builder.Connect(receiver.GetOutputPort("command"), hold.GetInputPort("received_command"))

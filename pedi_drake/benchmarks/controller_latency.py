@@ -61,11 +61,11 @@ from pedi_drake.scenario import load_scenario
 # outputs computed every tick) of its systems.
 STAGES = (
     ("receive", Go1LcmReceiver, ("_latch",)),
-    ("estimate", KalmanEstimator, ("_update", "_calc_base_state")),
+    ("estimate", KalmanEstimator, ("_update",)),
     ("mission", MissionManager, ("_update", "_calc_body", "_calc_legs")),
     ("ik", LegIkSystem, ("_update",)),
     ("control", WholeBodyController, ("_update",)),
-    ("safety", Go1SafetyFilter, ("_update", "_calc_command")),
+    ("safety", Go1SafetyFilter, ("_update",)),
     ("send", Go1CommandSender, ("_publish",)),
 )
 

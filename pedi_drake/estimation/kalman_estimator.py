@@ -19,6 +19,12 @@ reads above a threshold; a prong tip when the schedule loads that prong. Each pr
 its own: a trunk turning about one tip lifts the others, and pinning those to the ground too
 would pull the height estimate between contradicting measurements.
 Only go1.* signals are read, in simulation and on hardware alike.
+
+The measurements are uncorrelated (a diagonal noise covariance), so the correction takes them one
+row at a time: the same estimate as the batch formula K = P H^T (H P H^T + R)^-1, without the
+(m x m) factorisation, and every row of H has one or two non-zeros (a state, or a foot relative to
+the trunk), so P H^T is a column or a difference of two. A control tick is one compiled call
+(`FloatingBaseKalmanFilter.step`) that reads the inputs and writes the Context's state in place.
 """
 
 import dataclasses
@@ -26,37 +32,24 @@ import math
 
 import numpy as np
 from pydrake.math import RotationMatrix
-from pydrake.systems.framework import BasicVector, Context, DiscreteValues, LeafSystem
+from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
 
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.estimation.config import KalmanEstimatorConfig
-from pedi_drake.estimation.leg_odometry import foot_kinematics_B
+from pedi_drake.estimation.leg_odometry import _foot_kinematics_kernel, _offsets
 from pedi_drake.jit import kernel
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.vector3 import rotation_matrix_wxyz
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
 NUM_STATES = 18
-_P, _V = slice(0, 3), slice(3, 6)
-
-
-_I3 = np.eye(3)
-_I3.flags.writeable = False
-
-
-def _foot(i: int) -> slice:
-    return slice(6 + 3 * i, 9 + 3 * i)
-
-
-_FEET = slice(6, 18)
-_DIAGONAL = np.diag_indices(NUM_STATES)
-# Rows of the four foot-position measurements p_WF - p_WB (they do not change).
-_FOOT_POSITION_ROWS = np.zeros((12, NUM_STATES))
-for _i in range(4):
-    _FOOT_POSITION_ROWS[3 * _i : 3 * _i + 3, _P] = -_I3
-    _FOOT_POSITION_ROWS[3 * _i : 3 * _i + 3, _foot(_i)] = _I3
-_FOOT_POSITION_ROWS.flags.writeable = False
+# Layout of the filter's discrete state: [initialised flag, x (18), P (18 x 18) row by row].
+FILTER_STATE_SIZE = 1 + NUM_STATES + NUM_STATES * NUM_STATES
+# A joint angle further than this outside its limits is no real sample (all zeros before the
+# first leg_control_data: the calf cannot be at 0) [rad].
+_PLAUSIBLE_SLACK = 0.2
+# The initial covariance's standard deviations: trunk position [m], velocity [m/s], feet [m].
+_INITIAL_STD = (0.01, 0.1, 0.01)
 
 
 def imu_offset_B() -> np.ndarray:
@@ -66,6 +59,35 @@ def imu_offset_B() -> np.ndarray:
     trunk = plant.GetBodyByName(robot.TRUNK_BODY_NAME, plant_map.model)
     imu = plant.GetBodyByName(robot.IMU_BODY_NAME, plant_map.model)
     return plant.CalcRelativeTransform(context, trunk.body_frame(), imu.body_frame()).translation().copy()
+
+
+@kernel
+def _imu_kernel(imu):
+    """(usable, unit quaternion (w >= 0), R_WB (3, 3)) of a go1.imu vector (10,).
+
+    Not usable: a non-finite value, or a quaternion of norm < 0.5 (all zeros before the first
+    message). The rotation is vector3.rotation_matrix_wxyz's formula.
+    """
+    quaternion = np.zeros(4)
+    R = np.eye(3)
+    for i in range(10):
+        if not math.isfinite(imu[i]):
+            return False, quaternion, R
+    norm = math.sqrt(imu[0] * imu[0] + imu[1] * imu[1] + imu[2] * imu[2] + imu[3] * imu[3])
+    if norm < 0.5:
+        return False, quaternion, R
+    signed = norm if imu[0] >= 0.0 else -norm
+    for i in range(4):
+        quaternion[i] = imu[i] / signed
+    w, x, y, z = quaternion[0], quaternion[1], quaternion[2], quaternion[3]
+    s = 2.0 / (w * w + x * x + y * y + z * z)
+    xx, yy, zz = x * x * s, y * y * s, z * z * s
+    xy, xz, yz = x * y * s, x * z * s, y * z * s
+    wx, wy, wz = w * x * s, w * y * s, w * z * s
+    R[0, 0], R[0, 1], R[0, 2] = 1.0 - yy - zz, xy - wz, xz + wy
+    R[1, 0], R[1, 1], R[1, 2] = xy + wz, 1.0 - xx - zz, yz - wx
+    R[2, 0], R[2, 1], R[2, 2] = xz - wy, yz + wx, 1.0 - xx - yy
+    return True, quaternion, R
 
 
 @dataclasses.dataclass(frozen=True)
@@ -86,13 +108,12 @@ class ImuSample:
     def from_vector(imu: np.ndarray) -> "ImuSample | None":
         """None when the quaternion is not usable (all zeros before the first message, NaN)."""
         imu = np.asarray(imu, dtype=float)
-        if imu.shape != (10,) or not np.isfinite(imu).all():
+        if imu.shape != (10,):
             return None
-        norm = math.sqrt(float(imu[0:4] @ imu[0:4]))
-        if norm < 0.5:
+        usable, quaternion, R = _imu_kernel(imu)
+        if not usable:
             return None
-        quaternion = imu[0:4] / (norm if imu[0] >= 0.0 else -norm)
-        return ImuSample(rotation_matrix_wxyz(quaternion), imu[4:7].copy(), imu[7:10].copy(), quaternion)
+        return ImuSample(R, imu[4:7].copy(), imu[7:10].copy(), quaternion)
 
 
 def rolling_velocities_W(R_WB: np.ndarray, w_B: np.ndarray, q: np.ndarray, qd: np.ndarray, radius: float) -> np.ndarray:
@@ -125,18 +146,35 @@ def _rolling_kernel(R_WB, w_B, q, qd, radius):
     return rolling
 
 
-def _plausible_joint_angles(q: np.ndarray, slack: float = 0.2) -> bool:
-    """Whether q lies within the joint limits (+- slack [rad]); all zeros (the calf cannot be at 0) is not."""
-    return bool(np.all(q >= robot.Q_LOWER - slack) and np.all(q <= robot.Q_UPPER + slack))
-
-
-_NO_ROLLING = np.zeros((4, 3))
-_NO_ROLLING.flags.writeable = False
+@kernel
+def _contact_kernel(foot_sensor, schedule, threshold):
+    """Feet in contact (4,): sensed above `threshold`, and loaded by `schedule` unless it is empty."""
+    in_contact = np.empty(4, dtype=np.bool_)
+    for i in range(4):
+        scheduled = schedule.shape[0] == 0 or schedule[i] > 0.5
+        in_contact[i] = scheduled and foot_sensor[i] > threshold
+    return in_contact
 
 
 @kernel
-def _predict_kernel(x, P, R_WB, w_B, f_B, p_BI, gravity_W, dt, rolling, in_contact, process_noise):
+def _process_noise_kernel(in_contact, dt, noise_std):
+    """Diagonal of Q over dt [s] for the feet in contact; `noise_std` = the config's position,
+    accelerometer, stance-foot and swing-foot process noises."""
+    q = np.empty(NUM_STATES)
+    for k in range(3):
+        q[k] = noise_std[0] ** 2 * dt
+        q[3 + k] = noise_std[1] ** 2 * dt
+    for i in range(4):
+        sigma = noise_std[2] if in_contact[i] else noise_std[3]
+        for k in range(3):
+            q[6 + 3 * i + k] = sigma * sigma * dt
+    return q
+
+
+@kernel
+def _predict_kernel(x, P, R_WB, w_B, f_B, p_BI, dt, rolling, in_contact, noise_std):
     """`FloatingBaseKalmanFilter.predict` on plain arrays: the new (x, P)."""
+    process_noise = _process_noise_kernel(in_contact, dt, noise_std)
     # Specific force at the trunk origin: f - w x (w x p_BI).
     wp = np.array(
         [w_B[1] * p_BI[2] - w_B[2] * p_BI[1], w_B[2] * p_BI[0] - w_B[0] * p_BI[2], w_B[0] * p_BI[1] - w_B[1] * p_BI[0]]
@@ -144,7 +182,7 @@ def _predict_kernel(x, P, R_WB, w_B, f_B, p_BI, gravity_W, dt, rolling, in_conta
     wwp = np.array([w_B[1] * wp[2] - w_B[2] * wp[1], w_B[2] * wp[0] - w_B[0] * wp[2], w_B[0] * wp[1] - w_B[1] * wp[0]])
     x = x.copy()
     for r in range(3):
-        a_W = gravity_W[r]
+        a_W = GRAVITY_W[r]
         for k in range(3):
             a_W += R_WB[r, k] * (f_B[k] - wwp[k])
         x[r] += x[3 + r] * dt + 0.5 * a_W * dt * dt
@@ -168,12 +206,71 @@ def _predict_kernel(x, P, R_WB, w_B, f_B, p_BI, gravity_W, dt, rolling, in_conta
 
 
 @kernel
-def _measurements_kernel(
-    R, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, use_height, foot_radius, tips_B, tip_radius, m
-):
-    """The measurement vector y (m,) of `FloatingBaseKalmanFilter.update`, in the row order of its
-    `_measurement_model`: every foot's R p_BF, the stance feet's trunk velocities (and heights),
-    the loaded prong tips' trunk velocity and height, or the resting trunk's zero velocity."""
+def _measurement_rows(in_contact, num_tips, use_height, noise_std):
+    """The measurement model of `update` for the feet `in_contact` and `num_tips` loaded prong tips:
+    (columns (m, 2), coefficients (m, 2), variances (m,)), row i of H being coefficients[i, 0] at
+    columns[i, 0] plus coefficients[i, 1] at columns[i, 1] (0 where a row has one non-zero).
+
+    `noise_std`: the config's foot position [m], foot velocity [m/s], ground height [m] and resting
+    velocity [m/s] noises. Rows: every foot's position relative to the trunk, the stance feet's
+    trunk velocities, their heights (`use_height`), each loaded tip's trunk velocity and height,
+    or, with nothing loaded, the resting trunk's horizontal velocity.
+    """
+    foot_position, foot_velocity = noise_std[0], noise_std[1]
+    ground_height, resting_velocity = noise_std[2], noise_std[3]
+    stance = 0
+    for i in range(4):
+        if in_contact[i]:
+            stance += 1
+    # No foot or prong loaded: the trunk rests on the ground (on its belly or knees) while the
+    # legs move freely; it does not slide, so a zero horizontal velocity keeps the IMU from
+    # drifting while the legs unfold (the knees may push it up: z is left to the IMU).
+    resting = stance == 0 and num_tips == 0
+    m = 12 + 3 * stance + (stance if use_height else 0) + (2 if resting else 0) + 4 * num_tips
+    columns = np.zeros((m, 2), dtype=np.int64)
+    coefficients = np.zeros((m, 2))
+    noise = np.empty(m)
+    # Every foot's position p_WF - p_WB; a foot in the air is carried by the kinematics: a loose
+    # measurement of it costs nothing.
+    for i in range(4):
+        for k in range(3):
+            row = 3 * i + k
+            columns[row, 0], coefficients[row, 0] = k, -1.0
+            columns[row, 1], coefficients[row, 1] = 6 + 3 * i + k, 1.0
+            noise[row] = foot_position**2 * (1.0 if in_contact[i] else 4.0)
+    row = 12
+    for i in range(4):  # no-slip velocity rows
+        if in_contact[i]:
+            for k in range(3):
+                columns[row + k, 0], coefficients[row + k, 0] = 3 + k, 1.0
+                noise[row + k] = foot_velocity**2
+            row += 3
+    if use_height:
+        for i in range(4):  # flat ground under the feet in contact
+            if in_contact[i]:
+                columns[row, 0], coefficients[row, 0] = 6 + 3 * i + 2, 1.0
+                noise[row] = ground_height**2
+                row += 1
+    for _ in range(num_tips):  # tip velocity (3) and height (1)
+        for k in range(3):
+            columns[row + k, 0], coefficients[row + k, 0] = 3 + k, 1.0
+            noise[row + k] = foot_velocity**2
+        columns[row + 3, 0], coefficients[row + 3, 0] = 2, 1.0
+        noise[row + 3] = ground_height**2
+        row += 4
+    if resting:
+        for k in range(2):
+            columns[row + k, 0], coefficients[row + k, 0] = 3 + k, 1.0
+            noise[row + k] = resting_velocity**2
+    return columns, coefficients, noise
+
+
+@kernel
+def _measurements_kernel(R, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, use_height, foot_radius, tips_B, m):
+    """The measurement vector y (m,) of `FloatingBaseKalmanFilter.update`, in the row order of
+    `_measurement_rows`: every foot's R p_BF, the stance feet's trunk velocities (and heights),
+    the loaded prong tips' trunk velocity and height (radius - (R p_BT)_z: `tips_B` (k, 4) holds
+    each loaded tip's position [m] and radius [m]), or the resting trunk's zero velocity."""
     y = np.zeros(m)
     row = 0
     for i in range(4):  # every foot: p_WF - p_WB = R p_BF
@@ -206,49 +303,197 @@ def _measurements_kernel(
         v_B = np.array([w_B[1] * p[2] - w_B[2] * p[1], w_B[2] * p[0] - w_B[0] * p[2], w_B[0] * p[1] - w_B[1] * p[0]])
         for r in range(3):
             y[row + r] = -(R[r, 0] * v_B[0] + R[r, 1] * v_B[1] + R[r, 2] * v_B[2])
-        y[row + 3] = tip_radius - (R[2, 0] * p[0] + R[2, 1] * p[1] + R[2, 2] * p[2])
+        y[row + 3] = p[3] - (R[2, 0] * p[0] + R[2, 1] * p[1] + R[2, 2] * p[2])
         row += 4
     # With nothing loaded the trunk rests on the ground: the remaining rows (zero velocity) stay 0.
     return y
 
 
 @kernel
-def _correct_kernel(x, P, H, noise, y):
-    """The Kalman correction of (x, P) by measurements y = H x + noise (variances `noise`)."""
-    innovation = y - H @ x
-    PHt = P @ np.ascontiguousarray(H.T)
-    S = H @ PHt
-    for i in range(len(y)):
-        S[i, i] += noise[i]
-    # S is symmetric positive definite: by Cholesky, S = L L^T, K^T = S^-1 (P H^T)^T.
-    L = np.linalg.cholesky(S)
-    KT = _cholesky_solve(L, np.ascontiguousarray(PHt.T))
-    x = x + KT.T @ innovation
-    P = P - KT.T @ np.ascontiguousarray(PHt.T)
-    return x, 0.5 * (P + P.T)
+def _correct_kernel(x, P, columns, coefficients, noise, y):
+    """The Kalman correction of (x, P) by measurements y = H x + noise (variances `noise`, H as
+    `_measurement_rows` gives it): (x, P, True), or (x, P, False) as given when an innovation
+    variance is not positive (P no longer positive definite).
+
+    Uncorrelated measurements are taken one row at a time, each by the scalar update
+    K = P h^T / (h P h^T + r): the batch update's estimate, without factorising H P H^T + R.
+    P is symmetrised first, and each update (P h^T)(P h^T)^T / (h P h^T + r) keeps it exactly so.
+    """
+    n = x.shape[0]
+    x_new = x.copy()
+    P_new = 0.5 * (P + P.T)
+    ph = np.empty(n)
+    for i in range(y.shape[0]):
+        a, b = columns[i, 0], columns[i, 1]
+        ca, cb = coefficients[i, 0], coefficients[i, 1]
+        for r in range(n):
+            ph[r] = ca * P_new[r, a]
+        if cb != 0.0:
+            for r in range(n):
+                ph[r] += cb * P_new[r, b]
+        variance = ca * ph[a] + noise[i]
+        innovation = y[i] - ca * x_new[a]
+        if cb != 0.0:
+            variance += cb * ph[b]
+            innovation -= cb * x_new[b]
+        if not variance > 0.0:
+            return x, P, False
+        inverse = 1.0 / variance
+        step = innovation * inverse
+        for r in range(n):
+            x_new[r] += ph[r] * step
+            for c in range(n):
+                P_new[r, c] -= (ph[r] * ph[c]) * inverse
+    return x_new, P_new, True
 
 
 @kernel
-def _cholesky_solve(L, B):
-    """X with L L^T X = B, L lower triangular (forward then back substitution)."""
-    n, k = B.shape
-    X = B.copy()
-    for c in range(k):
-        for i in range(n):
-            value = X[i, c]
-            for j in range(i):
-                value -= L[i, j] * X[j, c]
-            X[i, c] = value / L[i, i]
-        for i in range(n - 1, -1, -1):
-            value = X[i, c]
-            for j in range(i + 1, n):
-                value -= L[j, i] * X[j, c]
-            X[i, c] = value / L[i, i]
-    return X
+def _initial_state_kernel(R_WB, q, xy, offsets, foot_radius):
+    """`FloatingBaseKalmanFilter.initial_state` on plain arrays: (x, P)."""
+    p_BF, _ = _foot_kinematics_kernel(q, offsets)
+    feet_W = np.empty((4, 3))
+    lowest = np.inf
+    for i in range(4):
+        for r in range(3):
+            feet_W[i, r] = R_WB[r, 0] * p_BF[i, 0] + R_WB[r, 1] * p_BF[i, 1] + R_WB[r, 2] * p_BF[i, 2]
+        lowest = min(lowest, feet_W[i, 2])
+    x = np.zeros(NUM_STATES)
+    x[0], x[1], x[2] = xy[0], xy[1], foot_radius - lowest
+    for i in range(4):
+        for r in range(3):
+            x[6 + 3 * i + r] = feet_W[i, r] + x[r]
+    P = np.zeros((NUM_STATES, NUM_STATES))
+    for k in range(3):
+        P[k, k] = _INITIAL_STD[0] ** 2
+        P[3 + k, 3 + k] = _INITIAL_STD[1] ** 2
+    for k in range(6, NUM_STATES):
+        P[k, k] = _INITIAL_STD[2] ** 2
+    return x, P
+
+
+@kernel
+def _update_kernel(
+    x, P, R_WB, w_B, q, qd, in_contact, rolling, use_rolling, tips_B, offsets, use_height, foot_radius, noise_std
+):
+    """`FloatingBaseKalmanFilter.update` on plain arrays: (x, P, whether the correction succeeded).
+
+    `tips_B` (k, 4): the loaded prong tips' positions in the trunk frame [m] and radii [m].
+    """
+    p_BF, J = _foot_kinematics_kernel(q, offsets)
+    columns, coefficients, noise = _measurement_rows(in_contact, tips_B.shape[0], use_height, noise_std)
+    y = _measurements_kernel(
+        R_WB, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, use_height, foot_radius, tips_B, noise.shape[0]
+    )
+    return _correct_kernel(x, P, columns, coefficients, noise, y)
+
+
+@kernel
+def _loaded_tips(tips_B, schedule):
+    """(k, 4) the prong tips (position [m], radius [m]) the schedule loads (its entries after the
+    four feet); none without a schedule (empty)."""
+    loaded = 0
+    if schedule.shape[0] > 0:
+        for t in range(tips_B.shape[0]):
+            if schedule[4 + t] > 0.5:
+                loaded += 1
+    tips = np.empty((loaded, 4))
+    row = 0
+    if schedule.shape[0] > 0:
+        for t in range(tips_B.shape[0]):
+            if schedule[4 + t] > 0.5:
+                tips[row] = tips_B[t]
+                row += 1
+    return tips
+
+
+@kernel
+def _step_kernel(
+    filter_state,
+    base_state,
+    imu,
+    q,
+    qd,
+    foot_sensor,
+    schedule,
+    xy,
+    dt,
+    threshold,
+    p_BI,
+    offsets,
+    tips_B,
+    foot_radius,
+    use_height,
+    process_noise_std,
+    measurement_noise_std,
+    plausible_q,
+):
+    """One tick of the estimator on its state, in place: True when the estimate was updated.
+
+    filter_state (1 + 18 + 18 * 18): [initialised flag, x, P row by row]; base_state (13): the
+    output (see base_state.py). Both are left as they are (the last estimate held) when a sample
+    is not usable: a non-finite input, an unusable IMU quaternion, joint angles outside
+    `plausible_q` (2, 12: lower, upper [rad]) before the first estimate (no leg_control_data
+    yet), or a correction that failed.
+    """
+    usable, quaternion, R = _imu_kernel(imu)
+    if not usable:
+        return False
+    for i in range(12):
+        if not (math.isfinite(q[i]) and math.isfinite(qd[i])):
+            return False
+    for i in range(4):
+        if not math.isfinite(foot_sensor[i]):
+            return False
+    initialised = filter_state[0] != 0.0
+    if not initialised:
+        for i in range(12):
+            if not (plausible_q[0, i] <= q[i] <= plausible_q[1, i]):
+                return False
+    w_B = imu[4:7]
+    in_contact = _contact_kernel(foot_sensor, schedule, threshold)
+    rolling = _rolling_kernel(R, w_B, q, qd, foot_radius)
+    n = NUM_STATES
+    if initialised:
+        x, P = _predict_kernel(
+            filter_state[1 : 1 + n],
+            filter_state[1 + n :].reshape((n, n)),
+            R,
+            w_B,
+            imu[7:10],
+            p_BI,
+            dt,
+            rolling,
+            in_contact,
+            process_noise_std,
+        )
+    else:
+        x, P = _initial_state_kernel(R, q, xy, offsets, foot_radius)
+    tips = _loaded_tips(tips_B, schedule)
+    x, P, corrected = _update_kernel(
+        x, P, R, w_B, q, qd, in_contact, rolling, True, tips, offsets, use_height, foot_radius, measurement_noise_std
+    )
+    if not corrected:
+        return False
+    for i in range(n):
+        if not math.isfinite(x[i]):
+            return False
+        for j in range(n):
+            if not math.isfinite(P[i, j]):
+                return False
+    filter_state[0] = 1.0
+    filter_state[1 : 1 + n] = x
+    filter_state[1 + n :] = P.ravel()
+    base_state[0:4] = quaternion
+    base_state[4:7] = x[0:3]
+    for r in range(3):  # w_W = R_WB w_B
+        base_state[7 + r] = R[r, 0] * w_B[0] + R[r, 1] * w_B[1] + R[r, 2] * w_B[2]
+    base_state[10:13] = x[3:6]
+    return True
 
 
 class FloatingBaseKalmanFilter:
-    """The filter's maths on plain arrays (no Drake state): `initial_state`, `predict`, `update`."""
+    """The filter's maths on plain arrays (no Drake state): `initial_state`, `predict`, `update`,
+    and `step`, all of a tick at once on the estimator's state vectors."""
 
     def __init__(
         self,
@@ -259,16 +504,40 @@ class FloatingBaseKalmanFilter:
         prong_tip_radius: float = 0.0,
     ):
         self.config = config
-        self.p_BI = np.asarray(p_BI, dtype=float)
-        self.foot_radius = foot_radius
+        self.p_BI = np.array(p_BI, dtype=float)
+        self.foot_radius = float(foot_radius)
         # Prong tip centres in the trunk frame (k, 3) [m]: a loaded tip pins the trunk like a foot.
-        self.prong_tips_B = np.zeros((0, 3)) if prong_tips_B is None else np.asarray(prong_tips_B, dtype=float)
-        self.prong_tip_radius = prong_tip_radius
-        self._process_noise_cache: dict[tuple, np.ndarray] = {}
-        self._measurement_models: dict[tuple, tuple[np.ndarray, np.ndarray]] = {}
+        self.prong_tips_B = np.zeros((0, 3)) if prong_tips_B is None else np.array(prong_tips_B, dtype=float)
+        self.prong_tip_radius = float(prong_tip_radius)
+        # The constants of every tick, as the kernels take them (writable: numba checks a
+        # read-only array's type on every call, several microseconds).
+        self._tips = np.column_stack([self.prong_tips_B, np.full(len(self.prong_tips_B), self.prong_tip_radius)])
+        self._offsets = np.array(_offsets())
+        c = config
+        self._process_noise_std = np.array(
+            [c.position_process_noise, c.accelerometer_noise, c.stance_foot_process_noise, c.swing_foot_process_noise]
+        )
+        self._measurement_noise_std = np.array(
+            [c.foot_position_noise, c.foot_velocity_noise, c.ground_height_noise, c.resting_velocity_noise]
+        )
+        self._use_height = bool(c.ground_height_measurement)
+        self._plausible_q = np.array([robot.Q_LOWER - _PLAUSIBLE_SLACK, robot.Q_UPPER + _PLAUSIBLE_SLACK])
+        # `_step_kernel`'s arguments after the tick's inputs, in its order.
+        self._step_constants = (
+            float(c.period),
+            float(c.foot_contact_threshold),
+            self.p_BI,
+            self._offsets,
+            self._tips,
+            self.foot_radius,
+            self._use_height,
+            self._process_noise_std,
+            self._measurement_noise_std,
+            self._plausible_q,
+        )
 
     def warm_up(self) -> None:
-        """Runs one predict and update of every kind, so the compiled kernels are compiled (or
+        """Runs one predict, update and step of every kind, so the compiled kernels are compiled (or
         loaded from numba's cache) now, not in the first control tick."""
         imu = ImuSample(np.eye(3), np.zeros(3), -GRAVITY_W)
         x, P = self.initial_state(imu, robot.STANDING_Q, np.zeros(2))
@@ -278,15 +547,23 @@ class FloatingBaseKalmanFilter:
             self.update(
                 x, P, imu, robot.STANDING_Q, np.zeros(12), contact, rolling, np.ones(len(self.prong_tips_B), bool)
             )
+        self.contact_flags(np.zeros(4), None, 0.0)
+        ImuSample.from_vector(np.array([1.0, 0, 0, 0, 0, 0, 0, 0, 0, 9.81]))
+        filter_state, base_state = np.zeros(FILTER_STATE_SIZE), np.zeros(BASE_STATE_SIZE)
+        imu_vector, q, rates = np.array([1.0, 0, 0, 0, 0, 0, 0, 0, 0, 9.81]), robot.STANDING_Q, np.zeros(12)
+        for schedule in (np.zeros(0), np.ones(4 + len(self.prong_tips_B))):
+            for _ in range(2):  # initialise, then predict and correct
+                self.step(filter_state, base_state, imu_vector, q, rates, np.ones(4), schedule, np.zeros(2))
 
     def initial_state(self, imu: ImuSample, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(x, P) for a robot at rest with its lowest foot on the ground, trunk at `xy` [m]."""
-        p_BF, _ = foot_kinematics_B(q)
-        feet_W = p_BF @ imu.R_WB.T
-        p = np.array([xy[0], xy[1], self.foot_radius - float(np.min(feet_W[:, 2]))])
-        x = np.concatenate([p, np.zeros(3), (feet_W + p).ravel()])
-        variances = np.concatenate([np.full(3, 0.01**2), np.full(3, 0.1**2), np.full(12, 0.01**2)])
-        return x, np.diag(variances)
+        return _initial_state_kernel(
+            np.asarray(imu.R_WB, dtype=float),
+            np.asarray(q, dtype=float),
+            np.asarray(xy, dtype=float),
+            self._offsets,
+            self.foot_radius,
+        )
 
     def predict(
         self,
@@ -299,85 +576,18 @@ class FloatingBaseKalmanFilter:
     ):
         """Propagates (x, P) over dt [s] with the IMU acceleration; feet in contact move by their
         `rolling` velocities (4, 3) [m/s] (see rolling_velocities_W), when given."""
-        in_contact = np.asarray(contact[:4], bool)
         return _predict_kernel(
-            x,
-            P,
-            imu.R_WB,
-            imu.w_B,
-            imu.f_B,
+            np.asarray(x, dtype=float),
+            np.asarray(P, dtype=float),
+            np.asarray(imu.R_WB, dtype=float),
+            np.asarray(imu.w_B, dtype=float),
+            np.asarray(imu.f_B, dtype=float),
             self.p_BI,
-            GRAVITY_W,
-            dt,
-            _NO_ROLLING if rolling is None else np.asarray(rolling, dtype=float),
-            in_contact,
-            self._process_noise(tuple(in_contact.tolist()), dt),
+            float(dt),
+            np.zeros((4, 3)) if rolling is None else np.asarray(rolling, dtype=float),
+            np.asarray(contact[:4], dtype=bool),
+            self._process_noise_std,
         )
-
-    def _process_noise(self, contact: tuple[bool, ...], dt: float) -> np.ndarray:
-        """Diagonal of Q over dt [s] for the feet in `contact` (one of 16 patterns: kept once made)."""
-        key = (contact, dt)
-        q = self._process_noise_cache.get(key)
-        if q is None:
-            c = self.config
-            q = np.empty(NUM_STATES)
-            q[_P] = c.position_process_noise**2 * dt
-            q[_V] = c.accelerometer_noise**2 * dt
-            sigma = np.where(contact, c.stance_foot_process_noise, c.swing_foot_process_noise)
-            q[_FEET] = np.repeat(sigma * sigma * dt, 3)
-            q.flags.writeable = False
-            if len(self._process_noise_cache) > 64:
-                self._process_noise_cache.clear()  # dt keeps changing: do not grow without bound
-            self._process_noise_cache[key] = q
-        return q
-
-    def _measurement_model(self, contact: tuple[bool, ...], num_tips: int) -> tuple[np.ndarray, np.ndarray]:
-        """(H, measurement noise variances) for the feet in `contact` and `num_tips` loaded prong
-        tips, in the row order of `update`. Constant for a contact pattern: made once each (the
-        tip rows depend on how many tips are loaded, not which: their values carry the geometry)."""
-        key = (contact, num_tips)
-        model = self._measurement_models.get(key)
-        if model is not None:
-            return model
-        c = self.config
-        stance = [i for i in range(4) if contact[i]]
-        use_height = c.ground_height_measurement
-        # No foot or prong loaded: the trunk rests on the ground (on its belly or knees) while
-        # the legs move freely; it does not slide, so a zero horizontal velocity keeps the IMU
-        # from drifting while the legs unfold (the knees may push it up: z is left to the IMU).
-        resting = not stance and not num_tips
-        m = 12 + 3 * len(stance) + (len(stance) if use_height else 0) + (2 if resting else 0) + 4 * num_tips
-        H = np.zeros((m, NUM_STATES))
-        noise = np.empty(m)
-        # Every foot's position; a foot in the air is carried by the kinematics: a loose
-        # measurement of it costs nothing.
-        H[:12] = _FOOT_POSITION_ROWS
-        for i in range(4):
-            noise[3 * i : 3 * i + 3] = c.foot_position_noise**2 * (1.0 if contact[i] else 4.0)
-        row = 12
-        for _ in stance:  # no-slip velocity rows
-            H[row : row + 3, _V] = _I3
-            noise[row : row + 3] = c.foot_velocity_noise**2
-            row += 3
-        if use_height:
-            for i in stance:  # flat ground under the feet in contact
-                H[row, 6 + 3 * i + 2] = 1.0
-                noise[row] = c.ground_height_noise**2
-                row += 1
-        for _ in range(num_tips):  # tip velocity (3) and height (1)
-            H[row : row + 3, _V] = _I3
-            noise[row : row + 3] = c.foot_velocity_noise**2
-            H[row + 3, 2] = 1.0
-            noise[row + 3] = c.ground_height_noise**2
-            row += 4
-        if resting:
-            H[row : row + 2, _V] = _I3[:2]
-            noise[row : row + 2] = c.resting_velocity_noise**2
-            row += 2
-        H.flags.writeable = False
-        noise.flags.writeable = False
-        self._measurement_models[key] = (H, noise)
-        return H, noise
 
     def update(
         self,
@@ -393,49 +603,70 @@ class FloatingBaseKalmanFilter:
         """Corrects (x, P) with the leg kinematics of all feet and the no-slip of the feet in contact
         (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with each
         prong tip flagged in `tips_loaded` (one bool per prong; None: none loaded): it does not
-        move, and touches the ground."""
-        p_BF, J = foot_kinematics_B(q)
-        in_contact = np.asarray(contact[:4], bool)
-        tips = self.prong_tips_B[np.asarray(tips_loaded, bool)] if tips_loaded is not None else self.prong_tips_B[:0]
-        num_tips = len(tips)
-        H, noise = self._measurement_model(tuple(in_contact.tolist()), num_tips)
-        y = _measurements_kernel(
-            imu.R_WB,
-            imu.w_B,
-            p_BF,
-            J,
+        move, and touches the ground. Raises np.linalg.LinAlgError when P is not positive definite."""
+        tips = self._tips[np.asarray(tips_loaded, bool)] if tips_loaded is not None else self._tips[:0]
+        x, P, corrected = _update_kernel(
+            np.asarray(x, dtype=float),
+            np.asarray(P, dtype=float),
+            np.asarray(imu.R_WB, dtype=float),
+            np.asarray(imu.w_B, dtype=float),
+            np.asarray(q, dtype=float),
             np.asarray(qd, dtype=float),
-            in_contact,
-            _NO_ROLLING if rolling is None else np.asarray(rolling, dtype=float),
+            np.asarray(contact[:4], dtype=bool),
+            np.zeros((4, 3)) if rolling is None else np.asarray(rolling, dtype=float),
             rolling is not None,
-            self.config.ground_height_measurement,
+            np.ascontiguousarray(tips),
+            self._offsets,
+            self._use_height,
             self.foot_radius,
-            tips,
-            self.prong_tip_radius,
-            len(noise),
+            self._measurement_noise_std,
         )
-        return _correct_kernel(x, P, H, noise, y)
+        if not corrected:
+            raise np.linalg.LinAlgError("Kalman correction: an innovation variance is not positive")
+        return x, P
+
+    def step(
+        self,
+        filter_state: np.ndarray,
+        base_state: np.ndarray,
+        imu: np.ndarray,
+        q: np.ndarray,
+        qd: np.ndarray,
+        foot_sensor: np.ndarray,
+        schedule: np.ndarray,
+        xy: np.ndarray,
+    ) -> bool:
+        """One estimator tick on its state vectors, in place (see `_step_kernel`): True when updated.
+
+        Inputs as the estimator's ports give them: go1.imu (10), q [rad], qd [rad/s] (12),
+        go1.foot_contact (4), and the contact schedule (4 feet, then one per prong; empty: none);
+        `xy` [m]: where the trunk starts (see `initial_state`).
+        """
+        return _step_kernel(filter_state, base_state, imu, q, qd, foot_sensor, schedule, xy, *self._step_constants)
 
     @staticmethod
     def contact_flags(foot_sensor: np.ndarray, schedule: np.ndarray | None, threshold: float) -> np.ndarray:
         """Feet in contact: scheduled (when a schedule is given) and sensed."""
-        scheduled = np.ones(4, dtype=bool) if schedule is None else np.asarray(schedule[:4]) > 0.5
-        return scheduled & (np.asarray(foot_sensor) > threshold)
+        return _contact_kernel(
+            np.asarray(foot_sensor, dtype=float),
+            np.zeros(0) if schedule is None else np.asarray(schedule, dtype=float),
+            float(threshold),
+        )
 
 
 class KalmanEstimator(LeafSystem):
     """go1.imu, go1.position_measured, go1.velocity_measured, go1.foot_contact (+ optional
     contact_set) -> base_state (13: quaternion, p_WB, w_WB, v_WB; see base_state.py).
 
-    Periodic discrete update at `config.period`; base_state is computed from the discrete state
-    alone, so the loop estimator -> mission manager -> contact_set -> estimator has a delay.
-    State: [initialised flag, x (18), P (18 x 18), quaternion (4), w_W (3)].
+    Periodic discrete update at `config.period`; base_state is a discrete state of its own (the
+    output port reads it without computing), so the loop estimator -> mission manager ->
+    contact_set -> estimator has a delay. Filter state: [initialised flag, x (18), P (18 x 18)].
     """
 
     def __init__(self, config: KalmanEstimatorConfig, initial_xy=(0.0, 0.0), prongs: ProngDesign | None = None):
         super().__init__()
         self.config = config
-        self._xy = np.asarray(config.initial_xy if config.initial_xy is not None else initial_xy, dtype=float)
+        self._xy = np.array(config.initial_xy if config.initial_xy is not None else initial_xy, dtype=float)
         tips = None if prongs is None else prongs.tip_positions_B()
         radius = 0.0 if prongs is None else prongs.tip_radius
         self.filter = FloatingBaseKalmanFilter(config, imu_offset_B(), prong_tips_B=tips, prong_tip_radius=radius)
@@ -447,62 +678,33 @@ class KalmanEstimator(LeafSystem):
         self.foot_contact_port = self.DeclareVectorInputPort("foot_contact", 4)
         # Optional: the mission's contact schedule (feet first, then prongs).
         self.contact_set_port = self.DeclareVectorInputPort("contact_set", num_contacts)
-        n = NUM_STATES
-        self._layout = {"flag": 0, "x": slice(1, 1 + n), "P": slice(1 + n, 1 + n + n * n)}
-        self._quat = slice(1 + n + n * n, 5 + n + n * n)
-        self._w = slice(5 + n + n * n, 8 + n + n * n)
-        initial = np.zeros(8 + n + n * n)
-        initial[self._quat] = [1.0, 0.0, 0.0, 0.0]
-        self._state = self.DeclareDiscreteState(initial)
+        self._no_schedule = np.zeros(0)
+        self._filter_state = self.DeclareDiscreteState(FILTER_STATE_SIZE)
+        initial_base = np.zeros(BASE_STATE_SIZE)
+        initial_base[0] = 1.0  # identity orientation until the first estimate
+        self._base_state = self.DeclareDiscreteState(initial_base)
         self.DeclareInitializationDiscreteUpdateEvent(self._update)
         self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
         # The same step on demand (CalcForcedDiscreteVariableUpdate), for tests.
         self.DeclareForcedDiscreteUpdateEvent(self._update)
-        self.base_state_port = self.DeclareVectorOutputPort(
-            "base_state", BASE_STATE_SIZE, self._calc_base_state, {self.xd_ticket()}
-        )
-
-    def _measurements(self, context: Context):
-        imu = ImuSample.from_vector(self.imu_port.Eval(context))
-        q = np.asarray(self.position_port.Eval(context), dtype=float)
-        qd = np.asarray(self.velocity_port.Eval(context), dtype=float)
-        force = np.asarray(self.foot_contact_port.Eval(context), dtype=float)
-        schedule = self.contact_set_port.Eval(context) if self.contact_set_port.HasValue(context) else None
-        finite = bool(np.isfinite(q).all() and np.isfinite(qd).all() and np.isfinite(force).all())
-        return imu, q, qd, force, schedule, finite
+        self.base_state_port = self.DeclareStateOutputPort("base_state", self._base_state)
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
-        s = context.get_discrete_state(self._state).get_value().copy()
-        imu, q, qd, force, schedule, finite = self._measurements(context)
-        if imu is None or not finite:
-            return  # hold the last estimate: a bad sample (or none yet) never reaches the output
-        if s[0] == 0.0 and not _plausible_joint_angles(q):
-            return  # no leg_control_data yet (all zeros on hardware): initialise from a real sample
-        n = NUM_STATES
-        contact = self.filter.contact_flags(force, schedule, self.config.foot_contact_threshold)
-        rolling = rolling_velocities_W(imu.R_WB, imu.w_B, q, qd, self.filter.foot_radius)
-        if s[0] == 0.0:
-            x, P = self.filter.initial_state(imu, q, self._xy)
-        else:
-            x, P = s[self._layout["x"]], s[self._layout["P"]].reshape(n, n)
-            x, P = self.filter.predict(x, P, imu, contact, self.config.period, rolling)
-        tips_loaded = None if schedule is None else np.asarray(schedule[4:]) > 0.5
-        x, P = self.filter.update(x, P, imu, q, qd, contact, rolling, tips_loaded)
-        if not (np.isfinite(x).all() and np.isfinite(P).all()):
-            return
-        s[0] = 1.0
-        s[self._layout["x"]] = x
-        s[self._layout["P"]] = P.ravel()
-        s[self._quat] = imu.quaternion_wxyz
-        s[self._w] = imu.R_WB @ imu.w_B
-        discrete_state.get_mutable_vector(self._state).SetFromVector(s)
-
-    def _calc_base_state(self, context: Context, output: BasicVector) -> None:
-        s = context.get_discrete_state(self._state).get_value()
-        x = s[self._layout["x"]]
-        output.SetFromVector(np.concatenate([s[self._quat], x[_P], s[self._w], x[_V]]))
+        # `discrete_state` holds the current state on entry: the step writes it only when the
+        # sample is usable, so a bad sample (or none yet) never reaches the output.
+        schedule = self.contact_set_port.Eval(context) if self.contact_set_port.HasValue(context) else self._no_schedule
+        self.filter.step(
+            discrete_state.get_mutable_value(self._filter_state),
+            discrete_state.get_mutable_value(self._base_state),
+            self.imu_port.Eval(context),
+            self.position_port.Eval(context),
+            self.velocity_port.Eval(context),
+            self.foot_contact_port.Eval(context),
+            schedule,
+            self._xy,
+        )
 
     def covariance(self, context: Context) -> np.ndarray:
         """The filter's covariance P (18 x 18) in `context` (this system's)."""
         n = NUM_STATES
-        return context.get_discrete_state(self._state).get_value()[self._layout["P"]].reshape(n, n)
+        return context.get_discrete_state(self._filter_state).get_value()[1 + n :].reshape(n, n)

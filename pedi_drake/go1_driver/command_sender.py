@@ -1,13 +1,13 @@
 """Publishes the (already bounded) `go1.command` to the Go1 bridge on `pd_plustau_targets` at 500 Hz.
 
 The 60-vector (q_des, qd_des, kp, kd, tau_ff; Unitree order) becomes a `pd_tau_targets_lcmt`
-in the wire order (q_des, qd_des, tau_ff, kp, kd) via constants.command_to_message, through the
+in the wire order (q_des, qd_des, tau_ff, kp, kd) via constants.CommandEncoder, through the
 driver's Go1Link, which stamps each publication against its tick's wall-clock schedule. The
 sender checks nothing: Go1SafetyFilter upstream guarantees the limits. As a last line of defence
-it refuses to publish a non-finite command (the link's guard then damps when the loop stays silent).
+it refuses to publish a non-finite command (the encoder gives no bytes for one; the link's guard
+then damps when the loop stays silent).
 """
 
-import numpy as np
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from pedi_drake.go1_command import COMMAND_SIZE
@@ -26,11 +26,11 @@ class Go1CommandSender(LeafSystem):
         # The I/O boundary, kept here so a run can reach it at shutdown (`hardware_link`).
         self.link = link
         self._command = self.DeclareVectorInputPort("command", COMMAND_SIZE)
+        # Made once: Drake copies the status a handler returns.
+        self._succeeded = EventStatus.Succeeded()
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
 
     def _publish(self, context) -> EventStatus:
-        command = self._command.Eval(context)
-        if not np.all(np.isfinite(command)):
+        if not self.link.publish_command(self._command.Eval(context), context.get_time()):
             return EventStatus.Failed(self, "refusing to publish a non-finite go1.command")
-        self.link.publish_command(command, context.get_time())
-        return EventStatus.Succeeded()
+        return self._succeeded

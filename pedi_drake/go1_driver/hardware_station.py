@@ -4,7 +4,7 @@
     leg_control_data      -> go1.position_measured, go1.velocity_measured, go1.torque_estimated
     state_estimator_data  -> go1.imu, go1.foot_contact (raw sensor value)
     rc_command            -> the remote's E-stop button
-all on the scenario's LCM bus "go1" through one LcmInterfaceSystem. Driver-only ports:
+all on the scenario's LCM bus "go1" (one receiver latches the three status channels). Driver-only ports:
     input  driver.estop (1, optional): > 0.5 latches damping
     output driver.status (1 + len(INTERVENTIONS)): latched reason and intervention counters
     output driver.message_counts (6): [received, dropped] for leg_control_data,
@@ -19,7 +19,6 @@ watchdogs use the wall clock.
 
 from pydrake.lcm import DrakeLcmParams
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import Multiplexer
 
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.go1_driver import constants as c
@@ -27,11 +26,7 @@ from pedi_drake.go1_driver.command_sender import Go1CommandSender
 from pedi_drake.go1_driver.config import Go1DriverConfig
 from pedi_drake.go1_driver.link import Go1Link
 from pedi_drake.go1_driver.safety import Go1SafetyFilter
-from pedi_drake.go1_driver.status_receiver import (
-    MakeLegControlReceiver,
-    MakeRcCommandReceiver,
-    MakeStateEstimatorReceiver,
-)
+from pedi_drake.go1_driver.status_receiver import MakeStatusReceiver
 
 
 def go1_lcm_url(lcm_buses: dict[str, DrakeLcmParams]) -> str:
@@ -68,38 +63,26 @@ def MakeHardwareStation(config: Go1DriverConfig, link: Go1Link) -> Diagram:
     """
     period = config.safety.period
     builder = DiagramBuilder()
-    wait = config.first_status_timeout
-    leg = builder.AddNamedSystem("leg_control_receiver", MakeLegControlReceiver(link, period=period, wait_timeout=wait))
-    estimator = builder.AddNamedSystem(
-        "state_estimator_receiver", MakeStateEstimatorReceiver(link, period=period, wait_timeout=wait)
+    # One receiver latches the three status channels (one Python call a tick); its outputs are
+    # parts of its state, split off by compiled code.
+    status = builder.AddNamedSystem(
+        "status_receiver", MakeStatusReceiver(link, period=period, wait_timeout=config.first_status_timeout)
     )
-    remote = builder.AddNamedSystem("rc_command_receiver", MakeRcCommandReceiver(link, period=period))
     safety = builder.AddNamedSystem("safety", Go1SafetyFilter(config.safety, num_status_channels=2))
     sender = builder.AddNamedSystem("command_sender", Go1CommandSender(link, period=period))
 
-    silence = builder.AddNamedSystem("status_silence", Multiplexer([1, 1]))
-    builder.Connect(leg.GetOutputPort("silence"), silence.get_input_port(0))
-    builder.Connect(estimator.GetOutputPort("silence"), silence.get_input_port(1))
-    builder.Connect(silence.get_output_port(), safety.GetInputPort("status_silence"))
-    builder.Connect(leg.GetOutputPort("position_measured"), safety.GetInputPort("position_measured"))
-    builder.Connect(leg.GetOutputPort("velocity_measured"), safety.GetInputPort("velocity_measured"))
-    builder.Connect(remote.GetOutputPort("estop"), safety.GetInputPort("rc_estop"))
+    builder.Connect(status.GetOutputPort("robot_status"), safety.GetInputPort("robot_status"))
     builder.Connect(safety.GetOutputPort("command"), sender.GetInputPort("command"))
 
     builder.ExportInput(safety.GetInputPort("command"), "go1.command")
-    for name in ("position_measured", "velocity_measured", "torque_estimated"):
-        builder.ExportOutput(leg.GetOutputPort(name), f"go1.{name}")
-    builder.ExportOutput(estimator.GetOutputPort("imu"), "go1.imu")
-    builder.ExportOutput(estimator.GetOutputPort("foot_contact"), "go1.foot_contact")
+    for name in ("position_measured", "velocity_measured", "torque_estimated", "imu", "foot_contact"):
+        builder.ExportOutput(status.GetOutputPort(name), f"go1.{name}")
 
     builder.ExportInput(safety.GetInputPort("estop"), "driver.estop")
     builder.ExportOutput(safety.GetOutputPort("status"), "driver.status")
     builder.ExportOutput(safety.GetOutputPort("command"), "driver.command_published")
-    counts = builder.AddNamedSystem("message_counts", Multiplexer([2, 2, 2]))
     # In the order of c.STATUS_CHANNELS.
-    for i, receiver in enumerate((leg, estimator, remote)):
-        builder.Connect(receiver.GetOutputPort("message_counts"), counts.get_input_port(i))
-    builder.ExportOutput(counts.get_output_port(), "driver.message_counts")
+    builder.ExportOutput(status.GetOutputPort("message_counts"), "driver.message_counts")
     diagram = builder.Build()
     diagram.set_name("go1_hardware_station")
     return diagram

@@ -101,12 +101,14 @@ class Inbox:
         self.values: np.ndarray | None = None
         self.received = 0
         self.rejected = [0] * len(REJECT_REASONS)
+        self._dropped = 0  # sum(self.rejected), kept so that a snapshot does not add it up
         self.receipt_time = -math.inf
 
     def _reject(self, reason: str, detail: str = "") -> None:
         i = _REASON_INDEX[reason]
         with self._lock:
             self.rejected[i] += 1
+            self._dropped += 1
             count = self.rejected[i]
         # First occurrence, then every power of ten: counted always, never a flood of log lines.
         if count == 1 or math.log10(count).is_integer():
@@ -145,13 +147,13 @@ class Inbox:
         """(newest values or None, messages received, messages rejected, receipt time [s])."""
         with self._lock:
             self._taken = True
-            return self.values, self.received, sum(self.rejected), self.receipt_time
+            return self.values, self.received, self._dropped, self.receipt_time
 
     def counts(self) -> dict:
         with self._lock:
             return {
                 "received": self.received,
-                "dropped": sum(self.rejected),
+                "dropped": self._dropped,
                 "rejected": {reason: n for reason, n in zip(REJECT_REASONS, self.rejected, strict=True) if n},
             }
 
@@ -178,13 +180,14 @@ def _estop_vector(fields: tuple[str, ...]) -> Callable[[object], np.ndarray]:
 
 @dataclasses.dataclass
 class _Timing:
-    """The loop's publications: lateness against the tick's schedule, and inter-departure times [s]."""
+    """The loop's publications: the wall time of each [s] and its offset from its tick's schedule
+    (wall time - diagram time / realtime rate) [s]. Lateness follows in `report`: the offset less
+    the earliest offset so far (the Simulator never runs ahead of its schedule, so the earliest
+    tick sets the schedule's anchor); inter-departure times are the differences of the times."""
 
     # array('d'): 8 bytes a tick and no Python objects for the garbage collector to walk.
-    lateness: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
-    interdeparture: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
-    anchor: float | None = None  # wall time of diagram time 0 on the schedule [s]
-    last_departure: float | None = None
+    departures: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
+    offsets: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
 
 
 def _distribution_ms(values) -> dict | None:
@@ -220,6 +223,7 @@ class Go1Link:
         self._config = config
         self._period = config.safety.period
         self._limits = SafetyLimits.from_config(config.safety)
+        self._shortest_command_timeout = min(config.safety.command_timeout, config.safety.warmup_command_timeout)
         self._threaded = threaded
         self._clock = clock
         self._publish_lock = threading.Lock()
@@ -237,6 +241,7 @@ class Go1Link:
         self._guard_published = 0
         self._shutdown_published = 0
         self._message_id = 0
+        self._encoder = c.CommandEncoder()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -321,42 +326,49 @@ class Go1Link:
 
     # -- sending -----------------------------------------------------------------------------
 
-    def _publish(self, command: np.ndarray, t_us: int) -> None:
-        data = c.encode_command(command, timestamp_us=t_us, message_id=self._message_id)
+    def _publish(self, command: np.ndarray, t_us: int) -> bool:
+        """Puts `command` on the wire; False (nothing sent) when a value of it is not finite."""
+        data = self._encoder.encode(command, t_us, self._message_id)
+        if data is None:
+            return False
         self._message_id += 1
         self._transport.publish(c.COMMAND_CHANNEL, data)
+        return True
 
     def _damping(self) -> np.ndarray:
         values = self.leg_control.snapshot()[0]
         q, qd = (values[0:12], values[12:24]) if values is not None else (np.zeros(12), np.zeros(12))
         return damping_command(q, qd, self._limits, self._config.safety.damping_kd)
 
-    def publish_command(self, command: np.ndarray, t: float) -> None:
+    def publish_command(self, command: np.ndarray, t: float) -> bool:
         """Publishes the loop's (bounded) command of diagram time `t` [s] and stamps its lateness.
 
-        After the guard latched, damping goes out instead: the loop's command is no longer trusted.
+        A command with a non-finite value is refused: False, nothing sent or stamped (the guard
+        then damps if the loop stays silent). After the guard latched, damping goes out instead:
+        the loop's command is no longer trusted.
         """
         now = self._clock()
-        timing = self._timing
-        scheduled_offset = t / self.realtime_rate
-        if timing.anchor is None or now - scheduled_offset < timing.anchor:
-            # The Simulator never runs ahead of its schedule: an earlier tick sets the anchor.
-            timing.anchor = now - scheduled_offset
-        timing.lateness.append(now - (timing.anchor + scheduled_offset))
-        if timing.last_departure is not None:
-            timing.interdeparture.append(now - timing.last_departure)
-        timing.last_departure = now
         with self._publish_lock:
-            self._last_publish = now
             if self.guard_latched is not None:
+                if not np.isfinite(command).all():
+                    return False
                 command = self._damping()
-            self._publish(command, int(round(t * 1e6)))
+            if not self._publish(command, int(round(t * 1e6))):
+                return False
+            self._last_publish = now
+        self._timing.departures.append(now)
+        self._timing.offsets.append(now - t / self.realtime_rate)
+        return True
 
     def _guard(self) -> None:
         """Runs on the receive thread after every look: damping when the loop went silent."""
         if self._last_publish is None or self._stop.is_set():
             return
         now = self._clock()
+        if self.guard_latched is None and now - self._last_publish <= self._shortest_command_timeout:
+            # The loop published lately: nothing to do, and no wait for the lock the loop holds
+            # while it publishes (this look may have been woken by that very publication).
+            return
         with self._publish_lock:
             silent = now - self._last_publish
             elapsed = self._message_id * self._period
@@ -391,7 +403,8 @@ class Go1Link:
 
     def report(self) -> dict:
         """Messages by channel (received, dropped, rejected by reason), the loop's timing, the guard."""
-        lateness = np.asarray(self._timing.lateness)
+        offsets = np.asarray(self._timing.offsets)
+        lateness = offsets - np.minimum.accumulate(offsets) if len(offsets) else offsets
         misses = int(np.count_nonzero(lateness > self._period))
         return {
             "messages": {inbox.channel: inbox.counts() for inbox in self.inboxes},
@@ -402,7 +415,7 @@ class Go1Link:
                 "deadline_misses": misses,
                 "deadline_misses_per_1000": 1000.0 * misses / len(lateness) if len(lateness) else 0.0,
                 "longest_miss_ms": float(1e3 * lateness.max()) if misses else 0.0,
-                "command_interdeparture_ms": _distribution_ms(self._timing.interdeparture),
+                "command_interdeparture_ms": _distribution_ms(np.diff(np.asarray(self._timing.departures))),
             },
             "guard": {
                 "latched": self.guard_latched,

@@ -3,7 +3,8 @@
 Plain functions (`bound_command`, `damping_command`) hold the maths; `Go1SafetyFilter` is the
 LeafSystem that applies them at the control rate with its watchdogs, soft start and latched
 E-stop, keeping everything that changes (last published command, soft-start pose, latch,
-intervention counters) in the Context's discrete state.
+intervention counters) in the Context's discrete state. Its tick is one compiled call
+(`_filter_step_kernel`, built from the same kernels) that writes that state in place.
 
 What is guaranteed for every published command (Unitree order, `go1.command` layout):
   * all 60 values are finite;
@@ -24,11 +25,10 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
 
 from pedi_drake import robot
-from pedi_drake.go1_command import COMMAND_SIZE, pack_command, split_command
+from pedi_drake.go1_command import COMMAND_SIZE
 from pedi_drake.go1_driver.config import Go1SafetyConfig
 from pedi_drake.go1_driver.constants import STATUS_CHANNELS
 from pedi_drake.jit import kernel
-from pedi_drake.trajectory import min_jerk
 
 _log = logging.getLogger(__name__)
 
@@ -82,8 +82,17 @@ class SafetyLimits:
 
     def clip_position(self, q: np.ndarray) -> np.ndarray:
         """q clipped into the joint limits, non-finite entries replaced by the range's middle [rad]."""
-        middle = 0.5 * (self.q_lower + self.q_upper)
-        return np.clip(np.where(np.isfinite(q), q, middle), self.q_lower, self.q_upper)
+        return _clip_position_kernel(np.asarray(q, dtype=float), self.q_lower, self.q_upper)
+
+
+@kernel
+def _clip_position_kernel(q, q_lower, q_upper):
+    """`SafetyLimits.clip_position` on plain arrays (12,)."""
+    out = np.empty(12)
+    for j in range(12):
+        value = q[j] if math.isfinite(q[j]) else 0.5 * (q_lower[j] + q_upper[j])
+        out[j] = min(max(value, q_lower[j]), q_upper[j])
+    return out
 
 
 def driver_report(status: np.ndarray, message_counts: np.ndarray | None = None) -> dict:
@@ -115,12 +124,28 @@ def damping_command(q_hold: np.ndarray, qd: np.ndarray, limits: SafetyLimits, kd
     kd is reduced per joint where kd |qd| would exceed the effort limit, so the damping torque
     at the measured rates stays within the limits; non-finite rates count as zero.
     """
-    qd = np.where(np.isfinite(qd), qd, 0.0)
-    kd_vec = np.full(12, min(max(kd, 1e-3), limits.kd_max))
-    torque = kd_vec * np.abs(qd)
-    bound = limits.effort * _EFFORT_MARGIN
-    kd_vec = np.where(torque > bound, bound / np.maximum(np.abs(qd), 1e-300), kd_vec)
-    return pack_command(limits.clip_position(q_hold), 0.0, 0.0, kd_vec, 0.0)
+    return _damping_kernel(
+        np.asarray(q_hold, dtype=float),
+        np.asarray(qd, dtype=float),
+        limits.q_lower,
+        limits.q_upper,
+        limits.effort,
+        limits.kd_max,
+        float(kd),
+    )
+
+
+@kernel
+def _damping_kernel(q_hold, qd, q_lower, q_upper, effort, kd_max, kd):
+    """`damping_command` on plain arrays: the command (60,)."""
+    out = np.zeros(60)
+    out[0:12] = _clip_position_kernel(q_hold, q_lower, q_upper)
+    gain = min(max(kd, 1e-3), kd_max)
+    for j in range(12):
+        rate = qd[j] if math.isfinite(qd[j]) else 0.0
+        bound = effort[j] * _EFFORT_MARGIN
+        out[36 + j] = bound / max(abs(rate), 1e-300) if gain * abs(rate) > bound else gain
+    return out
 
 
 # Bits of `_bound_command_kernel`'s flags, named as in INTERVENTIONS.
@@ -250,54 +275,208 @@ def bound_command(
 _NO_PREVIOUS = np.zeros(12)
 
 
+def robot_status_size(num_status_channels: int) -> int:
+    """The size of Go1SafetyFilter's robot_status input for `num_status_channels` watched channels."""
+    return 24 + num_status_channels + 1
+
+
+def robot_status_vector(q: np.ndarray, qd: np.ndarray, silence: np.ndarray, remote_estop: float) -> np.ndarray:
+    """Go1SafetyFilter's robot_status input: [q (12) [rad], qd (12) [rad/s], silence (n) [s], remote E-stop]."""
+    return np.concatenate([np.asarray(q, float), np.asarray(qd, float), np.asarray(silence, float), [remote_estop]])
+
+
 def command_timeout(config: Go1SafetyConfig, elapsed: float) -> float:
     """The loop-silence limit [s] after `elapsed` [s] of the loop (longer while it warms up)."""
     return config.warmup_command_timeout if elapsed < config.warmup_duration else config.command_timeout
 
 
-def soft_start_blend(command: np.ndarray, q_start: np.ndarray, fraction: float) -> np.ndarray:
+@kernel
+def _soft_start_kernel(command, q_start, fraction):
     """The command with targets blended from q_start [rad]: fraction 0 holds q_start, 1 passes through.
 
     Velocity target and feed-forward torque are scaled by the fraction; gains are unchanged,
     so at fraction 0 the motors hold the measured pose with the controller's stiffness.
     """
-    q_des, qd_des, kp, kd, tau_ff = split_command(command)
-    return pack_command(q_start + fraction * (q_des - q_start), fraction * qd_des, kp, kd, fraction * tau_ff)
+    out = command.copy()
+    for j in range(12):
+        out[j] = q_start[j] + fraction * (command[j] - q_start[j])
+        out[12 + j] = fraction * command[12 + j]
+        out[48 + j] = fraction * command[48 + j]
+    return out
 
 
-def smooth_fraction(elapsed: float, duration: float) -> float:
-    """Quintic 0 -> 1 over `duration` [s] with zero slope at both ends (1 when duration <= 0)."""
+@kernel
+def _smooth_fraction_kernel(elapsed, duration):
+    """Quintic 0 -> 1 over `duration` [s] with zero slope at both ends (1 when duration <= 0): the
+    minimum-jerk blend s = 10 tau^3 - 15 tau^4 + 6 tau^5 of trajectory.min_jerk."""
     if duration <= 0.0:
         return 1.0
-    return min_jerk(elapsed / duration)[0]
+    tau = elapsed / duration
+    if tau <= 0.0:
+        return 0.0
+    if tau >= 1.0:
+        return 1.0
+    # Products, not **: compiled and interpreted then agree to the bit (numba's pow does not
+    # always round as the C library's).
+    return tau * tau * tau * (10.0 - 15.0 * tau + 6.0 * (tau * tau))
 
 
-# Discrete state layout of Go1SafetyFilter.
-_CMD = slice(0, COMMAND_SIZE)  # last published command
-_Q_START = slice(60, 72)  # measured pose at the first tick [rad]
-_T_START = 72  # context time of the first tick [s]
-_STARTED = 73  # 1 after the first tick
-_LATCH = 74  # 1 + index of the latching intervention, 0 when not latched
-_LAST_WALL = 75  # wall clock of the previous tick [s]
-_COUNTERS = slice(76, 76 + len(INTERVENTIONS))
-_STATE_SIZE = 76 + len(INTERVENTIONS)
+@kernel
+def _should_log(count):
+    """First occurrence, then every power of ten: counted always, logged without flooding at 500 Hz."""
+    if count < 1.0:
+        return False
+    exponent = math.log10(count)
+    return exponent == math.floor(exponent)
 
 
-def _should_log(count: float) -> bool:
-    # First occurrence, then every power of ten: counted always, logged without flooding at 500 Hz.
-    return count >= 1 and math.log10(count).is_integer()
+# The filter's discrete state: the published command (60, its own group: the `command` output
+# reads it directly), and its memory:
+_LATCH = 0  # 1 + index of the latching intervention, 0 when not latched
+_COUNTERS = 1  # len(INTERVENTIONS) counters, one per kind
+_Q_START = 1 + len(INTERVENTIONS)  # measured pose at the first tick (12) [rad]
+_T_START = _Q_START + 12  # context time of the first tick [s]
+_STARTED = _T_START + 1  # 1 after the first tick
+_LAST_WALL = _T_START + 2  # wall clock of the previous tick [s]
+_MEMORY_SIZE = _T_START + 3
+_STATUS_SIZE = 1 + len(INTERVENTIONS)  # the `status` output: [latch, counters], the memory's start
+
+# Intervention indices the compiled tick sets (numba reads module constants at compile time).
+_I = INTERVENTION_INDEX
+_LATCHING_INDICES = tuple(_I[name] for name in LATCHING)
+_BOUND_FLAG_INDICES = tuple(_I[name] for name in _BOUND_FLAGS)
+_NONFINITE_COMMAND, _NONFINITE_STATUS = _I["nonfinite_command"], _I["nonfinite_status"]
+_SOFT_START, _DAMPING = _I["soft_start"], _I["damping"]
+_STATUS_TIMEOUT, _CONTROLLER_SILENCE = _I["status_timeout"], _I["controller_silence"]
+_ESTOP_PORT, _ESTOP_REMOTE = _I["estop_port"], _I["estop_remote"]
+
+
+# The filter's settings as its compiled tick takes them (one array: each argument of a compiled
+# call costs a type check), by index.
+_KP_MAX, _KD_MAX, _MAX_TARGET_STEP, _DAMPING_KD = 0, 1, 2, 3
+_STATUS_TIMEOUT_S, _COMMAND_TIMEOUT_S, _WARMUP_COMMAND_TIMEOUT_S, _WARMUP_DURATION_S = 4, 5, 6, 7
+_SOFT_START_DURATION_S = 8
+
+
+def _settings_vector(config: Go1SafetyConfig, limits: SafetyLimits) -> np.ndarray:
+    settings = np.empty(9)
+    settings[_KP_MAX], settings[_KD_MAX] = limits.kp_max, limits.kd_max
+    settings[_MAX_TARGET_STEP], settings[_DAMPING_KD] = limits.max_target_step, config.damping_kd
+    settings[_STATUS_TIMEOUT_S], settings[_COMMAND_TIMEOUT_S] = config.status_timeout, config.command_timeout
+    settings[_WARMUP_COMMAND_TIMEOUT_S] = config.warmup_command_timeout
+    settings[_WARMUP_DURATION_S] = config.warmup_duration
+    settings[_SOFT_START_DURATION_S] = config.soft_start_duration
+    return settings
+
+
+@kernel
+def _filter_step_kernel(published, memory, command, robot_status, estop, now, t, bounds, settings):
+    """One tick of `Go1SafetyFilter` on its state, in place: (bits of the interventions to log,
+    index of the intervention that latched damping in this tick or -1).
+
+    published (60): the last published command, overwritten by this tick's; memory: the filter's
+    memory (layout above). Inputs: the controller's command (60), the filter's robot_status
+    ([q (12) [rad], qd (12) [rad/s], silence of each status channel [s], remote E-stop]), estop
+    (1; > 0.5 latches), the wall clock `now` [s] and the context time `t` [s]; `bounds` (4, 12):
+    SafetyLimits' q_lower, q_upper, qd_max and effort; `settings`: by the indices above.
+    """
+    q_lower, q_upper, qd_max, effort = bounds[0], bounds[1], bounds[2], bounds[3]
+    kd_max = settings[_KD_MAX]
+    q, qd = robot_status[0:12], robot_status[12:24]
+    num_channels = robot_status.shape[0] - 25
+    fired = 0
+    status_ok = True
+    for j in range(12):
+        if not (math.isfinite(q[j]) and math.isfinite(qd[j])):
+            status_ok = False
+    if memory[_STARTED] == 0.0:
+        q_start = _clip_position_kernel(q, q_lower, q_upper)
+        memory[_Q_START : _Q_START + 12] = q_start
+        memory[_T_START] = t
+        published[:] = 0.0
+        published[0:12] = q_start
+        memory[_STARTED] = 1.0
+    else:
+        # The loop-silence limit (longer while the loop warms up), as `command_timeout`.
+        warming_up = t - memory[_T_START] < settings[_WARMUP_DURATION_S]
+        limit = settings[_WARMUP_COMMAND_TIMEOUT_S] if warming_up else settings[_COMMAND_TIMEOUT_S]
+        if now - memory[_LAST_WALL] > limit:
+            fired |= 1 << _CONTROLLER_SILENCE
+    memory[_LAST_WALL] = now
+
+    # The receive thread's judgement, not `now - receipt`: a late tick does not make the robot
+    # look silent, and the robot's real silence trips within status_timeout + one look.
+    for i in range(num_channels):
+        if not robot_status[24 + i] <= settings[_STATUS_TIMEOUT_S]:  # NaN counts as silent
+            fired |= 1 << _STATUS_TIMEOUT
+    if estop[0] > 0.5:
+        fired |= 1 << _ESTOP_PORT
+    if robot_status[24 + num_channels] > 0.5:
+        fired |= 1 << _ESTOP_REMOTE
+    latched = -1
+    if memory[_LATCH] == 0.0:
+        for k in range(len(_LATCHING_INDICES)):
+            if fired >> _LATCHING_INDICES[k] & 1:
+                latched = _LATCHING_INDICES[k]
+                memory[_LATCH] = 1 + latched
+                break
+
+    q_des_previous = published[0:12].copy()
+    if not status_ok:
+        fired |= 1 << _NONFINITE_STATUS
+    command_ok = True
+    for i in range(60):
+        if not math.isfinite(command[i]):
+            command_ok = False
+    if not command_ok:
+        fired |= 1 << _NONFINITE_COMMAND
+    if memory[_LATCH] != 0.0 or not status_ok or not command_ok:
+        fired |= 1 << _DAMPING
+        safe = _damping_kernel(q_des_previous, qd, q_lower, q_upper, effort, kd_max, settings[_DAMPING_KD])
+    else:
+        elapsed = t - memory[_T_START]
+        if elapsed < settings[_SOFT_START_DURATION_S]:
+            fired |= 1 << _SOFT_START
+            fraction = _smooth_fraction_kernel(elapsed, settings[_SOFT_START_DURATION_S])
+            command = _soft_start_kernel(command, memory[_Q_START : _Q_START + 12], fraction)
+        safe, bits = _bound_command_kernel(
+            command,
+            q,
+            qd,
+            q_lower,
+            q_upper,
+            qd_max,
+            effort,
+            settings[_KP_MAX],
+            kd_max,
+            settings[_MAX_TARGET_STEP],
+            q_des_previous,
+            True,
+        )
+        for k in range(len(_BOUND_FLAG_INDICES)):
+            if bits >> k & 1:
+                fired |= 1 << _BOUND_FLAG_INDICES[k]
+    published[:] = safe
+    log = 0
+    for i in range(len(INTERVENTIONS)):
+        if fired >> i & 1:
+            memory[_COUNTERS + i] += 1.0
+            if i != _SOFT_START and i != _DAMPING and _should_log(memory[_COUNTERS + i]):
+                log |= 1 << i
+    return log, latched
 
 
 class Go1SafetyFilter(LeafSystem):
-    """command (60) + measured state + status receipt times + E-stops -> safe command (60).
+    """command (60) + the robot's status + E-stop -> safe command (60).
 
     Inputs:
       command (60): the controller's `go1.command`.
-      position_measured (12) [rad], velocity_measured (12) [rad/s]: from leg_control_data.
-      status_silence (n): how long each status channel has been silent [s], judged by the receive
-        thread's clock (Go1Link.silence); the watchdog trips on the longest.
+      robot_status (24 + n + 1): what the filter reads from the robot, in one vector (one port
+        evaluation a tick): [q (12) [rad], qd (12) [rad/s] (leg_control_data), silence (n): how
+        long each status channel has been silent [s], judged by the receive thread's clock
+        (Go1Link.silence; the watchdog trips on the longest), remote E-stop (1): > 0.5 latches
+        damping (the remote's button)].
       estop (1, optional): > 0.5 latches damping.
-      rc_estop (1, optional): > 0.5 latches damping (the remote's button).
     Outputs:
       command (60): the bounded command, from the state (what the sender publishes).
       status (1 + len(INTERVENTIONS)): [latched reason (0 none, else 1 + index in INTERVENTIONS),
@@ -317,88 +496,55 @@ class Go1SafetyFilter(LeafSystem):
         # The wall clock is a dependency (injectable for tests), not state.
         self._clock = clock
         self._command = self.DeclareVectorInputPort("command", COMMAND_SIZE)
-        self._q = self.DeclareVectorInputPort("position_measured", 12)
-        self._qd = self.DeclareVectorInputPort("velocity_measured", 12)
-        self._status_silence = self.DeclareVectorInputPort("status_silence", num_status_channels)
+        self._robot_status = self.DeclareVectorInputPort("robot_status", robot_status_size(num_status_channels))
         self._estop = self.DeclareVectorInputPort("estop", 1)
-        self._rc_estop = self.DeclareVectorInputPort("rc_estop", 1)
-        initial = np.zeros(_STATE_SIZE)
-        initial[_CMD] = damping_command(robot.STANDING_Q, np.zeros(12), self._limits, config.damping_kd)
-        self._state = self.DeclareDiscreteState(initial)
+        self._no_estop = np.zeros(1)
+        limits = self._limits
+        self._bounds = np.array([limits.q_lower, limits.q_upper, limits.qd_max, limits.effort])
+        self._settings = _settings_vector(config, limits)
+        initial = damping_command(robot.STANDING_Q, np.zeros(12), limits, config.damping_kd)
+        self._published = self.DeclareDiscreteState(initial)
+        self._memory = self.DeclareDiscreteState(_MEMORY_SIZE)
         # Compiled here (or loaded from numba's cache), not in the first control tick.
-        bound_command(initial[_CMD], robot.STANDING_Q, np.zeros(12), self._limits, robot.STANDING_Q)
+        bound_command(initial, robot.STANDING_Q, np.zeros(12), limits, robot.STANDING_Q)
+        robot_status = robot_status_vector(robot.STANDING_Q, np.zeros(12), np.zeros(num_status_channels), 0.0)
+        memory = np.zeros(_MEMORY_SIZE)
+        for command in (initial, np.full(COMMAND_SIZE, np.nan)):
+            _filter_step_kernel(
+                initial.copy(), memory, command, robot_status, self._no_estop, 0.0, 0.0, self._bounds, self._settings
+            )
         self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
-        self.DeclareVectorOutputPort("command", COMMAND_SIZE, self._calc_command, {self.xd_ticket()})
-        self.DeclareVectorOutputPort("status", 1 + len(INTERVENTIONS), self._calc_status, {self.xd_ticket()})
+        self.DeclareStateOutputPort("command", self._published)
+        self.DeclareVectorOutputPort("status", _STATUS_SIZE, self._calc_status, {self.xd_ticket()})
 
     @property
     def limits(self) -> SafetyLimits:
         return self._limits
 
-    def _flag(self, port, context) -> bool:
-        return port.HasValue(context) and bool(port.Eval(context)[0] > 0.5)
-
     def _update(self, context, discrete_state: DiscreteValues) -> None:
-        config, limits = self._config, self._limits
-        x = context.get_discrete_state(self._state).get_value().copy()
-        now = self._clock()
-        fired: set[str] = set()
-        q, qd = self._q.Eval(context), self._qd.Eval(context)
-        status_ok = bool(np.isfinite(q).all() and np.isfinite(qd).all())
-        if x[_STARTED] == 0.0:
-            x[_Q_START] = limits.clip_position(q)
-            x[_T_START] = context.get_time()
-            x[_CMD] = pack_command(x[_Q_START], 0.0, 0.0, 0.0, 0.0)
-            x[_STARTED] = 1.0
-        elif now - x[_LAST_WALL] > command_timeout(config, context.get_time() - x[_T_START]):
-            fired.add("controller_silence")
-        x[_LAST_WALL] = now
+        estop = self._estop
+        log, latched = _filter_step_kernel(
+            discrete_state.get_mutable_value(self._published),
+            discrete_state.get_mutable_value(self._memory),
+            self._command.Eval(context),
+            self._robot_status.Eval(context),
+            estop.Eval(context) if estop.HasValue(context) else self._no_estop,
+            self._clock(),
+            context.get_time(),
+            self._bounds,
+            self._settings,
+        )
+        if log or latched >= 0:
+            self._log_interventions(discrete_state.get_value(self._memory), log, latched, context.get_time())
 
-        # The receive thread's judgement, not `now - receipt`: a late tick does not make the robot
-        # look silent, and the robot's real silence trips within status_timeout + one look.
-        silence = self._status_silence.Eval(context)
-        if not float(silence.max()) <= config.status_timeout:  # NaN counts as silent
-            fired.add("status_timeout")
-        if self._flag(self._estop, context):
-            fired.add("estop_port")
-        if self._flag(self._rc_estop, context):
-            fired.add("estop_remote")
-        if x[_LATCH] == 0.0:
-            for name in LATCHING:
-                if name in fired:
-                    x[_LATCH] = 1 + INTERVENTION_INDEX[name]
-                    _log.error("Go1 driver: %s, damping latched", name)
-                    break
-
-        command = self._command.Eval(context)
-        q_des_previous = x[_CMD][0:12].copy()
-        if not status_ok:
-            fired.add("nonfinite_status")
-        if not np.isfinite(command).all():
-            fired.add("nonfinite_command")
-        if x[_LATCH] != 0.0 or not status_ok or "nonfinite_command" in fired:
-            fired.add("damping")
-            safe = damping_command(q_des_previous, qd, limits, config.damping_kd)
-        else:
-            elapsed = context.get_time() - x[_T_START]
-            if elapsed < config.soft_start_duration:
-                fired.add("soft_start")
-                command = soft_start_blend(command, x[_Q_START], smooth_fraction(elapsed, config.soft_start_duration))
-            safe, flags = bound_command(command, q, qd, limits, q_des_previous)
-            fired |= flags
-        x[_CMD] = safe
-        counters = x[_COUNTERS]
-        for name in fired:
-            i = INTERVENTION_INDEX[name]
-            counters[i] += 1
-            if name not in ("soft_start", "damping") and _should_log(counters[i]):
-                _log.warning("Go1 driver safety: %s (count %d) at t = %.3f s", name, counters[i], context.get_time())
-        x[_COUNTERS] = counters
-        discrete_state.set_value(self._state, x)
-
-    def _calc_command(self, context, output: BasicVector) -> None:
-        output.SetFromVector(context.get_discrete_state(self._state).get_value()[_CMD])
+    @staticmethod
+    def _log_interventions(memory: np.ndarray, log: int, latched: int, t: float) -> None:
+        if latched >= 0:
+            _log.error("Go1 driver: %s, damping latched", INTERVENTIONS[latched])
+        for i, name in enumerate(INTERVENTIONS):
+            if log >> i & 1:
+                count = memory[_COUNTERS + i]
+                _log.warning("Go1 driver safety: %s (count %d) at t = %.3f s", name, count, t)
 
     def _calc_status(self, context, output: BasicVector) -> None:
-        x = context.get_discrete_state(self._state).get_value()
-        output.SetFromVector(np.concatenate([[x[_LATCH]], x[_COUNTERS]]))
+        output.SetFromVector(context.get_discrete_state(self._memory).get_value()[:_STATUS_SIZE])

@@ -1,24 +1,34 @@
-"""Receivers of Go1 LCM messages: latch the newest valid message of a channel into the Context.
+"""Receivers of Go1 LCM messages: latch the newest valid message of each channel into the Context.
 
-`Go1LcmReceiver` reads one `Inbox` (pedi_drake.go1_driver.link): on the driver the link's receive
-thread fills it, checking, decoding and time-stamping each message as it arrives; on the
-simulator bridge a DrakeLcm subscription does. A periodic update at the control rate copies the
-inbox into the discrete state, so outputs are functions of the Context only. Messages of the
-wrong size or fingerprint, that fail to decode or carry NaN, are dropped and counted by reason:
-a foreign publisher on the channel can never crash the driver.
+`Go1LcmReceiver` reads one or more `Inbox`es (pedi_drake.go1_driver.link): on the driver the
+link's receive thread fills them, checking, decoding and time-stamping each message as it
+arrives; on the simulator bridge a DrakeLcm subscription does. A periodic update at the control
+rate copies every inbox into one discrete state vector, so outputs are functions of the Context
+only. Messages of the wrong size or fingerprint, that fail to decode or carry NaN, are dropped and
+counted by reason: a foreign publisher on the channel can never crash the driver.
 
-Factories build the three receivers the driver uses (Unitree motor order throughout):
+`MakeLcmReceiver` puts a Selector (Drake's, compiled) behind the receiver that splits the latched
+vector into named outputs (and bundles of them): a tick runs one Python call for all the
+channels, and none when the outputs are evaluated.
+
+`MakeStatusReceiver` builds the driver's receiver of its three status channels (Unitree motor
+order throughout):
   leg_control_data      -> position_measured [rad], velocity_measured [rad/s], torque_estimated [N m]
   state_estimator_data  -> imu (quat w,x,y,z; gyro [rad/s]; accelerometer [m/s^2]), foot_contact (raw)
   rc_command            -> estop (1 while a configured switch of the remote is on)
+with silence (2) of the first two, message_counts (6) of all three, and robot_status, the bundle
+Go1SafetyFilter reads.
 """
 
+import dataclasses
 import logging
 import math
 import time
+from collections.abc import Sequence
 
 import numpy as np
-from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
+from pydrake.systems.framework import Diagram, DiagramBuilder, DiscreteValues, LeafSystem
+from pydrake.systems.primitives import Selector, SelectorParams
 
 from pedi_drake.exceptions import LcmTimeout
 from pedi_drake.go1_driver.link import Go1Link, Inbox
@@ -26,98 +36,178 @@ from pedi_drake.go1_driver.link import Go1Link, Inbox
 _log = logging.getLogger(__name__)
 
 
-class Go1LcmReceiver(LeafSystem):
-    """One channel's inbox -> vector outputs, latched at the control rate.
+@dataclasses.dataclass(frozen=True)
+class ReceiverChannel:
+    """One channel a Go1LcmReceiver latches."""
 
-    Discrete state: [values (n), messages received, messages dropped, silence [s]].
-    Outputs: one vector port per entry of `outputs` (name -> slice of the values), plus
-      silence (1): how long the channel had been silent when last looked at [s] (inf before any
-        message); with a `link`, judged by its receive thread's clock (Go1Link.silence), so a late
-        tick of the loop does not make the robot look silent;
-      message_counts (2): [received, dropped].
-    With `wait_timeout` > 0 (needs a `link`), initialisation blocks until a first message arrives
-    and raises LcmTimeout naming the channel and URL when none does.
+    inbox: Inbox
+    # The channel's values before its first message (their size is the decoded vector's).
+    initial_values: np.ndarray
+    # Output name -> part of the channel's values.
+    outputs: dict[str, slice]
+    # Its silence is in the `silence` output: a watchdog judges it (an optional channel's is not).
+    watched: bool = True
+    # Initialisation waits (up to the receiver's wait_timeout) for its first message.
+    wait: bool = False
+
+
+class Go1LcmReceiver(LeafSystem):
+    """Inboxes of `channels` -> one latched vector, at the control rate.
+
+    Discrete state, the output `latched`: [values of every channel (in order), silence of every
+    channel [s], received and dropped messages of every channel]. A channel's silence is how long
+    it had been silent when last looked at (inf before any message); with a `link`, judged by its
+    receive thread's clock (Go1Link.silence), so a late tick of the loop does not make the robot
+    look silent. `output_selections()` names the parts (see MakeLcmReceiver).
+    With `wait_timeout` > 0 (needs a `link`), initialisation blocks until a first message of every
+    channel marked `wait` arrives and raises LcmTimeout naming the channel and URL when none does.
     """
 
     def __init__(
         self,
-        inbox: Inbox,
-        initial_values: np.ndarray,
-        outputs: dict[str, slice],
+        channels: Sequence[ReceiverChannel],
         *,
         link: Go1Link | None = None,
         period: float,
         wait_timeout: float = 0.0,
     ):
         super().__init__()
-        self._inbox = inbox
+        self._channels = tuple(channels)
         self._link = link
-        self._n = len(initial_values)
         self._wait_timeout = wait_timeout
-        self._state = self.DeclareDiscreteState(np.concatenate([initial_values, [0.0, 0.0, math.inf]]))
+        sizes = [len(channel.initial_values) for channel in self._channels]
+        starts = np.cumsum([0, *sizes]).tolist()
+        num_values, k = starts[-1], len(self._channels)
+        # Per channel: (inbox, its values' start and end, its silence's index, its counts' index).
+        self._latch_plan = tuple(
+            (channel.inbox, starts[i], starts[i + 1], num_values + i, num_values + k + 2 * i)
+            for i, channel in enumerate(self._channels)
+        )
+        self._selections: dict[str, list[int]] = {}
+        for i, channel in enumerate(self._channels):
+            for name, part in channel.outputs.items():
+                if name in self._selections or name in ("silence", "message_counts"):
+                    raise ValueError(f"Go1LcmReceiver: two outputs named {name!r}")
+                self._selections[name] = list(range(starts[i], starts[i + 1])[part])
+        self._selections["silence"] = [num_values + i for i, c in enumerate(self._channels) if c.watched]
+        self._selections["message_counts"] = list(range(num_values + k, num_values + 3 * k))
+        initial = np.concatenate([*(c.initial_values for c in self._channels), np.full(k, math.inf), np.zeros(2 * k)])
+        self._state = self.DeclareDiscreteState(initial)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._latch)
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
-        for name, part in outputs.items():
-            size = len(range(self._n)[part])
-            self.DeclareVectorOutputPort(name, size, self._make_calc(part), {self.xd_ticket()})
-        self.DeclareVectorOutputPort("silence", 1, self._make_calc(slice(self._n + 2, self._n + 3)))
-        self.DeclareVectorOutputPort("message_counts", 2, self._make_calc(slice(self._n, self._n + 2)))
+        self.latched = self.DeclareStateOutputPort("latched", self._state)
 
     @property
-    def channel(self) -> str:
-        return self._inbox.channel
+    def channels(self) -> tuple[str, ...]:
+        return tuple(channel.inbox.channel for channel in self._channels)
 
-    def _make_calc(self, part: slice):
-        def calc(context, output: BasicVector) -> None:
-            output.SetFromVector(context.get_discrete_state(self._state).get_value()[part])
-
-        return calc
+    def output_selections(self) -> dict[str, list[int]]:
+        """Output name -> indices into `latched`: every channel's named outputs, `silence` of the
+        watched channels [s], `message_counts` ([received, dropped] of every channel)."""
+        return {name: list(indices) for name, indices in self._selections.items()}
 
     def _latch(self, context, discrete_state: DiscreteValues) -> None:
-        if self._link is not None:
-            self._link.poll()
-        values, received, dropped, receipt_time = self._inbox.snapshot()
-        if self._link is not None:
-            silence = self._link.silence(self._inbox)
-        else:
-            silence = time.monotonic() - receipt_time
-        x = context.get_discrete_state(self._state).get_value().copy()
-        if values is not None:
-            x[: self._n] = values
-        x[self._n :] = [received, dropped, silence]
-        discrete_state.set_value(self._state, x)
+        link = self._link
+        if link is not None:
+            link.poll()
+        # Holds the current state on entry: a channel without a message keeps its values.
+        x = discrete_state.get_mutable_value(self._state)
+        for inbox, start, end, silence, counts in self._latch_plan:
+            values, received, dropped, receipt_time = inbox.snapshot()
+            if values is not None:
+                x[start:end] = values
+            x[silence] = link.silence(inbox) if link is not None else time.monotonic() - receipt_time
+            x[counts] = received
+            x[counts + 1] = dropped
 
     def _initialize(self, context, discrete_state: DiscreteValues) -> None:
         if self._wait_timeout > 0.0 and self._link is not None:
-            if not self._link.wait_for_first(self._inbox, self._wait_timeout):
-                raise LcmTimeout(
-                    f"no valid message on LCM channel {self.channel!r} at {self._link.url} "
-                    f"within {self._wait_timeout:g} s: is the Go1 bridge (or "
-                    "`python -m pedi_drake.apps.sim_bridge`) running on that URL?"
-                )
+            for channel in self._channels:
+                if channel.wait and not self._link.wait_for_first(channel.inbox, self._wait_timeout):
+                    raise LcmTimeout(
+                        f"no valid message on LCM channel {channel.inbox.channel!r} at {self._link.url} "
+                        f"within {self._wait_timeout:g} s: is the Go1 bridge (or "
+                        "`python -m pedi_drake.apps.sim_bridge`) running on that URL?"
+                    )
         self._latch(context, discrete_state)
 
 
-def MakeLegControlReceiver(link: Go1Link, **kwargs) -> Go1LcmReceiver:
-    """leg_control_data -> position_measured, velocity_measured, torque_estimated (12 each)."""
-    return Go1LcmReceiver(
-        link.leg_control,
-        np.zeros(36),
-        {"position_measured": slice(0, 12), "velocity_measured": slice(12, 24), "torque_estimated": slice(24, 36)},
-        link=link,
-        **kwargs,
+def MakeLcmReceiver(
+    channels: Sequence[ReceiverChannel],
+    *,
+    link: Go1Link | None = None,
+    period: float,
+    wait_timeout: float = 0.0,
+    bundles: dict[str, Sequence[str]] | None = None,
+) -> Diagram:
+    """A Go1LcmReceiver of `channels` (see it for the arguments) whose outputs are its named parts:
+    every channel's `outputs`, silence (the watched channels' [s]) and message_counts ([received,
+    dropped] per channel), split off the latched vector by a Selector; and each of `bundles`
+    (output name -> names of those parts, concatenated in that order)."""
+    builder = DiagramBuilder()
+    receiver = builder.AddNamedSystem(
+        "latch", Go1LcmReceiver(channels, link=link, period=period, wait_timeout=wait_timeout)
     )
+    params = SelectorParams()
+    latched = SelectorParams.InputPortParams()
+    latched.name, latched.size = "latched", receiver.latched.size()
+    params.inputs = [latched]
+    selections = receiver.output_selections()
+    for name, parts in (bundles or {}).items():
+        if name in selections:
+            raise ValueError(f"MakeLcmReceiver: the bundle {name!r} has the name of an output")
+        selections[name] = [index for part in parts for index in selections[part]]
+    outputs = []
+    for name, indices in selections.items():
+        output = SelectorParams.OutputPortParams()
+        output.name = name
+        selections = []
+        for index in indices:
+            selection = SelectorParams.OutputSelection()
+            selection.input_port_index, selection.input_offset = 0, index
+            selections.append(selection)
+        output.selections = selections
+        outputs.append(output)
+    params.outputs = outputs
+    selector = builder.AddNamedSystem("outputs", Selector(params))
+    builder.Connect(receiver.latched, selector.get_input_port(0))
+    for i in range(selector.num_output_ports()):
+        port = selector.get_output_port(i)
+        builder.ExportOutput(port, port.get_name())
+    diagram = builder.Build()
+    diagram.set_name("lcm_receiver")
+    return diagram
 
 
-def MakeStateEstimatorReceiver(link: Go1Link, **kwargs) -> Go1LcmReceiver:
-    """state_estimator_data -> imu (10: quat w,x,y,z, gyro, accelerometer), foot_contact (4)."""
-    initial = np.zeros(14)
-    initial[0] = 1.0  # identity orientation until the first message
-    return Go1LcmReceiver(
-        link.state_estimator, initial, {"imu": slice(0, 10), "foot_contact": slice(10, 14)}, link=link, **kwargs
+def MakeStatusReceiver(link: Go1Link, *, period: float, wait_timeout: float = 0.0) -> Diagram:
+    """leg_control_data, state_estimator_data and rc_command of `link` -> position_measured,
+    velocity_measured, torque_estimated (12 each), imu (10: quat w,x,y,z, gyro, accelerometer),
+    foot_contact (4), estop (1), silence (2: leg_control_data, state_estimator_data [s]),
+    message_counts (6, in the order of constants.STATUS_CHANNELS) and robot_status (27:
+    position_measured, velocity_measured, silence, estop: Go1SafetyFilter's input).
+
+    Initialisation waits up to `wait_timeout` [s] for the first leg_control_data and
+    state_estimator_data; the remote is optional (its silence trips nothing).
+    """
+    state_estimator_initial = np.zeros(14)
+    state_estimator_initial[0] = 1.0  # identity orientation until the first message
+    channels = (
+        ReceiverChannel(
+            link.leg_control,
+            np.zeros(36),
+            {"position_measured": slice(0, 12), "velocity_measured": slice(12, 24), "torque_estimated": slice(24, 36)},
+            wait=True,
+        ),
+        ReceiverChannel(
+            link.state_estimator,
+            state_estimator_initial,
+            {"imu": slice(0, 10), "foot_contact": slice(10, 14)},
+            wait=True,
+        ),
+        # 1 while any of the link's E-stop switch fields is on.
+        ReceiverChannel(link.rc_command, np.zeros(1), {"estop": slice(0, 1)}, watched=False),
     )
-
-
-def MakeRcCommandReceiver(link: Go1Link, **kwargs) -> Go1LcmReceiver:
-    """rc_command -> estop (1): 1 while any of the link's E-stop switch fields is on."""
-    return Go1LcmReceiver(link.rc_command, np.zeros(1), {"estop": slice(0, 1)}, link=link, **kwargs)
+    robot_status = ("position_measured", "velocity_measured", "silence", "estop")
+    return MakeLcmReceiver(
+        channels, link=link, period=period, wait_timeout=wait_timeout, bundles={"robot_status": robot_status}
+    )
