@@ -19,11 +19,7 @@ Without numba installed the kernels run as plain Python too. Systems that call k
 them in their constructor (`warm_up`), never inside a control tick.
 
 A kernel may call kernels (numba compiles them into it) and reads module constants as they were
-when it was compiled. numba's cache notices a change of the kernel's own file only, so a kernel
-takes what another file defines (model constants, geometry) as arguments, and after an edit of a
-kernel that a kernel of another file calls (leg_odometry's, called by the estimator's) the cache
-must be cleared (`find pedi_drake -name "*.nb[ci]" -delete`): the tests that compare a kernel
-with its `.py_func` notice a stale one, as `.py_func` calls the fresh callee.
+when it was compiled; the cache folder's hash covers both.
 """
 
 import hashlib
