@@ -53,6 +53,7 @@ def shadow_run(monkeypatch, mission: str, duration: float, state_tolerance: floa
         if not hasattr(self, "_table"):
             self._compiled_records()
         scratch = self.AllocateDiscreteVariables()
+        scratch.SetFrom(context.get_discrete_state())  # as the framework hands it to an update
         self._update_compiled(context, scratch)
         expected = discrete_state.get_vector(self.command_state).value()
         actual = scratch.get_vector(self.command_state).value()
@@ -136,3 +137,22 @@ def test_bad_input_holds_the_last_command_and_damps(bad):
 def test_the_compiled_tick_releases_python():
     # The driver's receive thread must run while a tick computes: the kernel holds no GIL.
     assert whole_body_tick.whole_body_tick.targetoptions.get("nogil") is True
+
+
+@pytest.mark.skipif(not jit.ENABLED, reason="PEDI_DRAKE_JIT=0")
+def test_no_tick_compiles_code(monkeypatch):
+    # The constructor compiles the tick for the argument types of a connected diagram's ticks: a
+    # compilation inside a tick would stall it for seconds (the driver's guard would damp).
+    scenario = load_scenario()
+    scenario.mission = "hit_target_front"
+    scenario.simulation_duration = 0.1
+    signatures = []
+    constructor = WholeBodyController.__init__
+
+    def construct(self, *args, **kwargs):
+        constructor(self, *args, **kwargs)
+        signatures.append(list(whole_body_tick.whole_body_tick.signatures))
+
+    monkeypatch.setattr(WholeBodyController, "__init__", construct)
+    simulate(scenario=scenario, name="signatures", quiet=True, replay=False)
+    assert signatures and list(whole_body_tick.whole_body_tick.signatures) == signatures[0]

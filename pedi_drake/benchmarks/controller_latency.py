@@ -1,7 +1,7 @@
 """Latency of the controller side of a hardware run, against a replay of recorded status messages.
 
     python -m pedi_drake.benchmarks.controller_latency [--mission hit_target_front] [--period 0.002]
-        [--qp-backend daqp] [--out benchmarks/results/controller_latency.json]
+        [--qp-backend compiled|daqp|dense_qp] [--out benchmarks/results/controller_latency.json]
 
 1. Records: the mission in simulation (seed 0); the status the robot would have sent at every
    tick (q, qd, tau_est, IMU, foot sensors) is read from the run's logs.
@@ -70,8 +70,9 @@ STAGES = (
 )
 
 
-def _scenario(mission: str, period: float, lcm_url: str = "", qp_backend: str = "daqp"):
-    periods = f"whole_body: {{period: {period}, qp_backend: {qp_backend}}}, kalman: {{period: {period}}}"
+def _scenario(mission: str, period: float, lcm_url: str = "", qp_backend: str | None = None):
+    backend = f", qp_backend: {qp_backend}" if qp_backend else ""
+    periods = f"whole_body: {{period: {period}{backend}}}, kalman: {{period: {period}}}"
     text = f"{{{periods}, go1_driver: {{safety: {{period: {period}}}}}}}"
     scenario = load_scenario(scenario_text=text)
     scenario.mission, scenario.controller = mission, "whole_body"
@@ -121,7 +122,7 @@ class Replay:
     """The hardware diagram on an in-process bus, fed the recorded status tick by tick
     (`qp_backend`: the whole-body controller's level QP solver)."""
 
-    def __init__(self, mission: str, period: float, samples: np.ndarray, qp_backend: str = "daqp"):
+    def __init__(self, mission: str, period: float, samples: np.ndarray, qp_backend: str | None = None):
         self.period, self.samples = period, samples
         self.scenario = _scenario(mission, period, "memq://", qp_backend)
         self.built = MakePedipulationDiagram(self.scenario, hardware=True)
@@ -293,7 +294,11 @@ def main() -> None:
     parser.add_argument("--out", default="benchmarks/results/controller_latency.json")
     parser.add_argument("--record-reference", type=Path, help="write the reference ticks here and stop")
     parser.add_argument("--reference-ticks", type=int, default=4000)
-    parser.add_argument("--qp-backend", default="daqp", help="the replayed controller's level QP solver")
+    parser.add_argument(
+        "--qp-backend",
+        default=None,
+        help="the whole-body controller's tick: compiled (the default) or the reference with daqp or dense_qp",
+    )
     args = parser.parse_args()
     if args.record_reference:
         record_reference(args.mission, args.period, args.reference_ticks, args.record_reference)
@@ -325,7 +330,7 @@ def main() -> None:
     load_end = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
     print(
         f"controller side of {args.mission} at {1 / args.period:.0f} Hz, {ticks} replayed ticks, "
-        f"level QPs by {args.qp_backend}"
+        f"whole-body tick: {args.qp_backend or 'default'}"
     )
     print(f"load average (1, 5, 15 min) at the start {load_start}, at the end {load_end}")
     print(f"bare plant (station_fixed_cmd): {baseline_ms:.3f} ms per {period_ms:.1f} ms step (RTF {baseline_rtf:.2f})")

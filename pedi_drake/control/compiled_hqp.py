@@ -172,13 +172,15 @@ _QP_MAX_ITERATIONS = _QP_DEFAULTS.max_iterations
 
 
 @kernel
-def _solve_level_qp(H, f, C, upper, eps_prox, y) -> int:
-    """min 0.5 y'Hy + f'y s.t. C y <= upper into y (hqp._solve_dense_qp with dense_qp); a status."""
+def _solve_level_qp(H, f, C, upper, eps_prox, y, workspace) -> int:
+    """min 0.5 y'Hy + f'y s.t. C y <= upper into y (hqp._solve_dense_qp with dense_qp); a status.
+    `workspace`: dense_qp's scratch arrays (matrices, transposed, vectors, integers) for at least
+    this size (`new_workspace`)."""
     n, m = f.shape[0], upper.shape[0]
     if m == 0:
         y[:] = np.linalg.lstsq(H, -f, rcond=np.finfo(np.float64).eps * n)[0]
         return STATUS_OK
-    matrices, transposed, vectors, integers = dense_qp.workspace_arrays(n, m)
+    matrices, transposed, vectors, integers = workspace
     status, _, _ = dense_qp.solve_dense_qp_kernel(
         H,
         f,
@@ -224,9 +226,10 @@ def solve_strict(
     eps_prox,
     x,
     residuals,
+    workspace,
 ) -> int:
     """Solves the levels in strict priority order (hqp.solve_hqp) into x (n,) and the levels'
-    equality residuals (L,); returns a status."""
+    equality residuals (L,); returns a status. `workspace`: `new_workspace` for the table's sizes."""
     num_levels = len(eq_start) - 1
     for i in range(n):
         x[i] = 0.0
@@ -306,7 +309,7 @@ def solve_strict(
                     C[mh + i, :nz] = GsZ[i]
                     C[mh + i, nz + i] = -1.0
                 y = np.empty(size)
-                status = _solve_level_qp(H, f, C, upper, eps_prox, y)
+                status = _solve_level_qp(H, f, C, upper, eps_prox, y, workspace)
                 if status != STATUS_OK:
                     return status
                 z[:] = y[:nz]
@@ -349,9 +352,11 @@ def solve_weighted(
     eps_prox,
     x,
     residuals,
+    workspace,
 ) -> int:
     """One QP with level k's equalities and soft rows weighted by level_weights[k], hard rows kept
-    hard (hqp.solve_weighted), into x (n,) and the residuals (L,); returns a status."""
+    hard (hqp.solve_weighted), into x (n,) and the residuals (L,); returns a status. `workspace`:
+    `new_workspace` for the table's sizes."""
     num_levels = len(eq_start) - 1
     mh = hard_G.shape[0]
     ms = soft_G.shape[0]
@@ -380,7 +385,7 @@ def solve_weighted(
         C[mh + i, n + i] = -1.0
         upper[mh + i] = soft_h[i]
     y = np.empty(size)
-    status = _solve_level_qp(H, f, C, upper, eps_prox, y)
+    status = _solve_level_qp(H, f, C, upper, eps_prox, y, workspace)
     if status != STATUS_OK:
         return status
     x[:] = y[:n]
@@ -389,6 +394,13 @@ def solve_weighted(
         r = eq_A[e0:e1] @ x - eq_b[e0:e1]
         residuals[level] = math.sqrt(r @ r)
     return STATUS_OK
+
+
+def new_workspace(n: int, max_hard: int, max_soft: int) -> tuple:
+    """dense_qp's scratch arrays for every level QP of a table with `n` variables, at most
+    `max_hard` hard and `max_soft` soft rows (a level's QP has n + soft variables and hard + soft
+    rows at most)."""
+    return dense_qp.workspace_arrays(n + max_soft, max_hard + max_soft)
 
 
 def solve_table_strict(table: RowTable, settings: HqpSettings | None = None) -> tuple[int, np.ndarray, np.ndarray]:
@@ -412,6 +424,7 @@ def solve_table_strict(table: RowTable, settings: HqpSettings | None = None) -> 
         settings.proximal_weight,
         x,
         residuals,
+        new_workspace(table.n, len(table.hard_h), len(table.soft_h)),
     )
     return status, x, residuals
 
@@ -439,5 +452,6 @@ def solve_table_weighted(
         settings.proximal_weight,
         x,
         residuals,
+        new_workspace(table.n, len(table.hard_h), len(table.soft_h)),
     )
     return status, x, residuals

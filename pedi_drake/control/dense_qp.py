@@ -150,7 +150,7 @@ _M_FACTOR = 0  # L, the Cholesky factor of H + eps I (lower)
 _M_J = 1  # Jt = J' = Q'L^-1: J by rows, so that its column operations run along contiguous memory
 _M_R = 2  # R (upper, q x q)
 _M_REDUCED = 3  # reduced Hessian of the exact step and its pivoted factor
-_NUM_MATRICES = 4
+NUM_MATRICES = 4
 # Rows of the vector workspace (each max(n_max, m_max) long).
 _V_D = 0  # d = J'c_p
 _V_Z = 1  # primal direction
@@ -166,11 +166,11 @@ _V_LAMBDA_EXACT = 10  # its multipliers
 _V_VALUES = 11  # C y - u (m)
 _V_VALUES_EXACT = 12  # C y* - u (m)
 _V_RAY = 13  # a direction of zero curvature and descent on the face (n)
-_NUM_VECTORS = 14
+NUM_VECTORS = 14
 # Rows of the integer workspace.
 _I_IS_ACTIVE = 0  # 1 for rows in the active set, _IMPLIED for rows left out as implied by it (m)
 _I_PERMUTATION = 1  # pivot order of the reduced Hessian (n)
-_NUM_INTEGER_ROWS = 2
+NUM_INTEGER_ROWS = 2
 _IMPLIED = 2
 
 
@@ -230,10 +230,10 @@ def workspace_arrays(n_max: int, m_max: int):
     n <= n_max variables and m <= m_max rows (callable from compiled code)."""
     length = max(n_max, m_max, 1)
     return (
-        np.zeros((_NUM_MATRICES, n_max, n_max)),
+        np.zeros((NUM_MATRICES, n_max, n_max)),
         np.zeros((n_max, m_max)),
-        np.zeros((_NUM_VECTORS, length)),
-        np.zeros((_NUM_INTEGER_ROWS, length), dtype=np.int64),
+        np.zeros((NUM_VECTORS, length)),
+        np.zeros((NUM_INTEGER_ROWS, length), dtype=np.int64),
     )
 
 
@@ -418,14 +418,14 @@ def _solve(
         or y.shape[0] < n
         or multipliers.shape[0] < m
         or active.shape[0] < n
-        or matrices.shape[0] < _NUM_MATRICES
+        or matrices.shape[0] < NUM_MATRICES
         or matrices.shape[1] < n
         or matrices.shape[2] < n
         or transposed.shape[0] < n
         or transposed.shape[1] < m
-        or vectors.shape[0] < _NUM_VECTORS
+        or vectors.shape[0] < NUM_VECTORS
         or vectors.shape[1] < max(n, m)
-        or integers.shape[0] < _NUM_INTEGER_ROWS
+        or integers.shape[0] < NUM_INTEGER_ROWS
         or integers.shape[1] < max(n, m)
     ):
         return NUMERICAL_FAILURE, 0, 0

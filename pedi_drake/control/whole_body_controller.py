@@ -49,10 +49,6 @@ STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0
 # Solved with sliding contacts' tangential no-motion below the force limits (see StackBuilder.levels).
 STATUS_CONTACTS_RELAXED = 3.0
 MAX_LEVELS = 5
-_NO_LEG_REFERENCE = np.zeros(references.LEG_REFERENCE_SIZE)
-_NO_LEG_REFERENCE.flags.writeable = False
-_DEFAULT_POLYGON = np.zeros(references.SAFETY_POLYGON_SIZE)
-_DEFAULT_POLYGON.flags.writeable = False
 
 
 def diagnostics_layout(num_contacts: int) -> dict[str, slice]:
@@ -152,6 +148,20 @@ class WholeBodyController(LeafSystem):
         self.DeclareForcedDiscreteUpdateEvent(self._update)
         self.command_port = self.DeclareStateOutputPort("command", self.command_state)
         self.diagnostics_port = self.DeclareStateOutputPort("diagnostics", self.diagnostics_state)
+        if self.compiled:
+            self._warm_up()
+
+    def _warm_up(self) -> None:
+        """Compiles (or loads from numba's cache) the compiled tick for the argument types of a
+        real tick, by running one on a scratch context: never inside a control tick."""
+        context = self.CreateDefaultContext()
+        standing = np.array(
+            [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, robot.trunk_height_for(robot.STANDING_Q[1], robot.STANDING_Q[2])] + [0.0] * 6
+        )
+        self.base_state_port.FixValue(context, standing)
+        self.position_port.FixValue(context, robot.STANDING_Q)
+        self.velocity_port.FixValue(context, np.zeros(12))
+        self._update_compiled(context, self.AllocateDiscreteVariables())
 
     def _compiled_records(self) -> None:
         """The compiled tick's constant records and its workspaces (a snapshot, a row table)."""
@@ -175,11 +185,11 @@ class WholeBodyController(LeafSystem):
             else np.zeros(references.BODY_REFERENCE_SIZE)
         )
         contact_set = self._optional(self.contact_set_port, context, self.default_contact_set)
-        leg_x = self._optional(self.leg_reference_port, context, _NO_LEG_REFERENCE)
-        polygon_x = self._optional(self.safety_polygon_port, context, _DEFAULT_POLYGON)
+        leg_x = self._optional(self.leg_reference_port, context, np.zeros(references.LEG_REFERENCE_SIZE))
+        polygon_x = self._optional(self.safety_polygon_port, context, np.zeros(references.SAFETY_POLYGON_SIZE))
         mu_x = self._optional(self.friction_port, context, np.array([self.config.friction]))
-        states = [context.get_discrete_state(index).value() for index in self._state_indices]
-        outputs = [discrete_state.get_mutable_vector(index).get_mutable_value() for index in self._state_indices]
+        # The framework hands the update the current state: the tick updates it in place.
+        state = [discrete_state.get_mutable_vector(index).get_mutable_value() for index in self._state_indices]
         solve_start = time.perf_counter()
         whole_body_tick.whole_body_tick(
             self._tick_params,
@@ -195,11 +205,10 @@ class WholeBodyController(LeafSystem):
             leg_x,
             polygon_x,
             mu_x,
-            *states,
             self._table,
-            *outputs,
+            *state,
         )
-        diag = outputs[-1]
+        diag = state[-1]
         now = time.perf_counter()
         diag[self.diag["solve_time"]] = now - solve_start
         diag[self.diag["tick_time"]] = now - start

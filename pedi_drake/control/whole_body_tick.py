@@ -177,6 +177,7 @@ def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
             tp.proximal_weight,
             x,
             residuals[:num_levels],
+            (t.qp_matrices, t.qp_transposed, t.qp_vectors, t.qp_integers),
         )
     else:
         weights = np.empty(num_levels)
@@ -209,6 +210,7 @@ def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
             tp.proximal_weight,
             x,
             residuals[:num_levels],
+            (t.qp_matrices, t.qp_transposed, t.qp_vectors, t.qp_integers),
         )
     if status == compiled_hqp.STATUS_OK and not _all_finite(x):
         status = compiled_hqp.STATUS_INFEASIBLE
@@ -230,11 +232,6 @@ def whole_body_tick(
     leg_x: np.ndarray,
     polygon_x: np.ndarray,
     mu_x: np.ndarray,
-    last_command: np.ndarray,
-    last_reference: np.ndarray,
-    last_ramp: np.ndarray,
-    last_hold: np.ndarray,
-    last_diag: np.ndarray,
     table_record: np.ndarray,
     command: np.ndarray,
     reference: np.ndarray,
@@ -243,12 +240,15 @@ def whole_body_tick(
     diag: np.ndarray,
 ) -> float:
     """One controller tick (WholeBodyController._update) at the estimate `base` and the measured
-    joints `q`, `qd`: writes the next command, reference, ramp, hold and diagnostics (all but the
-    two timing entries) and returns the tick's status. The records are one-element arrays:
+    joints `q`, `qd`: updates the discrete state in place (command, reference, ramp, hold and
+    diagnostics hold the current state on entry and the next on return; the diagnostics' two
+    timing entries are the caller's) and returns the tick's status. The records are one-element arrays:
     TICK_PARAMS_DTYPE, compiled_stack.STACK_PARAMS_DTYPE, go1_dynamics.model_record, and the
     workspaces `snapshot` (go1_dynamics.output_dtype: the dynamics terms this tick used) and
     `table_record` (compiled_stack.table_dtype: the levels' rows)."""
     tp, p, s, table = tick_params[0], stack_params[0], snapshot[0], table_record[0]
+    last_command, last_reference = command.copy(), reference.copy()
+    last_ramp, last_hold, last_diag = ramp.copy(), hold.copy(), diag.copy()
     nv, nc = p.nv, p.nc
     d = tp.diagnostics
     reference[:] = last_reference
