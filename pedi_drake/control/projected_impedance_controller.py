@@ -42,7 +42,7 @@ from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
 
 from pedi_drake import robot
 from pedi_drake.control import projected_dynamics as pd
-from pedi_drake.control import references, tasks
+from pedi_drake.control import projected_impedance_tick, references, tasks
 from pedi_drake.control.config import ProjectedImpedanceConfig
 from pedi_drake.control.robot_model import ControllerModel, RobotSnapshot
 from pedi_drake.control.whole_body_controller import (
@@ -132,6 +132,14 @@ class ProjectedImpedanceController(LeafSystem):
         self.diag = projected_diagnostics_layout(nc)
         self.command_gains = np.concatenate([np.full(12, config.joint_kp), np.full(12, config.joint_kd)])
         self.default_contact_set = references.contact_set_vector(num_prongs=nc - 4)
+        # The compiled tick's stand-ins for unconnected inputs. Writeable like a port's value: numba
+        # types a read-only array apart, and a tick must not meet a type it was not compiled for.
+        self._default_inputs = {
+            "body": np.zeros(references.BODY_REFERENCE_SIZE),  # the tick fills in the held pose
+            "leg": np.zeros(references.LEG_REFERENCE_SIZE),
+            "polygon": np.zeros(references.SAFETY_POLYGON_SIZE),
+            "friction": np.array([config.friction]),
+        }
 
         self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
         self.position_port = self.DeclareVectorInputPort("position_measured", 12)
@@ -148,10 +156,46 @@ class ProjectedImpedanceController(LeafSystem):
         self.hold_state = self.DeclareDiscreteState(8)  # initialised flag, p_WB (3), quat (4)
         self.estimate_state = self.DeclareDiscreteState(_ESTIMATE_STATE_SIZE)
         self.diagnostics_state = self.DeclareDiscreteState(self.diag["constraint_rank"].stop)
+        # The discrete states in the compiled tick's argument order.
+        self._state_indices = (
+            self.command_state,
+            self.reference_state,
+            self.ramp_state,
+            self.hold_state,
+            self.estimate_state,
+            self.diagnostics_state,
+        )
         self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
+        # The same tick on demand (CalcForcedDiscreteVariableUpdate): tests and the benchmark.
         self.DeclareForcedDiscreteUpdateEvent(self._update)
         self.command_port = self.DeclareStateOutputPort("command", self.command_state)
         self.diagnostics_port = self.DeclareStateOutputPort("diagnostics", self.diagnostics_state)
+
+        self.compiled = config.qp_backend == "compiled"
+        self._tick_params = projected_impedance_tick.tick_params(
+            config, self.v_index, nv, nc, self.model.total_mass, self.diag
+        )
+        self._snapshot = self.model.dynamics.new_output()
+        if self.compiled:
+            self._warm_up()
+
+    def _warm_up(self) -> None:
+        """Compiles (or loads from numba's cache) the compiled tick for the argument types a tick
+        passes, by running one on a scratch context: never inside a control tick."""
+        context = self.CreateDefaultContext()
+        X_WB = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3])
+        self.base_state_port.FixValue(context, np.concatenate([X_WB, np.zeros(6)]))
+        self.position_port.FixValue(context, robot.STANDING_Q)
+        self.velocity_port.FixValue(context, np.zeros(12))
+        values = self.AllocateDiscreteVariables()
+        self._update_compiled(context, values)
+        # And with every optional input connected, the body reference among them.
+        self.body_reference_port.FixValue(context, np.concatenate([X_WB[4:], X_WB[:4], np.zeros(12)]))
+        self.leg_reference_port.FixValue(context, np.zeros(references.LEG_REFERENCE_SIZE))
+        self.contact_set_port.FixValue(context, self.default_contact_set)
+        self.safety_polygon_port.FixValue(context, np.zeros(references.SAFETY_POLYGON_SIZE))
+        self.friction_port.FixValue(context, np.array([self.config.friction]))
+        self._update_compiled(context, values)
 
     # ---------------------------------------------------------------------------------------------
     def _optional(self, port, context: Context, default: np.ndarray) -> np.ndarray:
@@ -261,6 +305,52 @@ class ProjectedImpedanceController(LeafSystem):
         return [*torso, posture]
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        if self.compiled:
+            self._update_compiled(context, discrete_state)
+        else:
+            self._update_reference(context, discrete_state)
+
+    def _update_compiled(self, context: Context, discrete_state: DiscreteValues) -> None:
+        """The tick as one compiled call (projected_impedance_tick), the same as `_update_reference`
+        to rounding and the contact QP solver's tolerance."""
+        start = time.perf_counter()
+        base = np.asarray(self.base_state_port.Eval(context), float)
+        q = np.asarray(self.position_port.Eval(context), float)
+        qd = np.asarray(self.velocity_port.Eval(context), float)
+        has_body = self.body_reference_port.HasValue(context)
+        defaults = self._default_inputs
+        body = np.asarray(self.body_reference_port.Eval(context), float) if has_body else defaults["body"]
+        contact_set = self._optional(self.contact_set_port, context, self.default_contact_set)
+        leg_x = self._optional(self.leg_reference_port, context, defaults["leg"])
+        polygon_x = self._optional(self.safety_polygon_port, context, defaults["polygon"])
+        mu_x = self._optional(self.friction_port, context, defaults["friction"])
+        states = [context.get_discrete_state(index).value() for index in self._state_indices]
+        outputs = [discrete_state.get_mutable_vector(index).get_mutable_value() for index in self._state_indices]
+        solve_start = time.perf_counter()
+        status = projected_impedance_tick.projected_impedance_tick(
+            self._tick_params,
+            self.model.dynamics.model_record,
+            self._snapshot,
+            base,
+            q,
+            qd,
+            contact_set,
+            body,
+            has_body,
+            leg_x,
+            polygon_x,
+            mu_x,
+            *states,
+            *outputs,
+        )
+        diag = outputs[-1]
+        now = time.perf_counter()
+        if status == STATUS_OK:
+            diag[self.diag["solve_time"]] = now - solve_start
+        diag[self.diag["tick_time"]] = now - start
+
+    def _update_reference(self, context: Context, discrete_state: DiscreteValues) -> None:
+        """The tick in Python on projected_dynamics.py: the reference the compiled tick matches."""
         start = time.perf_counter()
         c = self.config
         base = np.asarray(self.base_state_port.Eval(context), float)
