@@ -108,8 +108,8 @@ class ProjectedImpedanceConfig:
     period: float = 0.002
     # How a tick is computed: "compiled" (the whole tick in one compiled call with the project's
     # dense QP solver: projected_impedance_tick.py), or "daqp" (the reference implementation in
-    # Python, projected_dynamics.py, its contact QP solved by DAQP).
-    qp_backend: str = "daqp"
+    # Python, projected_dynamics.py, its contact QP solved by DAQP; the same commands to rounding).
+    qp_backend: str = "compiled"
     # Stiffness of the lifted feet along world x, y, z [N/m] (Eq. 10, K_s).
     foot_stiffness: list[float] = dataclasses.field(default_factory=lambda: [600.0, 600.0, 600.0])
     # Damping of the lifted feet along world x, y, z [N s/m] (Eq. 10, D_s).

@@ -231,6 +231,9 @@ def _impedance_tasks(tp, s, leg_x, held, foot_row, J, Jdot_v, error, error_rate,
     v_ref = np.empty(3)
     a_ref = np.empty(3)
     rotation_error = np.empty(3)
+    r_W = np.empty(3)
+    rate_B = np.empty(3)
+    acceleration_B = np.empty(3)
     for i in range(4):
         if held[i]:
             continue
@@ -240,17 +243,27 @@ def _impedance_tasks(tp, s, leg_x, held, foot_row, J, Jdot_v, error, error_rate,
             if mode == _JOINTS:
                 # The foot the joint reference means on the trunk as estimated now
                 # (projected_impedance_controller.joint_reference_in_world).
-                r_W = s.R_WB @ p_B[i]
-                w = s.V_trunk[:3]
-                Jq = s.R_WB @ (J_B[i] @ block[4:7])
-                Ja = s.R_WB @ (J_B[i] @ block[7:10])
-                w_x_r = np.array(
-                    [w[1] * r_W[2] - w[2] * r_W[1], w[2] * r_W[0] - w[0] * r_W[2], w[0] * r_W[1] - w[1] * r_W[0]]
-                )
+                # p = p_WB + R p_BF(q), v = v_WB + w x R p_BF + R J(q) qd, a = R J(q) qdd.
+                for k in range(3):
+                    rate_B[k] = 0.0
+                    acceleration_B[k] = 0.0
+                    r_W[k] = 0.0
+                    for j in range(3):
+                        rate_B[k] += J_B[i, k, j] * block[4 + j]
+                        acceleration_B[k] += J_B[i, k, j] * block[7 + j]
+                        r_W[k] += s.R_WB[k, j] * p_B[i, j]
+                w0, w1, w2 = s.V_trunk[0], s.V_trunk[1], s.V_trunk[2]
+                v_ref[0] = s.V_trunk[3] + (w1 * r_W[2] - w2 * r_W[1])
+                v_ref[1] = s.V_trunk[4] + (w2 * r_W[0] - w0 * r_W[2])
+                v_ref[2] = s.V_trunk[5] + (w0 * r_W[1] - w1 * r_W[0])
                 for k in range(3):
                     p_ref[k] = s.p_WB[k] + r_W[k]
-                    v_ref[k] = s.V_trunk[3 + k] + w_x_r[k] + Jq[k]
-                    a_ref[k] = Ja[k]
+                    a_ref[k] = 0.0
+                    rotated_rate = 0.0
+                    for j in range(3):
+                        rotated_rate += s.R_WB[k, j] * rate_B[j]
+                        a_ref[k] += s.R_WB[k, j] * acceleration_B[j]
+                    v_ref[k] += rotated_rate
             else:
                 for k in range(3):
                     p_ref[k] = block[1 + k]
@@ -333,8 +346,8 @@ def _lower_tasks(tp, s, body, on_prongs, J, Jdot_v, desired, start) -> int:
     for joint in range(12):
         J[row, tp.v_joints[joint]] = 1.0
         Jdot_v[row] = 0.0
-        desired[row] = tp.posture_gains[0] * (tp.nominal_q[joint] - s.q_joints[joint]) - tp.posture_gains[1] * (
-            s.v_joints[joint]
+        desired[row] = (
+            tp.posture_gains[0] * (tp.nominal_q[joint] - s.q_joints[joint]) - tp.posture_gains[1] * (s.v_joints[joint])
         )
         row += 1
     levels += 1
