@@ -32,6 +32,7 @@ from pedi_drake.control.compiled_stack import (
     rotation_matrix_wxyz,
 )
 from pedi_drake.control.go1_dynamics import go1_dynamics
+from pedi_drake.control.tasks import GRAVITY
 from pedi_drake.control.whole_body_tick import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED, held_command
 from pedi_drake.estimation.leg_odometry import _foot_kinematics_kernel, _offsets
 from pedi_drake.jit import kernel, new_record
@@ -57,8 +58,6 @@ _STATUS, _CONSECUTIVE, _TOTAL, _CP, _TRUNK_P, _TRUNK_R, _FEET, _RESIDUALS, _FORC
 )
 _FOOT, _JOINTS, _FOOT_POSE = references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, references.LEG_MODE_FOOT_POSE
 _ESTIMATE_ENTRIES = 7  # per leg: error rate (3), filtered error acceleration (3), active flag
-# The impedance level's rows at most: a 5-D foot task on each of the four legs.
-_MAX_IMPEDANCE_ROWS = 20
 
 # Constants of a configured ProjectedImpedanceController (`tick_params`).
 TICK_PARAMS_DTYPE = np.dtype(
@@ -112,8 +111,6 @@ def tick_params(
 ) -> np.ndarray:
     """The TICK_PARAMS_DTYPE record of a ProjectedImpedanceConfig `config` for a plant with `nv`
     velocities (joints at `v_joints`), `nc` contacts and `total_mass` [kg]."""
-    from pedi_drake.control.tasks import GRAVITY
-
     mask = np.ones(nv, dtype=bool)
     mask[v_joints] = False
     record = new_record(TICK_PARAMS_DTYPE)
