@@ -6,7 +6,7 @@ tasks every `period` [s] and stores the next `go1.command` in the Context. It ha
 ports of `WholeBodyController`, so missions, the estimator and the LCM driver use it unchanged.
 
 Two paths compute a tick, chosen by `qp_backend`: "compiled" (the default) runs the whole tick as
-one compiled call (`projected_impedance_tick.py`: about a tenth of the CPU time), "daqp" the
+one compiled call (`projected_impedance_tick.py`: a fifth of the CPU time or less), "daqp" the
 reference below in Python on `projected_dynamics.py`. Both give the same commands to rounding
 and the contact QP solver's tolerance (tests/test_projected_impedance_tick.py runs them side by
 side on paper 002's missions).
