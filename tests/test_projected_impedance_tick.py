@@ -332,6 +332,30 @@ def test_lifting_a_foot_to_a_world_pose_agrees_on_both_paths():
     assert states[controller.ramp_state][0] == 0.0
 
 
+def test_no_tick_compiles_whichever_inputs_are_connected():
+    if not jit.ENABLED:
+        pytest.skip("PEDI_DRAKE_JIT=0: nothing is compiled")
+    controller, context = standing_controller("compiled")
+    compiled_signatures = len(projected_impedance_tick.projected_impedance_tick.signatures)
+    X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
+    optional = {
+        controller.body_reference_port: references.body_reference_vector(X.translation(), X.rotation()),
+        controller.leg_reference_port: np.zeros(references.LEG_REFERENCE_SIZE),
+        controller.contact_set_port: np.ones(4),
+        controller.safety_polygon_port: np.zeros(references.SAFETY_POLYGON_SIZE),
+        controller.friction_port: np.array([0.8]),
+    }
+    for port, value in optional.items():
+        port.FixValue(context, value)
+        next_states(controller, context, controller._update_compiled)
+        fresh = controller.CreateDefaultContext()  # this input alone among the optional ones
+        for required in (controller.base_state_port, controller.position_port, controller.velocity_port):
+            required.FixValue(fresh, required.Eval(context))
+        port.FixValue(fresh, value)
+        next_states(controller, fresh, controller._update_compiled)
+    assert len(projected_impedance_tick.projected_impedance_tick.signatures) == compiled_signatures
+
+
 def test_qp_backend_names_its_field_when_unknown():
     with pytest.raises(ScenarioError, match=r"projected_impedance\.qp_backend"):
         load_scenario(scenario_text="{controller: projected_impedance, projected_impedance: {qp_backend: osqp}}")

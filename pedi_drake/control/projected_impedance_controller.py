@@ -198,7 +198,9 @@ class ProjectedImpedanceController(LeafSystem):
 
     def _warm_up(self) -> None:
         """Compiles (or loads from numba's cache) the compiled tick for the argument types a tick
-        passes, by running one on a scratch context: never inside a control tick."""
+        passes, by running ticks on a scratch context: never inside a control tick. The types are
+        the same whichever inputs are connected (the stand-ins of unconnected ones are writeable
+        float arrays like a port's value), so one signature serves every tick."""
         context = self.CreateDefaultContext()
         X_WB = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3])
         self.base_state_port.FixValue(context, np.concatenate([X_WB, np.zeros(6)]))
@@ -206,7 +208,7 @@ class ProjectedImpedanceController(LeafSystem):
         self.velocity_port.FixValue(context, np.zeros(12))
         values = self.AllocateDiscreteVariables()
         self._update_compiled(context, values)
-        # And with every optional input connected, the body reference among them.
+        # And with every optional input connected (the same signature, the other branches).
         self.body_reference_port.FixValue(context, np.concatenate([X_WB[4:], X_WB[:4], np.zeros(12)]))
         self.leg_reference_port.FixValue(context, np.zeros(references.LEG_REFERENCE_SIZE))
         self.contact_set_port.FixValue(context, self.default_contact_set)

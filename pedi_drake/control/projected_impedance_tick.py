@@ -529,6 +529,9 @@ def projected_impedance_tick(
         for j in range(nv):
             value += s.M[i, j] * vdot[j]
         r[i] = value
+    if not (_all_finite(vdot) and _all_finite(r)):
+        # The Python path finds the same at its end; the QP solver is not given non-finite terms.
+        return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
     lam = np.empty(3 * num_held)
     tau = np.empty(12)
     equality_residual = np.zeros(1)
@@ -551,7 +554,7 @@ def projected_impedance_tick(
         tau,
         equality_residual,
     )
-    if solved != cpd.CONTACT_FORCES_OK or not (_all_finite(tau) and _all_finite(vdot)):
+    if solved != cpd.CONTACT_FORCES_OK or not _all_finite(tau):
         return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
 
     for k in range(12):
