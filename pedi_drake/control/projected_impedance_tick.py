@@ -6,7 +6,8 @@ module is the same tick in compiled code: `projected_impedance_tick` takes the t
 the controller's discrete state as arrays, writes the next state and returns the tick's status,
 with the dynamics terms from `go1_dynamics`, the control law from `compiled_projected_dynamics`
 and the leg kinematics of a joint reference from `leg_odometry`. No Python object is touched
-between the first input and the last output, and the interpreter's lock is released throughout.
+between the first input and the last output, and the interpreter's lock is released throughout
+(once `dense_qp` is compiled code: its stand-in calls DAQP in numba's object mode).
 
 Discrete state, as ProjectedImpedanceController declares it: command (60), reference (24: q_ref,
 qd_ref in Unitree order), ramp (nc), hold (8: initialised flag, p_WB, quaternion), estimate (28:
@@ -15,7 +16,7 @@ impedance), diagnostics (`projected_impedance_controller.projected_diagnostics_l
 
 Nothing raises: a non-finite input ends the tick as STATUS_BAD_INPUT, a failed decomposition or
 an infeasible contact QP as STATUS_QP_FAILED, both holding the last good command with damping
-(`whole_body_tick.held_command`), exactly where the Python path does.
+(`whole_body_tick.held_command`), with the status the Python path reports.
 """
 
 import math
