@@ -98,6 +98,7 @@ class WholeBodyControllerConfig:
 
 
 FORCE_ESTIMATES = ("impedance", "joint_torque")
+PROJECTED_IMPEDANCE_BACKENDS = ("compiled", "daqp")
 
 
 @dataclasses.dataclass
@@ -106,6 +107,10 @@ class ProjectedImpedanceConfig:
 
     # Control period [s] (500 Hz default).
     period: float = 0.002
+    # How a tick is computed: "compiled" (the whole tick in one compiled call with the project's
+    # dense QP solver: projected_impedance_tick.py), or "daqp" (the reference implementation in
+    # Python, projected_dynamics.py, its contact QP solved by DAQP; the same commands to rounding).
+    qp_backend: str = "compiled"
     # Stiffness of the lifted feet along world x, y, z [N/m] (Eq. 10, K_s).
     foot_stiffness: list[float] = dataclasses.field(default_factory=lambda: [600.0, 600.0, 600.0])
     # Damping of the lifted feet along world x, y, z [N s/m] (Eq. 10, D_s).
@@ -217,6 +222,11 @@ class ProjectedImpedanceConfig:
         need(self.torque_limit_scale <= 1.0, "torque_limit_scale", "must be at most 1")
         need(self.min_normal_force <= self.max_normal_force, "min_normal_force", "must not exceed max_normal_force")
         need(len(self.nominal_leg_posture) == 3, "nominal_leg_posture", "expected [hip, thigh, calf] in radians")
+        need(
+            self.qp_backend in PROJECTED_IMPEDANCE_BACKENDS,
+            "qp_backend",
+            f"must be one of {PROJECTED_IMPEDANCE_BACKENDS}, got {self.qp_backend!r}",
+        )
         for name in ("trunk_position", "trunk_orientation", "posture"):
             gains = getattr(self, name)
             need(gains.kp >= 0 and gains.kd >= 0, name, "kp and kd must be >= 0")

@@ -5,6 +5,12 @@ estimate) lives in `projected_dynamics.py`; this adapter turns the controller's 
 tasks every `period` [s] and stores the next `go1.command` in the Context. It has exactly the
 ports of `WholeBodyController`, so missions, the estimator and the LCM driver use it unchanged.
 
+Two paths compute a tick, chosen by `qp_backend`: "compiled" (the default) runs the whole tick as
+one compiled call (`projected_impedance_tick.py`: a fifth of the CPU time or less), "daqp" the
+reference below in Python on `projected_dynamics.py`. Both give the same commands to rounding
+and the contact QP solver's tolerance (tests/test_projected_impedance_tick.py runs them side by
+side on paper 002's missions).
+
 Tasks at one instant (world frame):
     constraint Jacobian: the feet and prong tips in the contact set, or still ramping out;
     first priority (impedance, Eq. 10): every lifted leg with a reference. A world foot
@@ -31,7 +37,8 @@ stiffness is the commanded one). A failed QP or a non-finite input never emits N
 command is held with zero velocity target and `failure_kd` damping, and reported.
 
 Diagnostics: the layout of `WholeBodyController` (same names and places, so the run's judging
-reads either), then `force_estimate` (12: Eq. 11 per leg, world frame [N], zero for legs without
+reads either; `solve_time` is the contact QP's on the reference path, the compiled call's on the
+compiled one), then `force_estimate` (12: Eq. 11 per leg, world frame [N], zero for legs without
 a foot impedance) and `constraint_rank` (rank of the held contacts' Jacobian).
 """
 
@@ -42,7 +49,7 @@ from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
 
 from pedi_drake import robot
 from pedi_drake.control import projected_dynamics as pd
-from pedi_drake.control import references, tasks
+from pedi_drake.control import projected_impedance_tick, references, tasks
 from pedi_drake.control.config import ProjectedImpedanceConfig
 from pedi_drake.control.robot_model import ControllerModel, RobotSnapshot
 from pedi_drake.control.whole_body_controller import (
@@ -132,6 +139,14 @@ class ProjectedImpedanceController(LeafSystem):
         self.diag = projected_diagnostics_layout(nc)
         self.command_gains = np.concatenate([np.full(12, config.joint_kp), np.full(12, config.joint_kd)])
         self.default_contact_set = references.contact_set_vector(num_prongs=nc - 4)
+        # The compiled tick's stand-ins for unconnected inputs. Writeable like a port's value: numba
+        # types a read-only array apart, and a tick must not meet a type it was not compiled for.
+        self._default_inputs = {
+            "body": np.zeros(references.BODY_REFERENCE_SIZE),  # the tick fills in the held pose
+            "leg": np.zeros(references.LEG_REFERENCE_SIZE),
+            "polygon": np.zeros(references.SAFETY_POLYGON_SIZE),
+            "friction": np.array([config.friction]),
+        }
 
         self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
         self.position_port = self.DeclareVectorInputPort("position_measured", 12)
@@ -148,10 +163,58 @@ class ProjectedImpedanceController(LeafSystem):
         self.hold_state = self.DeclareDiscreteState(8)  # initialised flag, p_WB (3), quat (4)
         self.estimate_state = self.DeclareDiscreteState(_ESTIMATE_STATE_SIZE)
         self.diagnostics_state = self.DeclareDiscreteState(self.diag["constraint_rank"].stop)
+        # The discrete states in the compiled tick's argument order, and their group numbers.
+        self._state_indices = (
+            self.command_state,
+            self.reference_state,
+            self.ramp_state,
+            self.hold_state,
+            self.estimate_state,
+            self.diagnostics_state,
+        )
+        self._state_groups = tuple(int(index) for index in self._state_indices)
+        # The optional inputs in the compiled tick's argument order (the body reference aside).
+        self._optional_ports = (
+            self.contact_set_port,
+            self.leg_reference_port,
+            self.safety_polygon_port,
+            self.friction_port,
+        )
+        self._solve_time_entry = self.diag["solve_time"].start
+        self._tick_time_entry = self.diag["tick_time"].start
         self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
+        # The same tick on demand (CalcForcedDiscreteVariableUpdate): tests and the benchmark.
         self.DeclareForcedDiscreteUpdateEvent(self._update)
         self.command_port = self.DeclareStateOutputPort("command", self.command_state)
         self.diagnostics_port = self.DeclareStateOutputPort("diagnostics", self.diagnostics_state)
+
+        self.compiled = config.qp_backend == "compiled"
+        self._tick_params = projected_impedance_tick.tick_params(
+            config, self.v_index, nv, nc, self.model.total_mass, self.diag
+        )
+        self._snapshot = self.model.dynamics.new_output()
+        if self.compiled:
+            self._warm_up()
+
+    def _warm_up(self) -> None:
+        """Compiles (or loads from numba's cache) the compiled tick for the argument types a tick
+        passes, by running ticks on a scratch context: never inside a control tick. The types are
+        the same whichever inputs are connected (the stand-ins of unconnected ones are writeable
+        float arrays like a port's value), so one signature serves every tick."""
+        context = self.CreateDefaultContext()
+        X_WB = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.3])
+        self.base_state_port.FixValue(context, np.concatenate([X_WB, np.zeros(6)]))
+        self.position_port.FixValue(context, robot.STANDING_Q)
+        self.velocity_port.FixValue(context, np.zeros(12))
+        values = self.AllocateDiscreteVariables()
+        self._update_compiled(context, values)
+        # And with every optional input connected (the same signature, the other branches).
+        self.body_reference_port.FixValue(context, np.concatenate([X_WB[4:], X_WB[:4], np.zeros(12)]))
+        self.leg_reference_port.FixValue(context, np.zeros(references.LEG_REFERENCE_SIZE))
+        self.contact_set_port.FixValue(context, self.default_contact_set)
+        self.safety_polygon_port.FixValue(context, np.zeros(references.SAFETY_POLYGON_SIZE))
+        self.friction_port.FixValue(context, np.array([self.config.friction]))
+        self._update_compiled(context, values)
 
     # ---------------------------------------------------------------------------------------------
     def _optional(self, port, context: Context, default: np.ndarray) -> np.ndarray:
@@ -261,6 +324,48 @@ class ProjectedImpedanceController(LeafSystem):
         return [*torso, posture]
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
+        if self.compiled:
+            self._update_compiled(context, discrete_state)
+        else:
+            self._update_reference(context, discrete_state)
+
+    def _update_compiled(self, context: Context, discrete_state: DiscreteValues) -> None:
+        """The tick as one compiled call (projected_impedance_tick), the same as `_update_reference`
+        to rounding and the contact QP solver's tolerance. The inputs go in as the ports' own float
+        arrays and the states as views by group number: at these sizes every numpy or pydrake call
+        saved is a microsecond."""
+        start = time.perf_counter()
+        defaults = self._default_inputs
+        has_body = self.body_reference_port.HasValue(context)
+        ports = self._optional_ports
+        last = context.get_discrete_state()
+        states = [last.value(group) for group in self._state_groups]
+        outputs = [discrete_state.get_mutable_value(group) for group in self._state_groups]
+        solve_start = time.perf_counter()
+        status = projected_impedance_tick.projected_impedance_tick(
+            self._tick_params,
+            self.model.dynamics.model_record,
+            self._snapshot,
+            self.base_state_port.Eval(context),
+            self.position_port.Eval(context),
+            self.velocity_port.Eval(context),
+            ports[0].Eval(context) if ports[0].HasValue(context) else self.default_contact_set,
+            self.body_reference_port.Eval(context) if has_body else defaults["body"],
+            has_body,
+            ports[1].Eval(context) if ports[1].HasValue(context) else defaults["leg"],
+            ports[2].Eval(context) if ports[2].HasValue(context) else defaults["polygon"],
+            ports[3].Eval(context) if ports[3].HasValue(context) else defaults["friction"],
+            *states,
+            *outputs,
+        )
+        diag = outputs[-1]
+        now = time.perf_counter()
+        if status == STATUS_OK:
+            diag[self._solve_time_entry] = now - solve_start
+        diag[self._tick_time_entry] = now - start
+
+    def _update_reference(self, context: Context, discrete_state: DiscreteValues) -> None:
+        """The tick in Python on projected_dynamics.py: the reference the compiled tick matches."""
         start = time.perf_counter()
         c = self.config
         base = np.asarray(self.base_state_port.Eval(context), float)

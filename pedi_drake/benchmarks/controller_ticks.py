@@ -1,0 +1,162 @@
+"""CPU time per tick of the two whole-body controllers, Python reference against compiled, on the
+same recorded inputs.
+
+    python -m pedi_drake.benchmarks.controller_ticks [--demo three_leg_hold] [--passes 3]
+        [--out benchmarks/results/controller_ticks.json]
+
+1. Records: the demo (ground-truth estimator) is simulated on paper 002's controller, its Python
+   path; every tick's controller inputs (the eight input ports, as the diagram evaluated them)
+   are kept.
+2. Replays: each controller variant, paper 002's `projected_impedance` and the paper-000 HQP
+   `whole_body`, each on its Python path (`qp_backend: daqp`) and its compiled one (`qp_backend:
+   compiled`), gets every recorded tick's inputs fixed on its own context and runs its discrete
+   update (the controller's state carries over from tick to tick; the plant does not respond:
+   the same inputs for every variant). Only the update is timed, in the thread's CPU time
+   (`time.thread_time`, which a loaded machine disturbs less than wall time). The variants
+   alternate tick by tick, so a change of the machine's load falls on all of them alike; one
+   untimed pass first compiles or loads every kernel.
+
+Prints the median and 99th percentile per tick of each variant [ms] and the share of ticks each
+solved (status 0), and writes them as JSON. Three-leg hold is the acceptance case of paper 002's
+tick (a median under 0.5 ms with three stance feet).
+"""
+
+import argparse
+import dataclasses
+import json
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+from pedi_drake.benchmarks.demos import DEMOS, demo_scenario, simulate_demo
+from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
+from pedi_drake.control.whole_body_controller import WholeBodyController
+
+DEFAULT_OUT = Path("benchmarks/results/controller_ticks.json")
+PORTS = (
+    "base_state",
+    "position_measured",
+    "velocity_measured",
+    "body_reference",
+    "leg_reference",
+    "contact_set",
+    "safety_polygon",
+    "friction",
+)
+VARIANTS = (
+    ("projected_impedance", "daqp"),
+    ("projected_impedance", "compiled"),
+    ("whole_body", "daqp"),
+    ("whole_body", "compiled"),
+)
+
+
+def record_inputs(demo: str) -> tuple[list[dict[str, np.ndarray]], object]:
+    """(every tick's controller inputs by port name, the demo's scenario) of `demo` simulated on
+    paper 002's controller (Python path)."""
+    scenario = demo_scenario(demo)
+    scenario.controller = "projected_impedance"
+    scenario.projected_impedance = dataclasses.replace(scenario.projected_impedance, qp_backend="daqp")
+    ticks: list[dict[str, np.ndarray]] = []
+    original = ProjectedImpedanceController._update_reference
+
+    def recording(controller, context, discrete_state):
+        ticks.append(
+            {
+                name: controller.GetInputPort(name).Eval(context).copy()
+                for name in PORTS
+                if controller.GetInputPort(name).HasValue(context)
+            }
+        )
+        original(controller, context, discrete_state)
+
+    ProjectedImpedanceController._update_reference = recording
+    try:
+        simulate_demo(demo, scenario)
+    finally:
+        ProjectedImpedanceController._update_reference = original
+    return ticks, scenario
+
+
+class _Variant:
+    """One controller on one path, with its own context, replaying the recorded inputs."""
+
+    def __init__(self, scenario, controller: str, backend: str) -> None:
+        if controller == "projected_impedance":
+            config = dataclasses.replace(scenario.projected_impedance, qp_backend=backend)
+            self.system = ProjectedImpedanceController(config, scenario.robot.prongs)
+        else:
+            config = dataclasses.replace(scenario.whole_body, qp_backend=backend)
+            self.system = WholeBodyController(config, scenario.robot.prongs)
+        self.name = f"{controller} ({backend})"
+        self.context = self.system.CreateDefaultContext()
+        self.values = self.system.AllocateDiscreteVariables()
+        self.ports = {name: self.system.GetInputPort(name) for name in PORTS}
+        self.status = self.system.diag["status"].start
+
+    def tick(self, inputs: dict[str, np.ndarray]) -> tuple[float, bool]:
+        """(CPU time of the update [s], whether it solved) at one tick's inputs."""
+        for name, value in inputs.items():
+            self.ports[name].FixValue(self.context, value)
+        start = time.thread_time()
+        self.system.CalcForcedDiscreteVariableUpdate(self.context, self.values)
+        elapsed = time.thread_time() - start
+        self.context.SetDiscreteState(self.values)
+        return elapsed, self.values.get_vector(self.system.diagnostics_state).value()[self.status] == 0.0
+
+
+def measure(demo: str, passes: int) -> list[dict]:
+    """One row per variant: median and p99 CPU per tick [ms] over `passes` replays of the demo."""
+    ticks, scenario = record_inputs(demo)
+    variants = [_Variant(scenario, controller, backend) for controller, backend in VARIANTS]
+    times: dict[str, list[float]] = {v.name: [] for v in variants}
+    solved: dict[str, list[bool]] = {v.name: [] for v in variants}
+    for replay in range(passes + 1):
+        for variant in variants:  # each pass from the first tick's state
+            variant.context = variant.system.CreateDefaultContext()
+        for inputs in ticks:
+            for variant in variants:
+                elapsed, ok = variant.tick(inputs)
+                if replay > 0:  # the first pass compiles or loads the kernels
+                    times[variant.name].append(elapsed)
+                    solved[variant.name].append(ok)
+    rows = []
+    for variant in variants:
+        per_tick = np.array(times[variant.name]) * 1e3
+        rows.append(
+            {
+                "demo": demo,
+                "controller": variant.name,
+                "ticks": len(per_tick),
+                "tick_median_ms": float(np.median(per_tick)),
+                "tick_p99_ms": float(np.percentile(per_tick, 99)),
+                "solved_fraction": float(np.mean(solved[variant.name])),
+            }
+        )
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--demo", default="three_leg_hold", choices=DEMOS)
+    parser.add_argument("--passes", type=int, default=3, help="timed replays of the recorded ticks")
+    parser.add_argument("--out", default=str(DEFAULT_OUT), help="JSON file of the rows")
+    args = parser.parse_args()
+    rows = measure(args.demo, args.passes)
+    print(f"{'controller':34s} {'median ms':>10s} {'p99 ms':>8s} {'solved':>7s}  ({rows[0]['ticks']} ticks)")
+    for row in rows:
+        print(
+            f"{row['controller']:34s} {row['tick_median_ms']:10.3f} {row['tick_p99_ms']:8.3f} "
+            f"{row['solved_fraction']:7.3f}"
+        )
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    report = {"machine": platform.processor() or platform.machine(), "command": "controller_ticks", "rows": rows}
+    out.write_text(json.dumps(report, indent=2))
+    print(f"written {out}")
+
+
+if __name__ == "__main__":
+    main()

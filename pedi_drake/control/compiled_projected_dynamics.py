@@ -1,0 +1,569 @@
+"""`projected_dynamics.py`'s control law as compiled kernels on plain arrays, for the compiled tick.
+
+`projected_dynamics.py` states the maths (Eqs. 2 to 11 of paper 002) and is the readable
+reference. These kernels compute the same quantities by the same formulas, in the same order,
+with the same rank rule and tolerances, so both agree to rounding (and to the QP solver's
+tolerance for the contact forces): `tests/test_projected_impedance_tick.py` compares them. What
+differs is only how: loops over caller-owned arrays instead of numpy calls (a numpy call on an
+18 x 18 costs more in dispatch than in arithmetic), pseudo-inverses from
+`small_decompositions.symmetric_eigen` instead of LAPACK's dsyevd, and a status returned instead
+of an exception raised, so that a control tick calling them always returns.
+
+Matrices are C-ordered; task rows are passed stacked, with `*_start` arrays giving each task's
+rows where there are several.
+"""
+
+import math
+
+import numpy as np
+
+from pedi_drake.control import dense_qp
+from pedi_drake.control.small_decompositions import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
+from pedi_drake.jit import kernel
+
+# Status of `contact_forces`.
+CONTACT_FORCES_OK, CONTACT_FORCES_INFEASIBLE = 0, 1
+# A scale below zero tells symmetric_pseudo_inverse to take the largest eigenvalue as its scale.
+_LARGEST = -1.0
+# The forces fixed by the wrench balance alone may exceed their bounds by this much [N, N m]
+# (projected_dynamics.solve_contact_forces).
+_FIXED_FORCE_SLACK = 1e-6
+_INFINITY = 1e30
+
+
+# ------------------------------------------------------------------------------------------------
+# Products (row-major loops: the innermost index runs along contiguous memory).
+
+
+@kernel
+def _multiply(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
+    """out = A B."""
+    m, k = A.shape
+    n = B.shape[1]
+    for i in range(m):
+        for j in range(n):
+            out[i, j] = 0.0
+        for p in range(k):
+            a = A[i, p]
+            if a != 0.0:
+                for j in range(n):
+                    out[i, j] += a * B[p, j]
+
+
+@kernel
+def _multiply_transposed(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
+    """out = A B^T."""
+    m, k = A.shape
+    n = B.shape[0]
+    for i in range(m):
+        for j in range(n):
+            s = 0.0
+            for p in range(k):
+                s += A[i, p] * B[j, p]
+            out[i, j] = s
+
+
+@kernel
+def _transposed_multiply(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
+    """out = A^T B."""
+    k, m = A.shape
+    n = B.shape[1]
+    out[:, :] = 0.0
+    for p in range(k):
+        for i in range(m):
+            a = A[p, i]
+            if a != 0.0:
+                for j in range(n):
+                    out[i, j] += a * B[p, j]
+
+
+@kernel
+def _times(A: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
+    """out = A x."""
+    for i in range(A.shape[0]):
+        s = 0.0
+        for j in range(A.shape[1]):
+            s += A[i, j] * x[j]
+        out[i] = s
+
+
+@kernel
+def _transposed_times(A: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
+    """out = A^T x."""
+    out[:] = 0.0
+    for i in range(A.shape[0]):
+        a = x[i]
+        if a != 0.0:
+            for j in range(A.shape[1]):
+                out[j] += A[i, j] * a
+
+
+@kernel
+def _norm(x: np.ndarray) -> float:
+    s = 0.0
+    for value in x:
+        s += value * value
+    return math.sqrt(s)
+
+
+@kernel
+def _symmetrize(A: np.ndarray) -> None:
+    """A = (A + A^T) / 2, exactly symmetric."""
+    n = A.shape[0]
+    for i in range(n):
+        for j in range(i):
+            value = 0.5 * (A[i, j] + A[j, i])
+            A[i, j] = value
+            A[j, i] = value
+
+
+# ------------------------------------------------------------------------------------------------
+# Eqs. 2 to 5.
+
+
+@kernel
+def constrained_dynamics(
+    M: np.ndarray,
+    h: np.ndarray,
+    Jc: np.ndarray,
+    Jcdot_v: np.ndarray,
+    v: np.ndarray,
+    contact_damping: float,
+    rank_tolerance: float,
+    P: np.ndarray,
+    A: np.ndarray,
+    vdot_0: np.ndarray,
+) -> int:
+    """projected_dynamics.constrained_dynamics: the projector P (nv, nv), the constrained inverse
+    inertia A (nv, nv) and the drift vdot_0 (nv,) into the given arrays; returns the rank of Jc
+    (3k, nv), or -1 when a decomposition fails (non-finite terms, a singular M_c)."""
+    nv = M.shape[0]
+    rows = Jc.shape[0]
+    # Jc^+ = Jc^T (Jc Jc^T)^+; the eigenvalues of Jc Jc^T are the squared singular values of Jc.
+    gram = np.empty((rows, rows))
+    _multiply_transposed(Jc, Jc, gram)
+    gram_pinv = np.empty((rows, rows))
+    rank = symmetric_pseudo_inverse(gram, rank_tolerance * rank_tolerance, _LARGEST, gram_pinv)
+    if rank < 0:
+        return -1
+    Jc_pinv = np.empty((nv, rows))
+    _transposed_multiply(Jc, gram_pinv, Jc_pinv)
+    _multiply(Jc_pinv, Jc, P)
+    for i in range(nv):
+        for j in range(nv):
+            P[i, j] = -P[i, j]
+        P[i, i] += 1.0
+    _symmetrize(P)
+    # M_c = P M + I - P, and the right-hand sides [P, -(P h) - Jc^+ (Jcdot v + kd Jc v)].
+    M_c = np.empty((nv, nv))
+    _multiply(P, M, M_c)
+    for i in range(nv):
+        for j in range(nv):
+            M_c[i, j] -= P[i, j]
+        M_c[i, i] += 1.0
+    rhs = np.empty((nv, nv + 1))
+    drift = np.empty(nv)
+    _times(P, h, drift)
+    if rows:
+        contact_velocity = np.empty(rows)
+        _times(Jc, v, contact_velocity)
+        for i in range(rows):
+            contact_velocity[i] = Jcdot_v[i] + contact_damping * contact_velocity[i]
+        constraint_acceleration = np.empty(nv)
+        _times(Jc_pinv, contact_velocity, constraint_acceleration)
+        for i in range(nv):
+            drift[i] += constraint_acceleration[i]
+    for i in range(nv):
+        for j in range(nv):
+            rhs[i, j] = P[i, j]
+        rhs[i, nv] = -drift[i]
+    if not lu_solve(M_c, rhs):
+        return -1
+    for i in range(nv):
+        for j in range(nv):
+            A[i, j] = rhs[i, j]
+        vdot_0[i] = rhs[i, nv]
+    _symmetrize(A)
+    return rank
+
+
+# ------------------------------------------------------------------------------------------------
+# Eqs. 9 and 10.
+
+
+@kernel
+def _task_residual(J, Jdot_v, desired, A, u, vdot_0) -> float:
+    """|desired - J (A u + vdot_0) - Jdot v| [m/s^2 ...]."""
+    nv = A.shape[0]
+    vdot = np.empty(nv)
+    _times(A, u, vdot)
+    for i in range(nv):
+        vdot[i] += vdot_0[i]
+    s = 0.0
+    for i in range(J.shape[0]):
+        value = desired[i] - Jdot_v[i]
+        for j in range(nv):
+            value -= J[i, j] * vdot[j]
+        s += value * value
+    return math.sqrt(s)
+
+
+@kernel
+def _remove_from_null_space(N, JA, Lambda, J) -> None:
+    """N -= (A J^T Lambda) J, with JA = J A (A symmetric) and Lambda symmetric."""
+    m, nv = JA.shape
+    Y = np.empty((m, nv))  # Lambda J A = (A J^T Lambda)^T
+    _multiply(Lambda, JA, Y)
+    for p in range(m):
+        for i in range(nv):
+            y = Y[p, i]
+            if y != 0.0:
+                for j in range(nv):
+                    N[i, j] -= y * J[p, j]
+
+
+@kernel
+def prioritized_force(
+    A: np.ndarray,
+    vdot_0: np.ndarray,
+    P: np.ndarray,
+    free_dimensions: int,
+    J: np.ndarray,
+    Jdot_v: np.ndarray,
+    error: np.ndarray,
+    error_rate: np.ndarray,
+    acceleration_ref: np.ndarray,
+    stiffness: np.ndarray,
+    damping: np.ndarray,
+    lower_J: np.ndarray,
+    lower_Jdot_v: np.ndarray,
+    lower_desired: np.ndarray,
+    lower_start: np.ndarray,
+    rank_tolerance: float,
+    u_out: np.ndarray,
+    impedance_force: np.ndarray,
+    impedance_inertia: np.ndarray,
+    residuals: np.ndarray,
+) -> int:
+    """projected_dynamics.prioritized_force: the impedance task (J (m, nv) and its per-row terms)
+    first, then each lower task (rows lower_start[t]:lower_start[t + 1] of lower_J, lower_Jdot_v
+    and the desired accelerations lower_desired) in the dynamically consistent null space of all
+    above. Writes P u into u_out (nv,), F (m,) and Lambda (m, m) of the impedance level and each
+    level's residual into `residuals`; returns the number of residuals, -1 on a failed
+    decomposition."""
+    nv = A.shape[0]
+    m = J.shape[0]
+    u = np.zeros(nv)
+    N = np.eye(nv)
+    count = 0
+    used = 0
+    impedance_inertia[:, :] = 0.0
+    impedance_force[:] = 0.0
+    if m:
+        JA = np.empty((m, nv))
+        _multiply(J, A, JA)
+        inertia = np.empty((m, m))
+        _multiply_transposed(JA, J, inertia)
+        used = symmetric_pseudo_inverse(inertia, rank_tolerance, _LARGEST, impedance_inertia)
+        if used < 0:
+            return -1
+        free = np.empty(m)
+        _times(J, vdot_0, free)
+        for i in range(m):
+            free[i] = acceleration_ref[i] - free[i] - Jdot_v[i]
+        _times(impedance_inertia, free, impedance_force)
+        for i in range(m):
+            impedance_force[i] -= stiffness[i] * error[i] + damping[i] * error_rate[i]
+        _transposed_times(J, impedance_force, u)
+        _remove_from_null_space(N, JA, impedance_inertia, J)
+        # The closed loop Lambda (xddot - xddot_ref) + K e + D edot = 0 the law achieves [N].
+        vdot = np.empty(nv)
+        _times(A, u, vdot)
+        for i in range(nv):
+            vdot[i] += vdot_0[i]
+        achieved = np.empty(m)
+        _times(J, vdot, achieved)
+        for i in range(m):
+            achieved[i] += Jdot_v[i] - acceleration_ref[i]
+        loop = np.empty(m)
+        _times(impedance_inertia, achieved, loop)
+        for i in range(m):
+            loop[i] += stiffness[i] * error[i] + damping[i] * error_rate[i]
+        residuals[count] = _norm(loop)
+        count += 1
+    for t in range(lower_start.shape[0] - 1):
+        rows = lower_start[t + 1] - lower_start[t]
+        Jt = lower_J[lower_start[t] : lower_start[t + 1]]
+        bias = lower_Jdot_v[lower_start[t] : lower_start[t + 1]]
+        desired = lower_desired[lower_start[t] : lower_start[t + 1]]
+        if used >= free_dimensions:
+            # The tasks above use every constraint-free direction: nothing is left for this one.
+            residuals[count] = _task_residual(Jt, bias, desired, A, u, vdot_0)
+            count += 1
+            continue
+        J_prec = np.empty((rows, nv))
+        _multiply(Jt, N, J_prec)
+        # The unprojected task's inverse inertia sets the scale of the rank decision.
+        JtA = np.empty((rows, nv))
+        _multiply(Jt, A, JtA)
+        unprojected = np.empty((rows, rows))
+        _multiply_transposed(JtA, Jt, unprojected)
+        scale = 0.0
+        for i in range(rows):
+            for j in range(rows):
+                scale += unprojected[i, j] * unprojected[i, j]
+        scale = math.sqrt(scale)
+        JpA = np.empty((rows, nv))
+        _multiply(J_prec, A, JpA)
+        inertia = np.empty((rows, rows))
+        _multiply_transposed(JpA, J_prec, inertia)
+        Lambda = np.empty((rows, rows))
+        rank = symmetric_pseudo_inverse(inertia, rank_tolerance, scale, Lambda)
+        if rank < 0:
+            return -1
+        used += rank
+        if rank == 0:
+            residuals[count] = _task_residual(Jt, bias, desired, A, u, vdot_0)
+            count += 1
+            continue
+        vdot = np.empty(nv)
+        _times(A, u, vdot)
+        for i in range(nv):
+            vdot[i] += vdot_0[i]
+        wanted = np.empty(rows)
+        _times(Jt, vdot, wanted)
+        for i in range(rows):
+            wanted[i] = desired[i] - wanted[i] - bias[i]
+        F = np.empty(rows)
+        _times(Lambda, wanted, F)
+        for p in range(rows):
+            f = F[p]
+            if f != 0.0:
+                for j in range(nv):
+                    u[j] += J_prec[p, j] * f
+        _remove_from_null_space(N, JpA, Lambda, J_prec)
+        residuals[count] = _task_residual(Jt, bias, desired, A, u, vdot_0)
+        count += 1
+    _times(P, u, u_out)
+    return count
+
+
+@kernel
+def constraint_free_torque(
+    A: np.ndarray,
+    vdot_0: np.ndarray,
+    P: np.ndarray,
+    u: np.ndarray,
+    v_joints: np.ndarray,
+    rank_tolerance: float,
+    tau_m: np.ndarray,
+    vdot: np.ndarray,
+) -> bool:
+    """projected_dynamics.constraint_free_torque: tau_m = (P S^T)^+ u (12,), in the order of the
+    joints' velocity indices `v_joints`, and vdot = A P S^T tau_m + vdot_0 (nv,); False on a
+    failed decomposition."""
+    nv = A.shape[0]
+    na = v_joints.shape[0]
+    # (P S^T)^+ = (S P S^T)^+ S P (P symmetric, idempotent).
+    joint_block = np.empty((na, na))
+    for a in range(na):
+        for b in range(na):
+            joint_block[a, b] = P[v_joints[a], v_joints[b]]
+    joint_block_pinv = np.empty((na, na))
+    if symmetric_pseudo_inverse(joint_block, rank_tolerance, _LARGEST, joint_block_pinv) < 0:
+        return False
+    Pu = np.empty(nv)
+    _times(P, u, Pu)
+    SPu = np.empty(na)
+    for a in range(na):
+        SPu[a] = Pu[v_joints[a]]
+    _times(joint_block_pinv, SPu, tau_m)
+    u_effective = np.zeros(nv)
+    for i in range(nv):
+        s = 0.0
+        for a in range(na):
+            s += P[i, v_joints[a]] * tau_m[a]
+        u_effective[i] = s
+    _times(A, u_effective, vdot)
+    for i in range(nv):
+        vdot[i] += vdot_0[i]
+    return True
+
+
+# ------------------------------------------------------------------------------------------------
+# Eqs. 6 to 8.
+
+
+@kernel
+def contact_forces(
+    Jc: np.ndarray,
+    r: np.ndarray,
+    unactuated: np.ndarray,
+    actuated: np.ndarray,
+    ramp: np.ndarray,
+    friction: float,
+    f_min: float,
+    f_max: float,
+    torque_limit: np.ndarray,
+    force_share: np.ndarray,
+    torque_weight: float,
+    force_weight: float,
+    rank_tolerance: float,
+    proximal_weight: float,
+    lam: np.ndarray,
+    tau: np.ndarray,
+    equality_residual: np.ndarray,
+) -> int:
+    """projected_dynamics.solve_contact_forces (Eq. 7) for the k held contacts (Jc (3k, nv), r =
+    M vdot + h, ramp (k,), force_share (3k,)): the forces lam (3k,) [N], the torques tau (12,)
+    [N m] and |Jc,u^T lam - r_u| in equality_residual[0]; returns CONTACT_FORCES_OK or
+    CONTACT_FORCES_INFEASIBLE (lam and tau then meaningless). The QP goes to `dense_qp.solve`
+    with `proximal_weight` [units of its Hessian]."""
+    n = Jc.shape[0]
+    k = n // 3
+    na = actuated.shape[0]
+    nu = unactuated.shape[0]
+    r_u = np.empty(nu)
+    for i in range(nu):
+        r_u[i] = r[unactuated[i]]
+    r_a = np.empty(na)
+    for i in range(na):
+        r_a[i] = r[actuated[i]]
+    if n == 0:
+        residual = _norm(r_u)
+        equality_residual[0] = residual
+        if not residual <= 1e-6 * max(1.0, _norm(r)):
+            return CONTACT_FORCES_INFEASIBLE
+        for i in range(na):
+            if abs(r_a[i]) > torque_limit[i]:
+                return CONTACT_FORCES_INFEASIBLE
+            tau[i] = r_a[i]
+        return CONTACT_FORCES_OK
+    T = np.empty((na, n))  # tau = r_a + T lam
+    for i in range(na):
+        for j in range(n):
+            T[i, j] = -Jc[j, actuated[i]]
+    B = np.empty((nu, n))  # the floating base's rows of Jc^T
+    for i in range(nu):
+        for j in range(n):
+            B[i, j] = Jc[j, unactuated[i]]
+    # One eigendecomposition of B^T B gives both the minimum-norm lam_0 and the null space Z.
+    BtB = np.empty((n, n))
+    _transposed_multiply(B, B, BtB)
+    w = np.empty(n)
+    W = np.empty((n, n))  # eigenvectors as rows, eigenvalues ascending
+    if not symmetric_eigen(BtB, w, W):
+        return CONTACT_FORCES_INFEASIBLE
+    threshold = rank_tolerance * rank_tolerance * max(w[n - 1], 1e-300)
+    nz = 0
+    for i in range(n):
+        if not w[i] > threshold:
+            nz += 1
+    Bt_r = np.empty(n)
+    _transposed_times(B, r_u, Bt_r)
+    lam_0 = np.zeros(n)
+    for i in range(n):
+        if w[i] > threshold:
+            coefficient = 0.0
+            for j in range(n):
+                coefficient += W[i, j] * Bt_r[j]
+            coefficient /= w[i]
+            for j in range(n):
+                lam_0[j] += W[i, j] * coefficient
+    # G_all lam <= g_all: the friction pyramid and force bounds per contact, then the torque limits.
+    rows = 6 * k + 2 * na
+    G = np.zeros((rows, n))
+    g = np.empty(rows)
+    for c in range(k):
+        x, z = 3 * c, 3 * c + 2
+        row = 6 * c
+        G[row, z] = -1.0
+        G[row + 1, z] = 1.0
+        G[row + 2, x], G[row + 2, z] = 1.0, -friction
+        G[row + 3, x], G[row + 3, z] = -1.0, -friction
+        G[row + 4, x + 1], G[row + 4, z] = 1.0, -friction
+        G[row + 5, x + 1], G[row + 5, z] = -1.0, -friction
+        g[row] = -f_min * ramp[c]
+        g[row + 1] = f_max * ramp[c]
+        for i in range(2, 6):
+            g[row + i] = 0.0
+    for i in range(na):
+        for j in range(n):
+            G[6 * k + i, j] = T[i, j]
+            G[6 * k + na + i, j] = -T[i, j]
+        g[6 * k + i] = torque_limit[i] - r_a[i]
+        g[6 * k + na + i] = torque_limit[i] + r_a[i]
+    if nz == 0:
+        for j in range(n):
+            lam[j] = lam_0[j]
+        values = np.empty(rows)
+        _times(G, lam, values)
+        for i in range(rows):
+            if not values[i] <= g[i] + _FIXED_FORCE_SLACK:
+                return CONTACT_FORCES_INFEASIBLE
+    else:
+        Z = np.empty((n, nz))  # the eigenvectors of the dropped eigenvalues, as columns
+        for i in range(nz):
+            for j in range(n):
+                Z[j, i] = W[i, j]
+        H_lam = np.empty((n, n))
+        _transposed_multiply(T, T, H_lam)
+        for i in range(n):
+            for j in range(n):
+                H_lam[i, j] *= torque_weight
+            H_lam[i, i] += force_weight
+        f_lam = np.empty(n)
+        _transposed_times(T, r_a, f_lam)
+        for i in range(n):
+            f_lam[i] = torque_weight * f_lam[i] - force_weight * force_share[i]
+        HZ = np.empty((n, nz))
+        _multiply(H_lam, Z, HZ)
+        H = np.empty((nz, nz))
+        _transposed_multiply(Z, HZ, H)
+        linear = np.empty(n)
+        _times(H_lam, lam_0, linear)
+        for i in range(n):
+            linear[i] += f_lam[i]
+        f = np.empty(nz)
+        _transposed_times(Z, linear, f)
+        C = np.empty((rows, nz))
+        _multiply(G, Z, C)
+        upper = np.empty(rows)
+        _times(G, lam_0, upper)
+        for i in range(rows):
+            upper[i] = g[i] - upper[i]
+        z = np.zeros(nz)
+        if dense_qp.solve(H, f, C, upper, proximal_weight, z) != dense_qp.OPTIMAL:
+            return CONTACT_FORCES_INFEASIBLE
+        for i in range(nz):
+            if not math.isfinite(z[i]):
+                return CONTACT_FORCES_INFEASIBLE
+        _times(Z, z, lam)
+        for j in range(n):
+            lam[j] += lam_0[j]
+    balance = np.empty(nu)
+    _times(B, lam, balance)
+    for i in range(nu):
+        balance[i] -= r_u[i]
+    equality_residual[0] = _norm(balance)
+    _times(T, lam, tau)
+    for i in range(na):
+        tau[i] += r_a[i]
+    return CONTACT_FORCES_OK
+
+
+@kernel
+def impedance_force_estimate(
+    inertia_rows: np.ndarray,
+    stiffness: np.ndarray,
+    damping: np.ndarray,
+    error: np.ndarray,
+    error_rate: np.ndarray,
+    error_acceleration: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    """Eq. 11: F_ext_hat = Lambda eddot + D edot + K e [N] into out, with `inertia_rows` the task's
+    rows of the level's Lambda and `error_acceleration` the whole level's eddot."""
+    _times(inertia_rows, error_acceleration, out)
+    for i in range(out.shape[0]):
+        out[i] += damping[i] * error_rate[i] + stiffness[i] * error[i]
