@@ -163,14 +163,6 @@ def _meets(G: np.ndarray, upper: np.ndarray, z: np.ndarray, tolerance: float) ->
     return True
 
 
-# dense_qp's tolerances (DenseQpSettings' defaults): violations, multipliers, stationarity [-].
-_QP_DEFAULTS = dense_qp.DenseQpSettings()
-_QP_PRIMAL_TOLERANCE = _QP_DEFAULTS.primal_tolerance
-_QP_DUAL_TOLERANCE = _QP_DEFAULTS.dual_tolerance
-_QP_STATIONARITY_TOLERANCE = _QP_DEFAULTS.stationarity_tolerance
-_QP_MAX_ITERATIONS = _QP_DEFAULTS.max_iterations
-
-
 @kernel
 def _solve_level_qp(H, f, C, upper, eps_prox, y, workspace) -> int:
     """min 0.5 y'Hy + f'y s.t. C y <= upper into y (hqp._solve_dense_qp with dense_qp); a status.
@@ -180,26 +172,7 @@ def _solve_level_qp(H, f, C, upper, eps_prox, y, workspace) -> int:
     if m == 0:
         y[:] = np.linalg.lstsq(H, -f, rcond=np.finfo(np.float64).eps * n)[0]
         return STATUS_OK
-    matrices, transposed, vectors, integers = workspace
-    status, _, _ = dense_qp.solve_dense_qp_kernel(
-        H,
-        f,
-        C,
-        upper,
-        eps_prox,
-        _QP_PRIMAL_TOLERANCE,
-        _QP_DUAL_TOLERANCE,
-        _QP_STATIONARITY_TOLERANCE,
-        _QP_MAX_ITERATIONS,
-        y,
-        np.empty(m),
-        np.empty(max(n, 1), np.int64),
-        0,
-        matrices,
-        transposed,
-        vectors,
-        integers,
-    )
+    status = dense_qp.solve_with_defaults(H, f, C, upper, eps_prox, y, workspace)
     if status != dense_qp.OPTIMAL:
         return STATUS_INFEASIBLE
     for v in y:

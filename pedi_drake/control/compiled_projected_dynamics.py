@@ -417,8 +417,8 @@ def contact_forces(
     """projected_dynamics.solve_contact_forces (Eq. 7) for the k held contacts (Jc (3k, nv), r =
     M vdot + h, ramp (k,), force_share (3k,)): the forces lam (3k,) [N], the torques tau (12,)
     [N m] and |Jc,u^T lam - r_u| in equality_residual[0]; returns CONTACT_FORCES_OK or
-    CONTACT_FORCES_INFEASIBLE (lam and tau then meaningless). The QP goes to `dense_qp.solve`
-    with `proximal_weight` [units of its Hessian]."""
+    CONTACT_FORCES_INFEASIBLE (lam and tau then meaningless). The QP goes to
+    `dense_qp.solve_with_defaults` with `proximal_weight` [units of its Hessian]."""
     n = Jc.shape[0]
     k = n // 3
     na = actuated.shape[0]
@@ -533,7 +533,8 @@ def contact_forces(
         for i in range(rows):
             upper[i] = g[i] - upper[i]
         z = np.zeros(nz)
-        if dense_qp.solve(H, f, C, upper, proximal_weight, z) != dense_qp.OPTIMAL:
+        workspace = dense_qp.workspace_arrays(nz, rows)
+        if dense_qp.solve_with_defaults(H, f, C, upper, proximal_weight, z, workspace) != dense_qp.OPTIMAL:
             return CONTACT_FORCES_INFEASIBLE
         for i in range(nz):
             if not math.isfinite(z[i]):

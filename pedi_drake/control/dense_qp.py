@@ -237,6 +237,41 @@ def workspace_arrays(n_max: int, m_max: int):
     )
 
 
+_PRIMAL_TOLERANCE = _DEFAULT_SETTINGS.primal_tolerance
+_DUAL_TOLERANCE = _DEFAULT_SETTINGS.dual_tolerance
+_STATIONARITY_TOLERANCE = _DEFAULT_SETTINGS.stationarity_tolerance
+_MAX_ITERATIONS = _DEFAULT_SETTINGS.max_iterations
+
+
+@kernel
+def solve_with_defaults(H, f, C, u, prox_weight, y, workspace) -> int:
+    """`solve_dense_qp_kernel` at the default tolerances (DenseQpSettings) from compiled code,
+    without a warm start: y (n,) and the status. `workspace`: (matrices, transposed, vectors,
+    integers) of `workspace_arrays` for at least this size."""
+    n, m = f.shape[0], u.shape[0]
+    matrices, transposed, vectors, integers = workspace
+    status, _, _ = solve_dense_qp_kernel(
+        H,
+        f,
+        C,
+        u,
+        prox_weight,
+        _PRIMAL_TOLERANCE,
+        _DUAL_TOLERANCE,
+        _STATIONARITY_TOLERANCE,
+        _MAX_ITERATIONS,
+        y,
+        np.empty(m),
+        np.empty(max(n, 1), np.int64),
+        0,
+        matrices,
+        transposed,
+        vectors,
+        integers,
+    )
+    return status
+
+
 def make_workspace(n_max: int, m_max: int) -> DenseQpWorkspace:
     """Workspace for any problem with n <= n_max variables and m <= m_max rows."""
     matrices, transposed, vectors, integers = workspace_arrays(n_max, m_max)

@@ -6,8 +6,7 @@ module is the same tick in compiled code: `projected_impedance_tick` takes the t
 the controller's discrete state as arrays, writes the next state and returns the tick's status,
 with the dynamics terms from `go1_dynamics`, the control law from `compiled_projected_dynamics`
 and the leg kinematics of a joint reference from `leg_odometry`. No Python object is touched
-between the first input and the last output, and the interpreter's lock is released throughout
-(once `dense_qp` is compiled code: its stand-in calls DAQP in numba's object mode).
+between the first input and the last output, and the interpreter's lock is released throughout.
 
 Discrete state, as ProjectedImpedanceController declares it: command (60), reference (24: q_ref,
 qd_ref in Unitree order), ramp (nc), hold (8: initialised flag, p_WB, quaternion), estimate (28:
