@@ -23,6 +23,7 @@ when it was compiled; the cache folder's hash covers both.
 """
 
 import hashlib
+import logging
 import os
 from pathlib import Path
 
@@ -30,6 +31,7 @@ import numpy as np
 
 try:
     import numba
+    from numba.core import event
 except ImportError:  # pragma: no cover - numba is a dependency; this keeps a broken install usable
     numba = None
 
@@ -52,8 +54,30 @@ def _cache_folder() -> Path:
 
 
 if ENABLED:
+
+    class _CompileNotice(event.Listener):
+        """Says once per process that kernels are being compiled: with an empty cache (a new
+        version of the package) building the controllers takes minutes, which should not look
+        like a hang."""
+
+        def __init__(self) -> None:
+            self.told = False
+
+        def on_start(self, event_) -> None:
+            if not self.told:
+                self.told = True
+                logging.getLogger(__name__).warning(
+                    "compiling the package's numba kernels into %s: once per version of the package, "
+                    "a few minutes on a 2-core machine",
+                    numba.config.CACHE_DIR,
+                )
+
+        def on_end(self, event_) -> None:
+            pass
+
     # Read by numba when a kernel is decorated (below, as each module is imported).
     numba.config.CACHE_DIR = str(_cache_folder())
+    event.register("numba:compile", _CompileNotice())
 
 
 def new_record(dtype: np.dtype) -> np.ndarray:
