@@ -54,9 +54,16 @@ class RobotView:
         """Foot centre in the trunk frame [m]."""
         return self._feet_B[robot.LEG_NAMES.index(leg)].copy()
 
+    @functools.cached_property
+    def _feet_W(self) -> np.ndarray:
+        """(4, 3) every foot centre in the world [m], Unitree leg order (made once per view)."""
+        feet = self._feet_B @ self.X_WB.rotation().matrix().T + self.X_WB.translation()
+        feet.flags.writeable = False
+        return feet
+
     def foot_W(self, leg: str) -> np.ndarray:
         """Foot centre in the world [m]."""
-        return self.X_WB @ self.foot_B(leg)
+        return self._feet_W[robot.LEG_NAMES.index(leg)].copy()
 
     def calf_rotation_W(self, leg: str) -> np.ndarray:
         """(3, 3) orientation of the calf of `leg` in the world, R_WC (estimate and joint angles)."""
@@ -65,6 +72,10 @@ class RobotView:
 
     def feet_W(self) -> dict[str, np.ndarray]:
         return {leg: self.foot_W(leg) for leg in robot.LEG_NAMES}
+
+    def feet_W_array(self) -> np.ndarray:
+        """(4, 3) every foot centre in the world [m], Unitree leg order (read-only)."""
+        return self._feet_W
 
     def com_W(self) -> np.ndarray:
         """Whole-robot centre of mass in the world [m] (plain Go1 model)."""
