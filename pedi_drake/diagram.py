@@ -13,9 +13,10 @@ from pydrake.common.value import AbstractValue
 from pydrake.geometry import Meshcat
 from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import ConstantValueSource, MatrixGain, VectorLogSink
+from pydrake.systems.primitives import ConstantValueSource, Demultiplexer, MatrixGain, VectorLogSink
 
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
+from pedi_drake.control.references import BODY_REFERENCE_SIZE, LEG_REFERENCE_SIZE
 from pedi_drake.control.stand_controller import StandController
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
@@ -226,13 +227,21 @@ def MakePedipulationDiagram(
                 builder.Connect(operator.GetOutputPort("operator_command"), manager.GetInputPort("operator_command"))
             for name in ("position_measured", "velocity_measured", "torque_estimated", "foot_contact"):
                 builder.Connect(station.GetOutputPort(f"go1.{name}"), manager.GetInputPort(name))
-            for name in ("body_reference", "leg_reference", "contact_set", "safety_polygon", "friction"):
+            # Both references from one evaluation of the manager a tick (see MissionManager).
+            split = builder.AddNamedSystem(
+                "mission.references", Demultiplexer([BODY_REFERENCE_SIZE, LEG_REFERENCE_SIZE])
+            )
+            builder.Connect(manager.GetOutputPort("references"), split.get_input_port())
+            body_reference, leg_reference = split.get_output_port(0), split.get_output_port(1)
+            builder.Connect(body_reference, controller.GetInputPort("body_reference"))
+            builder.Connect(leg_reference, controller.GetInputPort("leg_reference"))
+            for name in ("contact_set", "safety_polygon", "friction"):
                 builder.Connect(manager.GetOutputPort(name), controller.GetInputPort(name))
             if isinstance(estimator, KalmanEstimator):
                 builder.Connect(manager.GetOutputPort("contact_set"), estimator.contact_set_port)
             extra_logs["mission.status"] = manager.GetOutputPort("mission_status")
-            extra_logs["mission.body_reference"] = manager.GetOutputPort("body_reference")
-            extra_logs["mission.leg_reference"] = manager.GetOutputPort("leg_reference")
+            extra_logs["mission.body_reference"] = body_reference
+            extra_logs["mission.leg_reference"] = leg_reference
             extra_logs["mission.contact_set"] = manager.GetOutputPort("contact_set")
             extra_logs["mission.safety_polygon"] = manager.GetOutputPort("safety_polygon")
     command = controller.GetOutputPort("command")

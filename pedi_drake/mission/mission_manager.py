@@ -6,9 +6,12 @@ is one abstract state value (MissionProgress), updated at `period`; references a
 trajectories sampled at output time, so the controller sees smooth references at its own rate.
 
 What a tick costs: at each update the references are packed into a ReferenceTable (abstract
-state), which `body_reference` and `leg_reference` sample with one compiled kernel each; every
-other output changes only at the updates, so it is discrete state written there and its port
-is a state output port (no Python runs when the controller, the estimator or a log reads it).
+state), which `references` (body_reference then leg_reference, 19 + 48) samples with one
+compiled kernel: the diagram splits it for the controller and the logs (a Demultiplexer), so one
+Python call a tick serves both; `body_reference` and `leg_reference` give the same vectors
+separately (tests, scripts). Every other output changes only at the updates, so it is discrete
+state written there and its port is a state output port (no Python runs when the controller,
+the estimator or a log reads it).
 
 Joint angles for foot targets come from one LegIkSystem per leg the mission moves (`ik_legs`),
 through ports: the manager asks on `ik_foot_target_W.<leg>` (NaN when it asks nothing), with
@@ -60,7 +63,14 @@ from pedi_drake.mission.progress import (
     PhaseRecord,
     References,
 )
-from pedi_drake.mission.reference_table import body_reference_into, leg_reference_into, reference_table, warm_up
+from pedi_drake.mission.reference_table import (
+    REFERENCES_SIZE,
+    body_reference_into,
+    leg_reference_into,
+    reference_table,
+    references_into,
+    warm_up,
+)
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.operator.command import MODE_AUTONOMOUS, MODE_TELEOP, OPERATOR_COMMAND_SIZE, OperatorCommand
 from pedi_drake.prongs import ProngDesign
@@ -156,6 +166,9 @@ class MissionManager(LeafSystem):
         )
         self.DeclareVectorOutputPort(
             "leg_reference", controller_refs.LEG_REFERENCE_SIZE, self._calc_legs, prerequisites_of_calc=samples
+        )
+        self.DeclareVectorOutputPort(
+            "references", REFERENCES_SIZE, self._calc_references, prerequisites_of_calc=samples
         )
         self.DeclareStateOutputPort("contact_set", self._contacts)
         self.DeclareStateOutputPort("safety_polygon", self._polygon)
@@ -439,6 +452,10 @@ class MissionManager(LeafSystem):
     def _calc_legs(self, context, output: BasicVector) -> None:
         table = context.get_abstract_state(self._references).get_value()
         leg_reference_into(table.legs, context.get_time(), output.get_mutable_value())
+
+    def _calc_references(self, context, output: BasicVector) -> None:
+        table = context.get_abstract_state(self._references).get_value()
+        references_into(table.body, table.legs, context.get_time(), output.get_mutable_value())
 
     @staticmethod
     def _ik_target_W(plan, leg: str) -> np.ndarray:

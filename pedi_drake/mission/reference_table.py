@@ -4,9 +4,9 @@ The MissionManager's `body_reference` and `leg_reference` outputs are sampled at
 tick (500 Hz) from trajectory objects that change only at the manager's updates (100 Hz).
 Sampling the objects costs tens of microseconds of Python a tick; so at each update the
 References are packed once (`reference_table`: the trajectories' packed forms, see
-pedi_drake.trajectory) and a tick runs one compiled kernel per output (`body_reference_into`,
-`leg_reference_into`) that writes the controller's vector in place: the same formulas as
-`sample`, no Python object made.
+pedi_drake.trajectory) and a tick runs one compiled kernel (`references_into`: both vectors, one
+after the other; or `body_reference_into`, `leg_reference_into`) that writes the controller's
+vectors in place: the same formulas as `sample`, no Python object made.
 
 Layouts (float arrays):
     body  [index of the orientation part, the position trajectory's packed form, the orientation's
@@ -32,6 +32,8 @@ from pedi_drake.trajectory import sample_rotation_into, sample_vector_into, smoo
 
 _LEG_HEADER = 8  # mode, kp, kd, calf flag, calf rotation (3), packed size
 _PRESS_SIZE = 11
+# `references_into`'s vector: body_reference, then leg_reference.
+REFERENCES_SIZE = BODY_REFERENCE_SIZE + LEG_REFERENCE_SIZE
 
 
 @dataclasses.dataclass(frozen=True)
@@ -122,7 +124,15 @@ def leg_reference_into(legs, t, x) -> None:
             x[k + 7 + j] = speed * sdd * direction
 
 
+@kernel
+def references_into(body, legs, t, x) -> None:
+    """Fills `x` (REFERENCES_SIZE) with `body_reference` then `leg_reference` at `t` [s]."""
+    body_reference_into(body, t, x[:BODY_REFERENCE_SIZE])
+    leg_reference_into(legs, t, x[BODY_REFERENCE_SIZE:])
+
+
 def warm_up(table: ReferenceTable) -> None:
     """Compiles (or loads) the kernels a tick runs, outside any tick."""
+    references_into(table.body, table.legs, 0.0, np.zeros(REFERENCES_SIZE))
     body_reference_into(table.body, 0.0, np.zeros(BODY_REFERENCE_SIZE))
     leg_reference_into(table.legs, 0.0, np.zeros(LEG_REFERENCE_SIZE))
