@@ -149,8 +149,8 @@ class MissionManager(LeafSystem):
         self._progress = self.DeclareAbstractState(AbstractValue.Make(MissionProgress()))
         # What the outputs read, written with every progress stored (`_store`); until the first
         # one, the values of a mission that has not started (references: holding the origin).
-        resting = reference_table(References.holding(np.zeros(3), RotationMatrix(), 0.0, self._env.num_prongs))
-        self._references = self.DeclareAbstractState(AbstractValue.Make(resting))
+        holding = References.holding(np.zeros(3), RotationMatrix(), 0.0, self._env.num_prongs)
+        self._references = self.DeclareAbstractState(AbstractValue.Make(reference_table(holding)))
         self._polygon = self.DeclareDiscreteState(controller_refs.SAFETY_POLYGON_SIZE)
         self._contacts = self.DeclareDiscreteState(np.concatenate([np.ones(4), np.zeros(self._env.num_prongs)]))
         self._status = self.DeclareDiscreteState(self._status_vector(MissionProgress()))
@@ -180,7 +180,7 @@ class MissionManager(LeafSystem):
             "friction", 1, lambda c, o: o.SetFromVector([self._friction]), prerequisites_of_calc={self.nothing_ticket()}
         )
         self.DeclareStateOutputPort("mission_status", self._status)
-        warm_up(resting)
+        warm_up(holding)
 
     @property
     def mission(self) -> spec.MissionSpec:

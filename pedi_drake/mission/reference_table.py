@@ -131,8 +131,12 @@ def references_into(body, legs, t, x) -> None:
     leg_reference_into(legs, t, x[BODY_REFERENCE_SIZE:])
 
 
-def warm_up(table: ReferenceTable) -> None:
-    """Compiles (or loads) the kernels a tick runs, outside any tick."""
+def warm_up(refs: References) -> None:
+    """Compiles (or loads) the kernels a tick runs, outside any tick: the outputs' and, for the
+    phases, the trajectories' own `sample` (`refs` has a position and an orientation)."""
+    table = reference_table(refs)
     references_into(table.body, table.legs, 0.0, np.zeros(REFERENCES_SIZE))
     body_reference_into(table.body, 0.0, np.zeros(BODY_REFERENCE_SIZE))
     leg_reference_into(table.legs, 0.0, np.zeros(LEG_REFERENCE_SIZE))
+    refs.body_position.sample(0.0)
+    refs.body_orientation.sample(0.0)
