@@ -6,8 +6,9 @@
 1. Records: the mission in simulation (seed 0); the status the robot would have sent at every
    tick (q, qd, tau_est, IMU, foot sensors) is read from the run's logs.
 2. Replays: the `--hardware` diagram (driver, estimator, mission manager, IK, whole-body
-   controller) is built on an in-process bus; before every tick the recorded status is published,
-   and the tick (receive, estimate, mission, IK, control, safety, send) is timed alone, unpaced.
+   controller) is built on an in-process bus and advanced as a hardware run advances it (one
+   AdvanceTo, with a monitor); before every tick the recorded status is published, and the tick
+   (receive, estimate, mission, IK, control, safety, send) is timed alone, unpaced.
    Two passes: with the garbage collector as Python leaves it, and as a hardware run runs
    (go1_driver.hardware_run: the heap frozen at the start). Each tick is attributed to what ran
    in it: a garbage collection (gc.callbacks), a mission phase transition, or nothing special.
@@ -40,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import EventStatus
 
 from pedi_drake.apps.sim_bridge import status_messages
 from pedi_drake.benchmarks.station import real_time_factor
@@ -62,7 +64,7 @@ from pedi_drake.scenario import load_scenario
 STAGES = (
     ("receive", Go1LcmReceiver, ("_latch",)),
     ("estimate", KalmanEstimator, ("_update", "_calc_base_state")),
-    ("mission", MissionManager, ("_update", "_calc_body", "_calc_legs")),
+    ("mission", MissionManager, ("_update", "_calc_references", "_calc_body", "_calc_legs")),
     ("ik", LegIkSystem, ("_update",)),
     ("control", WholeBodyController, ("_update",)),
     ("safety", Go1SafetyFilter, ("_update", "_calc_command")),
@@ -157,7 +159,15 @@ class Replay:
         return np.array([c.message_to_command(decode(data)) for data in self.commands])
 
     def run(self, ticks: int, stage_times: dict | None = None) -> dict:
-        """Times `ticks` ticks; returns tick times [ms] and what happened in each."""
+        """Times `ticks` ticks; returns tick times [ms] and what happened in each.
+
+        The ticks run in one AdvanceTo, as in a hardware run (pedi_drake.run), with a Simulator
+        monitor at the end of every step (a hardware run has one too) that publishes the next
+        tick's status and stamps the times; the monitor's own work is left out of the tick. An
+        AdvanceTo per tick would add work a hardware run does not do: at every AdvanceTo the
+        Simulator looks up the witness functions of every system again, a Python call per
+        Python system (it does so otherwise only after an unrestricted update, the mission's).
+        """
         collections: list[float] = []
 
         def on_gc(phase, info) -> None:
@@ -174,22 +184,41 @@ class Replay:
         cpu_ms = np.zeros(ticks)
         phase_index = np.zeros(ticks, dtype=int)
         gc_generation = np.full(ticks, -1)
+        tick = {"k": 0, "start": 0.0, "cpu_start": 0.0}
+
+        def start_tick(k: int) -> None:
+            self._publish(k + 1)
+            collections.clear()
+            if stage_times is not None:
+                stage_times["tick"] = k
+            tick["k"], tick["start"], tick["cpu_start"] = k, time.perf_counter(), time.thread_time()
+
+        def end_of_step(root_context) -> EventStatus:
+            cpu_end, end = time.thread_time(), time.perf_counter()
+            k = tick["k"]
+            # A step that ends between ticks (an update at a period that is not a multiple of the
+            # tick's, the leg IK's) belongs to the tick that is running.
+            if k >= ticks or root_context.get_time() < (k + 1) * self.period - 1e-9:
+                return EventStatus.Succeeded()
+            tick_ms[k] = 1e3 * (end - tick["start"])
+            cpu_ms[k] = 1e3 * (cpu_end - tick["cpu_start"])
+            phase_index[k] = self.manager.progress(manager_context).index
+            starts = [g for _, p, g in collections if p == "start"]
+            if starts:
+                gc_generation[k] = max(starts)
+            if k + 1 < ticks:
+                start_tick(k + 1)
+            else:
+                tick["k"] = ticks
+            return EventStatus.Succeeded()
+
         gc.callbacks.append(on_gc)
+        self.simulator.set_monitor(end_of_step)
         try:
-            for k in range(ticks):
-                self._publish(k + 1)
-                collections.clear()
-                if stage_times is not None:
-                    stage_times["tick"] = k
-                start, cpu_start = time.perf_counter(), time.thread_time()
-                self.simulator.AdvanceTo((k + 1) * self.period)
-                tick_ms[k] = 1e3 * (time.perf_counter() - start)
-                cpu_ms[k] = 1e3 * (time.thread_time() - cpu_start)
-                phase_index[k] = self.manager.progress(manager_context).index
-                starts = [g for _, p, g in collections if p == "start"]
-                if starts:
-                    gc_generation[k] = max(starts)
+            start_tick(0)
+            self.simulator.AdvanceTo(ticks * self.period)
         finally:
+            self.simulator.clear_monitor()
             gc.callbacks.remove(on_gc)
             self.link.close()
         transition = np.zeros(ticks, dtype=bool)
