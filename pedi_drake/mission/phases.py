@@ -105,7 +105,7 @@ def stance_safety_polygon(view: RobotView, env: MissionEnvironment, contacts: np
     vertices_W = shrink_polygon(points[:, :2], margin)
     if len(vertices_W) < 3:
         return safety_polygon_vector()
-    origin = vertices_W.mean(axis=0)
+    origin = vertices_W.sum(axis=0) / len(vertices_W)  # the mean, without np.mean's overhead
     yaw = RollPitchYaw(view.X_WB.rotation()).yaw_angle()
     c, s = math.cos(yaw), math.sin(yaw)
     # Rows are vertices: (v - origin) R_WP, i.e. R_PW (v - origin) for each.

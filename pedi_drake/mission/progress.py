@@ -155,6 +155,13 @@ class ModeSwitch:
         return self  # a value
 
 
+def _shallow(obj):
+    """A new object of obj's class with the same attributes (copy.copy without its protocol's cost)."""
+    clone = object.__new__(type(obj))
+    clone.__dict__.update(obj.__dict__)
+    return clone
+
+
 def _duplicate(value):
     """A deep copy of plain data (dicts, lists, tuples, arrays, scalars, values), at a fraction of
     copy.deepcopy's cost on the small memos and metrics copied at every mission update."""
@@ -198,7 +205,7 @@ class MissionProgress:
     def copy(self) -> "MissionProgress":
         """A copy that is safe to change (a progress in a Context is never changed): its containers
         are duplicated, its values shared (see the module docstring)."""
-        clone = copy.copy(self)
+        clone = _shallow(self)
         clone.memo = _duplicate(self.memo)
         clone.references = None if self.references is None else self.references.copy()
         # Only the current phase's record (the last) is ever changed: the finished phases'
@@ -206,7 +213,9 @@ class MissionProgress:
         clone.records = self.records[:-1]
         if self.records:
             last = self.records[-1]
-            clone.records.append(dataclasses.replace(last, metrics=_duplicate(last.metrics)))
+            record = _shallow(last)
+            record.metrics = _duplicate(last.metrics)
+            clone.records.append(record)
         # Lists of phases (never changed during a run) and of ModeSwitch values.
         clone.recovery, clone.interlude, clone.switches = list(self.recovery), list(self.interlude), list(self.switches)
         return clone
