@@ -133,6 +133,8 @@ class Replay:
         self.link = hardware_link(self.diagram)
         self.bus = self.link.transport
         self.simulator = Simulator(self.diagram)
+        # As a run does (pedi_drake.run): the log never grows in a tick.
+        self.built.reserve_logs(self.simulator.get_mutable_context(), len(samples) * period)
         self.manager = self.diagram.GetSubsystemByName("mission")
         self.commands: list[np.ndarray] = []
         self.bus.subscribe(c.COMMAND_CHANNEL, lambda _c, data: self.commands.append(data))
