@@ -4,6 +4,12 @@ Scenario -> station (plant or driver) -> state estimate -> mission manager <-> l
 controller -> station command, with the operator's input (when the scenario has one) beside the
 estimate into the mission manager and its E-stop on the command. run_sim.py, the tests, the
 benchmarks and the notebooks all build their diagrams here.
+
+Every logged signal goes through one Multiplexer into one VectorLogSink (`LOG_SINK`):
+a sink costs about as much a tick whether it publishes or not (the Simulator schedules every
+system's periodic events at every step), about 4,500 instructions, and a run logs 14 to 20
+signals; the multiplexer's copy costs less than a tenth of that. `PedipulationDiagram.logs`
+splits the one log into the signals again.
 """
 
 import dataclasses
@@ -12,14 +18,16 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.geometry import Meshcat
 from pydrake.lcm import DrakeLcm, DrakeLcmInterface
-from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import ConstantValueSource, MatrixGain, VectorLogSink
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder
+from pydrake.systems.primitives import ConstantValueSource, Demultiplexer, MatrixGain, Multiplexer, VectorLogSink
 
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
+from pedi_drake.control.references import BODY_REFERENCE_SIZE, LEG_REFERENCE_SIZE
 from pedi_drake.control.stand_controller import StandController
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
 from pedi_drake.estimation.kalman_estimator import KalmanEstimator
+from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.ik.leg_ik_system import LegIkSystem
 from pedi_drake.log_hold import LogHold
@@ -53,6 +61,9 @@ SIM_LOGGED_SIGNALS = (
 )
 # The tolerance of the mission's IK solves [m]: well inside every reach phase's tolerance.
 MISSION_IK_TOLERANCE = 5e-4
+# The one log of a run's signals, and the multiplexer that feeds it (subsystem names).
+LOG_SINK = "log"
+LOG_MULTIPLEXER = "log.signals"
 # Simulated sensor signals that are costly to compute: logged through a sample-and-hold.
 SAMPLED_SENSOR_SIGNALS = (
     "go1.imu",
@@ -68,11 +79,25 @@ class PedipulationDiagram:
     """The built diagram and the names of its parts that a run reads back."""
 
     diagram: Diagram
-    # Logger subsystem name by signal name (VectorLogSink, read with FindLog(context)).
-    loggers: dict[str, str]
+    # The rows of each logged signal (by name) in the one log (`LOG_SINK`); read with `logs`.
+    log_rows: dict[str, slice]
     hardware: bool
     # The mission being run, if any (its manager is the subsystem "mission").
     mission: MissionSpec | None = None
+    log_period: float = 0.002  # [s]
+
+    def reserve_logs(self, context: Context, duration: float) -> None:
+        """Makes room in the log of `context` (the root context) for `duration` [s] of samples: a
+        log that fills up doubles, copying all it holds (tens of megabytes late in a run) within
+        one tick."""
+        log = self.diagram.GetSubsystemByName(LOG_SINK).FindMutableLog(context)
+        log.Reserve(int(duration / self.log_period) + 2)
+
+    def logs(self, context: Context) -> dict[str, SignalLog]:
+        """Every logged signal's samples so far in `context` (the root context), as copies."""
+        log = self.diagram.GetSubsystemByName(LOG_SINK).FindLog(context)
+        times, data = log.sample_times(), log.data()
+        return {name: SignalLog(times.copy(), data[rows].copy()) for name, rows in self.log_rows.items()}
 
 
 def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
@@ -151,7 +176,7 @@ def MakePedipulationDiagram(
     log_period: float = 0.002,
     operator_lcm: DrakeLcmInterface | None = None,
 ) -> PedipulationDiagram:
-    """Wires station, estimator, mission manager, leg IK and controller for `scenario`, with loggers
+    """Wires station, estimator, mission manager, leg IK and controller for `scenario`, with a log
     of LOGGED_SIGNALS (and of the controller's diagnostics and the mission's outputs).
 
     `operator_lcm`: the bus of the operator's input (scenario `operator:`); None opens the URL of
@@ -226,13 +251,21 @@ def MakePedipulationDiagram(
                 builder.Connect(operator.GetOutputPort("operator_command"), manager.GetInputPort("operator_command"))
             for name in ("position_measured", "velocity_measured", "torque_estimated", "foot_contact"):
                 builder.Connect(station.GetOutputPort(f"go1.{name}"), manager.GetInputPort(name))
-            for name in ("body_reference", "leg_reference", "contact_set", "safety_polygon", "friction"):
+            # Both references from one evaluation of the manager a tick (see MissionManager).
+            split = builder.AddNamedSystem(
+                "mission.references", Demultiplexer([BODY_REFERENCE_SIZE, LEG_REFERENCE_SIZE])
+            )
+            builder.Connect(manager.GetOutputPort("references"), split.get_input_port())
+            body_reference, leg_reference = split.get_output_port(0), split.get_output_port(1)
+            builder.Connect(body_reference, controller.GetInputPort("body_reference"))
+            builder.Connect(leg_reference, controller.GetInputPort("leg_reference"))
+            for name in ("contact_set", "safety_polygon", "friction"):
                 builder.Connect(manager.GetOutputPort(name), controller.GetInputPort(name))
             if isinstance(estimator, KalmanEstimator):
                 builder.Connect(manager.GetOutputPort("contact_set"), estimator.contact_set_port)
             extra_logs["mission.status"] = manager.GetOutputPort("mission_status")
-            extra_logs["mission.body_reference"] = manager.GetOutputPort("body_reference")
-            extra_logs["mission.leg_reference"] = manager.GetOutputPort("leg_reference")
+            extra_logs["mission.body_reference"] = body_reference
+            extra_logs["mission.leg_reference"] = leg_reference
             extra_logs["mission.contact_set"] = manager.GetOutputPort("contact_set")
             extra_logs["mission.safety_polygon"] = manager.GetOutputPort("safety_polygon")
     command = controller.GetOutputPort("command")
@@ -250,18 +283,24 @@ def MakePedipulationDiagram(
     else:
         # The host's clock beside the signals: aligns this run's logs with the robot side's.
         sources["wall_clock"] = builder.AddNamedSystem("wall_clock", WallClock()).clock
-    loggers = {}
+    logged, log_rows = [], {}
     for name, port in sources.items():
-        logger = builder.AddNamedSystem(f"log.{name}", VectorLogSink(port.size(), log_period))
-        logged = port
+        builder.ExportOutput(port, name)
         if not hardware and name in SAMPLED_SENSOR_SIGNALS:
             # Logged directly, these sensors would be computed twice a tick (see LogHold).
             hold = builder.AddNamedSystem(f"log_hold.{name}", LogHold(port.size(), log_period))
             builder.Connect(port, hold.get_input_port())
-            logged = hold.get_output_port()
-        builder.Connect(logged, logger.get_input_port())
-        loggers[name] = logger.get_name()
-        builder.ExportOutput(port, name)
+            port = hold.get_output_port()
+        start = sum(previous.size() for previous in logged)
+        log_rows[name] = slice(start, start + port.size())
+        logged.append(port)
+    signals = builder.AddNamedSystem(LOG_MULTIPLEXER, Multiplexer([port.size() for port in logged]))
+    for k, port in enumerate(logged):
+        builder.Connect(port, signals.get_input_port(k))
+    sink = builder.AddNamedSystem(LOG_SINK, VectorLogSink(signals.get_output_port().size(), log_period))
+    builder.Connect(signals.get_output_port(), sink.get_input_port())
     diagram = builder.Build()
     diagram.set_name("pedipulation")
-    return PedipulationDiagram(diagram=diagram, loggers=loggers, hardware=hardware, mission=mission)
+    return PedipulationDiagram(
+        diagram=diagram, log_rows=log_rows, hardware=hardware, mission=mission, log_period=log_period
+    )

@@ -92,6 +92,7 @@ def simulate(
     built = MakePedipulationDiagram(scenario, meshcat, hardware=hardware)
     diagram = built.diagram
     simulator = Simulator(diagram)
+    built.reserve_logs(simulator.get_mutable_context(), scenario.simulation_duration)
     if hardware:
         simulator.set_target_realtime_rate(realtime_rate)
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
@@ -121,10 +122,7 @@ def simulate(
         meshcat.PublishRecording()
         replay_html = meshcat.StaticHtml()
     context = simulator.get_context()
-    logs = {}
-    for signal, logger in built.loggers.items():
-        log = diagram.GetSubsystemByName(logger).FindLog(context)
-        logs[signal] = SignalLog(log.sample_times().copy(), log.data().copy())
+    logs = built.logs(context)
     return RunRecord(
         scenario=scenario,
         name=name,

@@ -11,24 +11,40 @@ the segment holds x0, after t0 + T it holds x1 (velocity and acceleration zero).
 
 Orientations are interpolated on SO(3) along the geodesic: R(t) = R0 exp(s(tau) theta [k]x) with
 theta k the axis-angle of R0^T R1, so the angular velocity is parallel to the fixed axis R0 k.
+
+Every trajectory is also a flat float array, its `packed` form (layouts beside the PACKED_*
+kinds), and the compiled kernels `sample_vector_into` and `sample_rotation_into` sample that
+form: the classes' `sample` calls them, and so does a control tick that samples references
+without the classes (pedi_drake.mission.reference_table). One implementation of each formula,
+with no Python object made per sample in the tick.
 """
 
 import dataclasses
 import functools
+import math
 
 import numpy as np
 from pydrake.common.eigen_geometry import AngleAxis
 from pydrake.math import RotationMatrix
 
 from pedi_drake.exceptions import PediError
+from pedi_drake.jit import kernel
+
+# Kinds of packed trajectories (the first entry of every `packed` array) and their layouts:
+# QUINTIC  [kind, m, n, m x (t0, duration, start (n), end (n))]: rest-to-rest quintics, one after
+#          the other (a QuinticSegment is m = 1); the first whose end is after t is sampled, or
+#          the last.
+# RAMP     [kind, n, t0, duration, start (n), velocity (n)]
+# CIRCLE   [kind, t0, duration, laps, phase, radius, start (3)]
+# GEODESIC [kind, t0, duration, angle, R_start (9, row-major), R_end (9), axis in the start frame
+#          (3), axis in W (3), quaternion of R_start (4, w x y z), of R_end (4)]
+# PIVOT    [kind, pivot (3), lever at the start in the rotating frame (3), the GEODESIC packed]
+PACKED_QUINTIC, PACKED_RAMP, PACKED_CIRCLE, PACKED_GEODESIC, PACKED_PIVOT = 0, 1, 2, 3, 4
+GEODESIC_PACKED_SIZE = 36
 
 
-def min_jerk(tau: float) -> tuple[float, float, float]:
-    """The minimum-jerk blend (paper 000, Eq. 2, rest to rest) at normalised time `tau`, clamped to [0, 1].
-
-    Returns (s, ds/dtau, d2s/dtau2) of s = 10 tau^3 - 15 tau^4 + 6 tau^5: zero slope and
-    curvature at both ends.
-    """
+@kernel
+def _min_jerk(tau: float) -> tuple[float, float, float]:
     if tau <= 0.0:
         return 0.0, 0.0, 0.0
     if tau >= 1.0:
@@ -39,12 +55,27 @@ def min_jerk(tau: float) -> tuple[float, float, float]:
     return s, ds, dds
 
 
+def min_jerk(tau: float) -> tuple[float, float, float]:
+    """The minimum-jerk blend (paper 000, Eq. 2, rest to rest) at normalised time `tau`, clamped to [0, 1].
+
+    Returns (s, ds/dtau, d2s/dtau2) of s = 10 tau^3 - 15 tau^4 + 6 tau^5: zero slope and
+    curvature at both ends. (The kernels' blend, run interpreted: callers in a control tick
+    outside a kernel need no compiled code.)
+    """
+    return _min_jerk.py_func(tau)
+
+
+@kernel
+def _quintic_time_law(t: float, t0: float, duration: float) -> tuple[float, float, float]:
+    s, ds, dds = _min_jerk((t - t0) / duration)
+    return s, ds / duration, dds / duration**2
+
+
 def quintic_time_law(t: float, t0: float, duration: float) -> tuple[float, float, float]:
     """(s, ds/dt [1/s], d2s/dt2 [1/s^2]) of the rest-to-rest quintic at time `t` [s]."""
     if not duration > 0.0:
         raise PediError(f"quintic duration must be > 0 s, got {duration!r}")
-    s, ds, dds = min_jerk((t - t0) / duration)
-    return s, ds / duration, dds / duration**2
+    return _quintic_time_law.py_func(t, t0, duration)
 
 
 def smooth_start_time_law(t: float, t0: float, ramp: float) -> tuple[float, float, float]:
@@ -58,12 +89,18 @@ def smooth_start_time_law(t: float, t0: float, ramp: float) -> tuple[float, floa
     """
     if not ramp > 0.0:
         raise PediError(f"speed ramp must be > 0 s, got {ramp!r}")
+    return smooth_start_kernel.py_func(t, t0, ramp)
+
+
+@kernel
+def smooth_start_kernel(t: float, t0: float, ramp: float) -> tuple[float, float, float]:
+    """`smooth_start_time_law` without the check of `ramp` (> 0: the caller's to ensure)."""
     tau = (t - t0) / ramp
     if tau <= 0.0:
         return 0.0, 0.0, 0.0
     if tau >= 1.0:
         return t - t0 - 0.5 * ramp, 1.0, 0.0
-    speed, ds, _ = min_jerk(tau)
+    speed, ds, _ = _min_jerk(tau)
     # The blend's integral: tau^4 (2.5 - 3 tau + tau^2), 0.5 at tau = 1.
     return ramp * tau**4 * (2.5 - 3.0 * tau + tau**2), speed, ds / ramp
 
@@ -73,6 +110,148 @@ def quintic_coefficients(x0: float, x1: float, duration: float) -> np.ndarray:
     d = x1 - x0
     T = duration
     return np.array([x0, 0.0, 0.0, 10.0 * d / T**3, -15.0 * d / T**4, 6.0 * d / T**5])
+
+
+# Sampling kernels of the packed forms ---------------------------------------------------------
+
+
+@kernel
+def _sample_quintic_segment(packed, base, n, t, p, v, a) -> None:
+    """The quintic whose (t0, duration, start (n), end (n)) begin at packed[base], at `t` [s]."""
+    start, end = base + 2, base + 2 + n
+    s, ds, dds = _quintic_time_law(t, packed[base], packed[base + 1])
+    if s == 0.0 or s == 1.0:
+        # At rest at either end: exactly the end value (start + 1 * delta may round off it).
+        rest = start if s == 0.0 else end
+        for i in range(n):
+            p[i] = packed[rest + i]
+            v[i] = 0.0
+            a[i] = 0.0
+        return
+    for i in range(n):
+        delta = packed[end + i] - packed[start + i]
+        p[i] = packed[start + i] + s * delta
+        v[i] = ds * delta
+        a[i] = dds * delta
+
+
+@kernel
+def _quaternion_of(R, q) -> None:
+    """q (w, x, y, z), w >= 0, of the rotation matrix R: Drake's RotationMatrix::ToQuaternion
+    (the branch on the largest of the trace and the diagonal keeps it accurate near pi)."""
+    trace = R[0, 0] + R[1, 1] + R[2, 2]
+    if trace >= R[0, 0] and trace >= R[1, 1] and trace >= R[2, 2]:
+        w, x, y, z = 1.0 + trace, R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]
+    elif R[0, 0] >= R[1, 1] and R[0, 0] >= R[2, 2]:
+        w, x, y, z = R[2, 1] - R[1, 2], 1.0 - (trace - 2.0 * R[0, 0]), R[0, 1] + R[1, 0], R[0, 2] + R[2, 0]
+    elif R[1, 1] >= R[2, 2]:
+        w, x, y, z = R[0, 2] - R[2, 0], R[0, 1] + R[1, 0], 1.0 - (trace - 2.0 * R[1, 1]), R[1, 2] + R[2, 1]
+    else:
+        w, x, y, z = R[1, 0] - R[0, 1], R[0, 2] + R[2, 0], R[1, 2] + R[2, 1], 1.0 - (trace - 2.0 * R[2, 2])
+    scale = (-1.0 if w < 0.0 else 1.0) / math.sqrt(x * x + y * y + z * z + w * w)
+    q[0], q[1], q[2], q[3] = w * scale, x * scale, y * scale, z * scale
+
+
+@kernel
+def sample_rotation_into(packed, t, R, q, w, alpha) -> None:
+    """Samples a GEODESIC packed array at `t` [s] into R (3, 3) = R_WB, its quaternion q (4,),
+    the angular velocity w (3,) [rad/s] and acceleration alpha (3,) [rad/s^2], both in W."""
+    s, ds, dds = _quintic_time_law(t, packed[1], packed[2])
+    if s == 0.0 or s == 1.0:
+        # At rest: the end rotation itself, and its quaternion as Drake computed it when packed.
+        matrix, quaternion = (4, 28) if s == 0.0 else (13, 32)
+        for i in range(3):
+            for j in range(3):
+                R[i, j] = packed[matrix + 3 * i + j]
+            w[i] = 0.0
+            alpha[i] = 0.0
+        for i in range(4):
+            q[i] = packed[quaternion + i]
+        return
+    angle = packed[3]
+    # R_rel = exp(s angle [k]x), as Eigen's AngleAxis::toRotationMatrix; then R = R_start R_rel.
+    kx, ky, kz = packed[22], packed[23], packed[24]
+    theta = s * angle
+    sine, cosine = math.sin(theta), math.cos(theta)
+    sx, sy, sz = sine * kx, sine * ky, sine * kz
+    cx, cy, cz = (1.0 - cosine) * kx, (1.0 - cosine) * ky, (1.0 - cosine) * kz
+    r00, r11, r22 = cx * kx + cosine, cy * ky + cosine, cz * kz + cosine
+    r01, r10 = cx * ky - sz, cx * ky + sz
+    r02, r20 = cx * kz + sy, cx * kz - sy
+    r12, r21 = cy * kz - sx, cy * kz + sx
+    for i in range(3):
+        a0, a1, a2 = packed[4 + 3 * i], packed[5 + 3 * i], packed[6 + 3 * i]
+        R[i, 0] = a0 * r00 + a1 * r10 + a2 * r20
+        R[i, 1] = a0 * r01 + a1 * r11 + a2 * r21
+        R[i, 2] = a0 * r02 + a1 * r12 + a2 * r22
+    _quaternion_of(R, q)
+    rate, rate_dot = ds * angle, dds * angle
+    for i in range(3):
+        w[i] = rate * packed[25 + i]
+        alpha[i] = rate_dot * packed[25 + i]
+
+
+@kernel
+def sample_vector_into(packed, t, p, v, a) -> None:
+    """Samples a packed QUINTIC, RAMP, CIRCLE or PIVOT trajectory at `t` [s] into p, v, a
+    (its value, first and second time derivatives; units of the trajectory)."""
+    kind = packed[0]
+    if kind == PACKED_QUINTIC:
+        m, n = int(packed[1]), int(packed[2])
+        for k in range(m):
+            base = 3 + k * (2 + 2 * n)
+            if t < packed[base] + packed[base + 1] or k == m - 1:
+                _sample_quintic_segment(packed, base, n, t, p, v, a)
+                return
+    elif kind == PACKED_RAMP:
+        n, t0, duration = int(packed[1]), packed[2], packed[3]
+        elapsed = min(max(t - t0, 0.0), duration)
+        moving = t0 <= t < t0 + duration
+        for i in range(n):
+            velocity = packed[4 + n + i]
+            p[i] = packed[4 + i] + elapsed * velocity
+            v[i] = velocity if moving else 0.0
+            a[i] = 0.0
+    elif kind == PACKED_CIRCLE:
+        s, ds, dds = _quintic_time_law(t, packed[1], packed[2])
+        laps, phase, radius = packed[3], packed[4], packed[5]
+        sweep = 2.0 * np.pi * laps
+        angle, rate, rate_dot = phase + sweep * s, sweep * ds, sweep * dds
+        c, si = math.cos(angle), math.sin(angle)
+        p[0] = packed[6] - radius * math.cos(phase) + radius * c
+        p[1] = packed[7] - radius * math.sin(phase) + radius * si
+        p[2] = packed[8] - radius * 0.0 + radius * 0.0
+        v[0], v[1], v[2] = radius * rate * -si, radius * rate * c, radius * rate * 0.0
+        centripetal = radius * rate**2
+        a[0] = radius * rate_dot * -si - centripetal * c
+        a[1] = radius * rate_dot * c - centripetal * si
+        a[2] = radius * rate_dot * 0.0 - centripetal * 0.0
+    else:  # PACKED_PIVOT: a point turning with the rotation about the pivot
+        R, q, w, alpha = np.empty((3, 3)), np.empty(4), np.empty(3), np.empty(3)
+        sample_rotation_into(packed[7:], t, R, q, w, alpha)
+        r = np.empty(3)
+        for i in range(3):
+            r[i] = R[i, 0] * packed[4] + R[i, 1] * packed[5] + R[i, 2] * packed[6]
+            p[i] = packed[1 + i] + r[i]
+        wr = np.array([w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2], w[0] * r[1] - w[1] * r[0]])
+        v[0], v[1], v[2] = wr[0], wr[1], wr[2]
+        a[0] = (alpha[1] * r[2] - alpha[2] * r[1]) + (w[1] * wr[2] - w[2] * wr[1])
+        a[1] = (alpha[2] * r[0] - alpha[0] * r[2]) + (w[2] * wr[0] - w[0] * wr[2])
+        a[2] = (alpha[0] * r[1] - alpha[1] * r[0]) + (w[0] * wr[1] - w[1] * wr[0])
+
+
+def _read_only(x) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    x.flags.writeable = False
+    return x
+
+
+def _sampled(packed: np.ndarray, t: float, shape: tuple) -> "TrajectorySample":
+    """The TrajectorySample of a packed vector trajectory (values of `shape`) at `t` [s]."""
+    n = int(np.prod(shape))
+    p, v, a = np.empty(n), np.empty(n), np.empty(n)
+    sample_vector_into(packed, float(t), p, v, a)
+    return TrajectorySample(p.reshape(shape), v.reshape(shape), a.reshape(shape))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -122,18 +301,13 @@ class QuinticSegment:
 
     def sample(self, t: float) -> TrajectorySample:
         """Position, velocity and acceleration at time `t` [s]."""
-        s, ds, dds = quintic_time_law(t, self.t0, self.duration)
-        if s == 0.0 or s == 1.0:
-            return self._at_rest[int(s)]
-        delta = self.end - self.start
-        return TrajectorySample(self.start + s * delta, ds * delta, dds * delta)
+        return _sampled(self.packed, t, self.start.shape)
 
     @functools.cached_property
-    def _at_rest(self) -> tuple[TrajectorySample, TrajectorySample]:
-        """The samples before the start and after the end (read-only arrays, made once)."""
-        zero = np.zeros_like(self.start)
-        zero.flags.writeable = False
-        return TrajectorySample(self.start, zero, zero), TrajectorySample(self.end, zero, zero)
+    def packed(self) -> np.ndarray:
+        """The QUINTIC packed form (one segment; see PACKED_QUINTIC)."""
+        n = self.start.size
+        return _read_only([PACKED_QUINTIC, 1, n, self.t0, self.duration, *self.start.ravel(), *self.end.ravel()])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -180,21 +354,31 @@ class QuinticOrientationSegment:
         return axis, float(rel.angle()), self.start.multiply(axis)
 
     @functools.cached_property
-    def _at_rest(self) -> tuple[OrientationSample, OrientationSample]:
-        """The samples before the start and after the end (made once)."""
-        zero = np.zeros(3)
-        zero.flags.writeable = False
-        return tuple(OrientationSample(R, zero, zero, R.ToQuaternion().wxyz()) for R in (self.start, self.end))
+    def packed(self) -> np.ndarray:
+        """The GEODESIC packed form (see PACKED_GEODESIC)."""
+        axis, angle, axis_W = self._axis_angle
+        ends = [R.matrix().ravel() for R in (self.start, self.end)]
+        quaternions = [R.ToQuaternion().wxyz() for R in (self.start, self.end)]
+        return _read_only(
+            [
+                PACKED_GEODESIC,
+                self.t0,
+                self.duration,
+                angle,
+                *ends[0],
+                *ends[1],
+                *axis,
+                *axis_W,
+                *quaternions[0],
+                *quaternions[1],
+            ]
+        )
 
     def sample(self, t: float) -> OrientationSample:
         """Orientation, angular velocity and acceleration (in the world frame) at time `t` [s]."""
-        axis, angle, axis_W = self._axis_angle
-        s, ds, dds = quintic_time_law(t, self.t0, self.duration)
-        if s == 0.0 or s == 1.0:
-            # At rest at either end (most samples: the phases hold a pose far longer than they move).
-            return self._at_rest[int(s)]
-        rotation = self.start.multiply(RotationMatrix(AngleAxis(s * angle, axis)))
-        return OrientationSample(rotation, ds * angle * axis_W, dds * angle * axis_W)
+        R, q, w, alpha = np.empty((3, 3)), np.empty(4), np.empty(3), np.empty(3)
+        sample_rotation_into(self.packed, float(t), R, q, w, alpha)
+        return OrientationSample(RotationMatrix(R), w, alpha, q)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -220,10 +404,13 @@ class PiecewiseQuintic:
 
     def sample(self, t: float) -> TrajectorySample:
         """Sample of the segment active at `t` [s] (the first before it starts, the last after)."""
-        for segment in self.segments:
-            if t < segment.t_end:
-                return segment.sample(t)
-        return self.segments[-1].sample(t)
+        return _sampled(self.packed, t, self.segments[0].start.shape)
+
+    @functools.cached_property
+    def packed(self) -> np.ndarray:
+        """The QUINTIC packed form (see PACKED_QUINTIC)."""
+        parts = [[s.t0, s.duration, *s.start.ravel(), *s.end.ravel()] for s in self.segments]
+        return _read_only([PACKED_QUINTIC, len(self.segments), self.segments[0].start.size, *sum(parts, [])])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -255,15 +442,13 @@ class CircularPath:
 
     def sample(self, t: float) -> TrajectorySample:
         """Position [m], velocity [m/s] and acceleration [m/s^2] at `t` [s]."""
-        s, ds, dds = quintic_time_law(t, self.t0, self.duration)
-        sweep = 2.0 * np.pi * self.laps
-        angle, rate, rate_dot = self.phase + sweep * s, sweep * ds, sweep * dds
-        c, si = np.cos(angle), np.sin(angle)
-        r = self.radius
-        position = self.centre + r * np.array([c, si, 0.0])
-        velocity = r * rate * np.array([-si, c, 0.0])
-        acceleration = r * rate_dot * np.array([-si, c, 0.0]) - r * rate**2 * np.array([c, si, 0.0])
-        return TrajectorySample(position, velocity, acceleration)
+        return _sampled(self.packed, t, (3,))
+
+    @functools.cached_property
+    def packed(self) -> np.ndarray:
+        """The CIRCLE packed form (see PACKED_CIRCLE)."""
+        start = np.asarray(self.start, float)
+        return _read_only([PACKED_CIRCLE, self.t0, self.duration, self.laps, self.phase, self.radius, *start])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -286,11 +471,15 @@ class PivotedPosition:
         return self.orientation.t_end
 
     def sample(self, t: float) -> TrajectorySample:
-        o = self.orientation.sample(t)
-        lever_0 = self.orientation.start.inverse().multiply(np.asarray(self.start, float) - self.pivot)
-        r = o.rotation.multiply(lever_0)
-        w, alpha = o.angular_velocity, o.angular_acceleration
-        return TrajectorySample(self.pivot + r, np.cross(w, r), np.cross(alpha, r) + np.cross(w, np.cross(w, r)))
+        """Position [m], velocity w x r [m/s] and acceleration alpha x r + w x (w x r) [m/s^2] at `t` [s]."""
+        return _sampled(self.packed, t, (3,))
+
+    @functools.cached_property
+    def packed(self) -> np.ndarray:
+        """The PIVOT packed form (see PACKED_PIVOT)."""
+        pivot = np.asarray(self.pivot, float)
+        lever_0 = self.orientation.start.inverse().multiply(np.asarray(self.start, float) - pivot)
+        return _read_only([PACKED_PIVOT, *pivot, *lever_0, *self.orientation.packed])
 
 
 @dataclasses.dataclass(frozen=True)
@@ -329,7 +518,11 @@ class RampSegment:
         return self.start + self.duration * self.velocity
 
     def sample(self, t: float) -> TrajectorySample:
-        elapsed = min(max(t - self.t0, 0.0), self.duration)
-        moving = self.t0 <= t < self.t_end
-        velocity = self.velocity if moving else np.zeros_like(self.velocity)
-        return TrajectorySample(self.start + elapsed * self.velocity, velocity, np.zeros_like(self.velocity))
+        """Position [m], velocity [m/s] (zero outside the interval) and acceleration (zero) at `t` [s]."""
+        return _sampled(self.packed, t, self.start.shape)
+
+    @functools.cached_property
+    def packed(self) -> np.ndarray:
+        """The RAMP packed form (see PACKED_RAMP)."""
+        n = self.start.size
+        return _read_only([PACKED_RAMP, n, self.t0, self.duration, *self.start.ravel(), *self.velocity.ravel()])

@@ -2,8 +2,9 @@
 
 import numpy as np
 import pytest
+from pydrake.common.eigen_geometry import Quaternion
 from pydrake.common.value import AbstractValue
-from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
@@ -11,6 +12,7 @@ from pydrake.systems.primitives import ConstantValueSource, ConstantVectorSource
 from pedi_drake import robot
 from pedi_drake.exceptions import PediError
 from pedi_drake.ik import LegIkSystem
+from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE, _retarget
 from pedi_drake.leg_kinematics import foot_position_B
 
 X_WB = RigidTransform(RollPitchYaw(0.05, -0.1, 0.7), [0.4, -0.2, 0.3])
@@ -117,3 +119,30 @@ def test_solved_target_B_echoes_the_trunk_frame_target_of_the_last_solve():
     assert np.all(np.isnan(ik.GetOutputPort("solved_target_B").Eval(context)))
     simulator.AdvanceTo(0.05)
     np.testing.assert_allclose(ik.GetOutputPort("solved_target_B").Eval(context), p_B, atol=1e-12)
+
+
+def test_the_retarget_check_equals_its_python_source_and_drakes_frames():
+    rng = np.random.default_rng(20261203)
+    for k in range(2000):
+        quaternion = rng.normal(size=4) * rng.uniform(0.5, 2.0)
+        pose = np.concatenate([quaternion, rng.normal(0, 0.3, 3)])
+        p_WF = rng.normal(0, 0.4, 3)
+        if k % 7 == 0:
+            p_WF[rng.integers(0, 3)] = np.nan  # nothing asked
+        R_WB = RotationMatrix(Quaternion(quaternion / np.linalg.norm(quaternion)))
+        expected = np.full(3, np.nan) if k % 7 == 0 else R_WB.inverse().multiply(p_WF - pose[4:7])
+        state = np.zeros(10)
+        state[0:3] = expected + rng.choice([0.0, 0.5 * RETARGET_TOLERANCE, 3 * RETARGET_TOLERANCE], size=3)
+        if k % 11 == 0:
+            state[0:3] = np.nan
+        state[3] = rng.integers(-1, 4)
+        leg_index = int(rng.integers(0, 4))
+        compiled, interpreted = np.empty(3), np.empty(3)
+        due = _retarget(p_WF, pose, state, leg_index, RETARGET_TOLERANCE, compiled)
+        assert due == _retarget.py_func(p_WF, pose, state, leg_index, RETARGET_TOLERANCE, interpreted)
+        np.testing.assert_allclose(compiled, interpreted, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(compiled, expected, rtol=0, atol=1e-13)
+        moved = np.abs(expected - state[0:3])
+        both_unset = np.isnan(expected).any() and np.isnan(state[0:3]).any()
+        same = both_unset or bool(np.all(moved <= RETARGET_TOLERANCE))
+        assert due == (int(state[3]) != leg_index or not same)

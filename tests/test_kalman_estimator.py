@@ -18,7 +18,6 @@ from pedi_drake.estimation.kalman_estimator import (
 )
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
-from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.ik.analytic import solve_leg_ik_analytic
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
@@ -253,13 +252,10 @@ def test_estimate_follows_the_simulated_robot_standing_up_with_sensor_noise():
     simulator.AdvanceTo(3.0)
     context = simulator.get_context()
 
-    def log(name):
-        data = built.diagram.GetSubsystemByName(built.loggers[name]).FindLog(context)
-        return SignalLog(data.sample_times(), data.data())
-
+    logs = built.logs(context)
     plant = built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     errors = estimate_errors(
-        log("base_state"), log("sim.plant_state"), robot.Go1PlantMap.from_plant(plant), plant.num_positions()
+        logs["base_state"], logs["sim.plant_state"], robot.Go1PlantMap.from_plant(plant), plant.num_positions()
     )
     assert errors["position_error_max_m"] < 0.01, errors
     assert errors["velocity_rms_m_s"] < 0.03, errors

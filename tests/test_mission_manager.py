@@ -1,20 +1,35 @@
 """MissionManager in closed loop: phase transitions, failures with reasons, recovery to four legs."""
 
 import copy
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 import pytest
+from pydrake.math import RotationMatrix
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.evaluation.mission_results import estimated_foot_errors
 from pedi_drake.exceptions import UnreachableTarget
+from pedi_drake.ik import leg_ik_system
+from pedi_drake.mission import reference_table
 from pedi_drake.mission.phases import IkAnswer, ReachRunner, receive_ik_answers
-from pedi_drake.mission.progress import FAILED, SUCCEEDED, IkPlan, MissionProgress, PhaseRecord
+from pedi_drake.mission.progress import (
+    FAILED,
+    LEG_MODE_FOOT,
+    STATUS_CODES,
+    SUCCEEDED,
+    IkPlan,
+    LegTrajectory,
+    MissionProgress,
+    PhaseRecord,
+    References,
+)
 from pedi_drake.mission.spec import CompanionReach, Reach
 from pedi_drake.scenario import load_scenario
+from pedi_drake.trajectory import QuinticSegment, sample_rotation_into, sample_vector_into
 
 QUICK_START = """
   - {kind: stand_up, height: 0.28, duration: 1.5, timeout: 3.0}
@@ -255,3 +270,107 @@ def test_an_unreached_ik_target_raises_with_the_phase_and_the_miss():
     answer = IkAnswer(np.array([0.0, -0.5, -0.9]), False, 0.91, np.array([1.5, -0.13, 0.2]))
     with pytest.raises(UnreachableTarget, match=r"reach: IK for FR .* closest miss 910.0 mm"):
         receive_ik_answers(plan, {"FR": answer})
+
+
+def test_a_progress_copy_owns_every_container_the_runners_change():
+    refs = References.holding(np.zeros(3), RotationMatrix(), 0.0, num_prongs=2)
+    refs.legs["FR"] = LegTrajectory(LEG_MODE_FOOT, QuinticSegment(np.zeros(3), np.ones(3), 0.0, 1.0))
+    refs.press = dict(leg="FR", start=np.zeros(3), direction=np.array([1.0, 0, 0]), speed=0.05, ramp=0.1, t0=0.0)
+    refs.press["frozen_at"] = None
+    progress = MissionProgress(references=refs, memo={"counts": {"speed": 0}, "goal": np.zeros(3)})
+    progress.records.append(PhaseRecord("reach", "reach", "running", 0.0, metrics={"legs": [{"error_m": 0.1}]}))
+    progress.interlude, progress.recovery = [Reach(name="a")], [Reach(name="b")]
+    changed = progress.copy()
+    changed.references.legs.pop("FR")
+    changed.references.contacts[0] = 0.0
+    changed.references.press["frozen_at"] = 1.0
+    changed.memo["counts"]["speed"] += 1
+    changed.memo["goal"][0] = 1.0
+    changed.records[-1].metrics["legs"][0]["error_m"] = 0.0
+    changed.interlude.append(Reach(name="c"))
+    changed.recovery.clear()
+    changed.switches.append(None)
+    assert "FR" in progress.references.legs and progress.references.contacts[0] == 1.0
+    assert progress.references.press["frozen_at"] is None
+    assert progress.memo["counts"]["speed"] == 0 and progress.memo["goal"][0] == 0.0
+    assert progress.records[-1].metrics["legs"][0]["error_m"] == 0.1
+    assert len(progress.interlude) == 1 and len(progress.recovery) == 1 and progress.switches == []
+    # Values are shared, not copied: a tick's copy does not copy trajectories.
+    assert changed.references.body_position is progress.references.body_position
+
+
+def test_every_progress_field_is_either_shared_or_duplicated_by_copy():
+    # A new field of MissionProgress must be placed in copy(): a value (shared) or a container
+    # that the runners change in place (duplicated).
+    assert {field.name for field in dataclasses.fields(MissionProgress)} == {
+        "index",
+        "status",
+        "reason",
+        "started",
+        "phase_start",
+        "memo",
+        "references",
+        "records",
+        "recovery",
+        "ik",
+        "interlude",
+        "resume_index",
+        "operator_mode",
+        "teleop_pending",
+        "switches",
+    }
+
+
+@pytest.fixture(scope="module")
+def stepped_run(tmp_path_factory):
+    """The QUICK_START mission and a reach, stepped at the manager's period: per update, the
+    manager's state outputs and what its progress says they are; and the compiled signatures of
+    the kernels a tick runs, after the diagram was built and after the run."""
+    path = tmp_path_factory.mktemp("mission") / "mission.yaml"
+    path.write_text(
+        "phases:"
+        + QUICK_START
+        + "  - {kind: reach, name: reach_front, leg: FR, target: [0.30, -0.13, 0.18], duration: 0.8, tolerance: 0.01}\n"
+    )
+    scenario = load_scenario(scenario_text=f"{{mission: {path}, controller: whole_body, robot: {{prongs: {{}}}}}}")
+    built = MakePedipulationDiagram(scenario)
+    kernels = [sample_vector_into, sample_rotation_into, reference_table.references_into, leg_ik_system._retarget]
+    compiled_at_build = [len(getattr(k, "signatures", ())) for k in kernels]
+    simulator = Simulator(built.diagram)
+    simulator.Initialize()
+    manager = built.diagram.GetSubsystemByName("mission")
+    context = manager.GetMyContextFromRoot(simulator.get_context())
+    rows = []
+    while context.get_time() < 6.0:
+        simulator.AdvanceTo(context.get_time() + manager.period)
+        progress = manager.progress(context)
+        plan = progress.ik
+        ports = {name: manager.GetOutputPort(name).Eval(context).copy() for name in ("contact_set", "mission_status")}
+        ports["ik"] = np.concatenate([manager.GetOutputPort(n).Eval(context) for n in ("ik_X_WB", "ik_q_seed")])
+        ports["ik_target"] = manager.GetOutputPort("ik_foot_target_W.FR").Eval(context).copy()
+        expected = {
+            "contact_set": progress.references.contacts,
+            "mission_status": [progress.index, STATUS_CODES[progress.status], float(bool(progress.references.legs)), 3],
+            "ik": np.concatenate([plan.X_WB, plan.q_seed]) if plan else np.r_[1.0, np.zeros(6), robot.STANDING_Q],
+            "ik_target": manager._ik_target_W(plan, "FR"),
+        }
+        rows.append((ports, expected, plan is not None and plan.pending("FR") is not None))
+    compiled_after = [len(getattr(k, "signatures", ())) for k in kernels]
+    return rows, manager.progress(context), compiled_at_build, compiled_after
+
+
+def test_state_outputs_are_what_the_progress_says(stepped_run):
+    rows, progress, _, _ = stepped_run
+    assert progress.records[-1].name == "reach_front", [r.name for r in progress.records]
+    assert any(asked for _, _, asked in rows), "the run never asked the IK"
+    for ports, expected, _ in rows:
+        for name, value in ports.items():
+            np.testing.assert_array_equal(value, expected[name], err_msg=name)
+
+
+def test_no_kernel_of_a_tick_is_compiled_during_the_run(stepped_run):
+    # The constructors compile (or load) every signature the ticks use. (Run alone, this module
+    # sees the constructors' work only; after other tests it may find them compiled already.)
+    pytest.importorskip("numba")
+    _, _, compiled_at_build, compiled_after = stepped_run
+    assert compiled_after == compiled_at_build

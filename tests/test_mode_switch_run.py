@@ -59,10 +59,11 @@ def run_with_operator(script: list[ScriptStep], end: float):
     root = simulator.get_context()
     manager = diagram.GetSubsystemByName("mission")
     progress = manager.progress(manager.GetMyContextFromRoot(root))
-    logs = {}
-    for name in ("mission.body_reference", "mission.leg_reference", "sim.plant_state"):
-        log = diagram.GetSubsystemByName(built.loggers[name]).FindLog(root)
-        logs[name] = (log.sample_times().copy(), log.data().copy())
+    every = built.logs(root)
+    logs = {
+        name: (every[name].times, every[name].data)
+        for name in ("mission.body_reference", "mission.leg_reference", "sim.plant_state")
+    }
     plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     return progress, logs, plant
 

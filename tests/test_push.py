@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from pedi_drake.diagram import MakePedipulationDiagram
+from pedi_drake.diagram import LOG_MULTIPLEXER, MakePedipulationDiagram
 from pedi_drake.exceptions import MissionFileError, ScenarioError
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.run import simulate
@@ -45,7 +45,7 @@ def test_no_controller_estimator_or_mission_reads_the_push():
         for (system, _), (source, index) in diagram.connection_map().items()
         if source is station and index == push_port.get_index()
     ]
-    assert readers == ["log.sim.push_force"]
+    assert readers == [LOG_MULTIPLEXER]
 
 
 def _scenario_file(tmp_path, push: str):

@@ -80,9 +80,9 @@ def standing_run():
     simulator = Simulator(built.diagram)
     simulator.AdvanceTo(STAND_END)
     context = simulator.get_context()
-    log = built.diagram.GetSubsystemByName(built.loggers["sim.plant_state"]).FindLog(context)
+    log = built.logs(context)["sim.plant_state"]
     plant = built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
-    return plant, log.sample_times(), log.data(), built, context
+    return plant, log.times, log.data, built, context
 
 
 def test_standing_holds_trunk_height_within_1cm_of_commanded_pose(standing_run):
@@ -167,7 +167,7 @@ def test_logged_sensors_start_at_their_initial_values():
     context = simulator.get_mutable_context()
     imu_0 = built.diagram.GetOutputPort("go1.imu").Eval(context).copy()
     simulator.AdvanceTo(0.1)
-    log = built.diagram.GetSubsystemByName(built.loggers["go1.imu"]).FindLog(context)
-    assert log.sample_times()[0] == 0.0
-    np.testing.assert_allclose(log.data()[:, 0], imu_0)
-    assert abs(np.linalg.norm(log.data()[0:4, -1]) - 1.0) < 1e-9  # a unit quaternion every sample
+    log = built.logs(context)["go1.imu"]
+    assert log.times[0] == 0.0
+    np.testing.assert_allclose(log.data[:, 0], imu_0)
+    assert abs(np.linalg.norm(log.data[0:4, -1]) - 1.0) < 1e-9  # a unit quaternion every sample

@@ -6,8 +6,9 @@
 1. Records: the mission in simulation (seed 0); the status the robot would have sent at every
    tick (q, qd, tau_est, IMU, foot sensors) is read from the run's logs.
 2. Replays: the `--hardware` diagram (driver, estimator, mission manager, IK, whole-body
-   controller) is built on an in-process bus; before every tick the recorded status is published,
-   and the tick (receive, estimate, mission, IK, control, safety, send) is timed alone, unpaced.
+   controller) is built on an in-process bus and advanced as a hardware run advances it (one
+   AdvanceTo, with a monitor); before every tick the recorded status is published, and the tick
+   (receive, estimate, mission, IK, control, safety, send) is timed alone, unpaced.
    Two passes: with the garbage collector as Python leaves it, and as a hardware run runs
    (go1_driver.hardware_run: the heap frozen at the start). Each tick is attributed to what ran
    in it: a garbage collection (gc.callbacks), a mission phase transition, or nothing special.
@@ -16,6 +17,9 @@
    IK, whole-body controller, safety filter, command sender) are wrapped, while that pass's
    diagram is built, in a timer of the loop thread's CPU time; what the tick costs beyond them is
    Drake's framework (event dispatch, port evaluation, the log sinks).
+   With `--callbacks`, one more pass times every Python callback of the diagram (periodic event
+   handlers and output calculations, whatever their system): what the framework share is made
+   of, and what Drake and pybind cost outside all Python code.
 4. The same mission in simulation: the whole-body controller's own tick (its diagnostics).
 5. The bare plant's cost in the same run (`station_fixed_cmd` of the station benchmark: the
    simulated Go1 with a constant command), the baseline for machines of different speed.
@@ -40,6 +44,7 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import EventStatus, LeafSystem
 
 from pedi_drake.apps.sim_bridge import status_messages
 from pedi_drake.benchmarks.station import real_time_factor
@@ -62,7 +67,7 @@ from pedi_drake.scenario import load_scenario
 STAGES = (
     ("receive", Go1LcmReceiver, ("_latch",)),
     ("estimate", KalmanEstimator, ("_update",)),
-    ("mission", MissionManager, ("_update", "_calc_body", "_calc_legs")),
+    ("mission", MissionManager, ("_update", "_calc_references", "_calc_body", "_calc_legs")),
     ("ik", LegIkSystem, ("_update",)),
     ("control", WholeBodyController, ("_update",)),
     ("safety", Go1SafetyFilter, ("_update",)),
@@ -130,6 +135,8 @@ class Replay:
         self.link = hardware_link(self.diagram)
         self.bus = self.link.transport
         self.simulator = Simulator(self.diagram)
+        # As a run does (pedi_drake.run): the log never grows in a tick.
+        self.built.reserve_logs(self.simulator.get_mutable_context(), len(samples) * period)
         self.manager = self.diagram.GetSubsystemByName("mission")
         self.commands: list[np.ndarray] = []
         self.bus.subscribe(c.COMMAND_CHANNEL, lambda _c, data: self.commands.append(data))
@@ -159,7 +166,15 @@ class Replay:
         return np.array([c.message_to_command(decode(data)) for data in self.commands])
 
     def run(self, ticks: int, stage_times: dict | None = None) -> dict:
-        """Times `ticks` ticks; returns tick times [ms] and what happened in each."""
+        """Times `ticks` ticks; returns tick times [ms] and what happened in each.
+
+        The ticks run in one AdvanceTo, as in a hardware run (pedi_drake.run), with a Simulator
+        monitor at the end of every step (a hardware run has one too) that publishes the next
+        tick's status and stamps the times; the monitor's own work is left out of the tick. An
+        AdvanceTo per tick would add work a hardware run does not do: at every AdvanceTo the
+        Simulator looks up the witness functions of every system again, a Python call per
+        Python system (it does so otherwise only after an unrestricted update, the mission's).
+        """
         collections: list[float] = []
 
         def on_gc(phase, info) -> None:
@@ -176,22 +191,41 @@ class Replay:
         cpu_ms = np.zeros(ticks)
         phase_index = np.zeros(ticks, dtype=int)
         gc_generation = np.full(ticks, -1)
+        tick = {"k": 0, "start": 0.0, "cpu_start": 0.0}
+
+        def start_tick(k: int) -> None:
+            self._publish(k + 1)
+            collections.clear()
+            if stage_times is not None:
+                stage_times["tick"] = k
+            tick["k"], tick["start"], tick["cpu_start"] = k, time.perf_counter(), time.thread_time()
+
+        def end_of_step(root_context) -> EventStatus:
+            cpu_end, end = time.thread_time(), time.perf_counter()
+            k = tick["k"]
+            # A step that ends between ticks (an update at a period that is not a multiple of the
+            # tick's, the leg IK's) belongs to the tick that is running.
+            if k >= ticks or root_context.get_time() < (k + 1) * self.period - 1e-9:
+                return EventStatus.Succeeded()
+            tick_ms[k] = 1e3 * (end - tick["start"])
+            cpu_ms[k] = 1e3 * (cpu_end - tick["cpu_start"])
+            phase_index[k] = self.manager.progress(manager_context).index
+            starts = [g for _, p, g in collections if p == "start"]
+            if starts:
+                gc_generation[k] = max(starts)
+            if k + 1 < ticks:
+                start_tick(k + 1)
+            else:
+                tick["k"] = ticks
+            return EventStatus.Succeeded()
+
         gc.callbacks.append(on_gc)
+        self.simulator.set_monitor(end_of_step)
         try:
-            for k in range(ticks):
-                self._publish(k + 1)
-                collections.clear()
-                if stage_times is not None:
-                    stage_times["tick"] = k
-                start, cpu_start = time.perf_counter(), time.thread_time()
-                self.simulator.AdvanceTo((k + 1) * self.period)
-                tick_ms[k] = 1e3 * (time.perf_counter() - start)
-                cpu_ms[k] = 1e3 * (time.thread_time() - cpu_start)
-                phase_index[k] = self.manager.progress(manager_context).index
-                starts = [g for _, p, g in collections if p == "start"]
-                if starts:
-                    gc_generation[k] = max(starts)
+            start_tick(0)
+            self.simulator.AdvanceTo(ticks * self.period)
         finally:
+            self.simulator.clear_monitor()
             gc.callbacks.remove(on_gc)
             self.link.close()
         transition = np.zeros(ticks, dtype=bool)
@@ -274,6 +308,91 @@ def stage_timers(ticks: int):
             setattr(cls, name, method)
 
 
+# LeafSystem declarations whose callback `callback_timers` wraps: (position, keyword) of the callback.
+_CALLBACK_ARGUMENTS = {
+    "DeclareVectorOutputPort": (2, "calc"),
+    "DeclareAbstractOutputPort": (2, "calc"),
+    "DeclarePeriodicDiscreteUpdateEvent": (2, "update"),
+    "DeclarePeriodicUnrestrictedUpdateEvent": (2, "update"),
+    "DeclarePeriodicPublishEvent": (2, "publish"),
+}
+
+
+@contextlib.contextmanager
+def callback_timers(ticks: int):
+    """While active, systems built get every Python callback declared through `_CALLBACK_ARGUMENTS`
+    timed: yields ({"System.port" or "System periodic ...": (ticks,) CPU ms}, the same of call
+    counts), with "tick" to be set to the running tick (Replay.run does). A callback that
+    evaluates another's output is charged its own time only. The timers add about a
+    microsecond to each call.
+    """
+    times: dict = {"tick": -1}
+    calls: dict = {}
+    running: list[str] = []
+
+    def timed(key: str, callback):
+        times.setdefault(key, np.zeros(ticks))
+        calls.setdefault(key, np.zeros(ticks, dtype=int))
+
+        def wrapper(*args, **kwargs):
+            start = time.thread_time()
+            running.append(key)
+            try:
+                return callback(*args, **kwargs)
+            finally:
+                running.pop()
+                k = times["tick"]
+                if 0 <= k < ticks:
+                    elapsed = 1e3 * (time.thread_time() - start)
+                    times[key][k] += elapsed
+                    calls[key][k] += 1
+                    if running:
+                        times[running[-1]][k] -= elapsed
+
+        return wrapper
+
+    def declaring(method: str, declare):
+        position, keyword = _CALLBACK_ARGUMENTS[method]
+        what = method.removeprefix("Declare").removesuffix("Event")
+
+        def declare_timed(system, *args, **kwargs):
+            label = args[0] if method.endswith("OutputPort") else what
+            key = f"{type(system).__name__} {label}"
+            if len(args) > position and callable(args[position]):
+                args = (*args[:position], timed(key, args[position]), *args[position + 1 :])
+            elif callable(kwargs.get(keyword)):
+                kwargs[keyword] = timed(key, kwargs[keyword])
+            return declare(system, *args, **kwargs)
+
+        return declare_timed
+
+    originals = {method: getattr(LeafSystem, method) for method in _CALLBACK_ARGUMENTS}
+    for method, declare in originals.items():
+        setattr(LeafSystem, method, declaring(method, declare))
+    try:
+        yield times, calls
+    finally:
+        for method, declare in originals.items():
+            setattr(LeafSystem, method, declare)
+
+
+def _callback_table(times: dict, calls: dict, cpu_ms: np.ndarray) -> dict:
+    """Per callback: calls per tick and CPU [ms] per tick; and what the ticks cost beyond them."""
+    rows = {
+        key: {"calls_per_tick": float(calls[key].mean()), "mean_ms": float(per_tick.mean()), **_distribution(per_tick)}
+        for key, per_tick in times.items()
+        if key != "tick"
+    }
+    rows = dict(sorted(rows.items(), key=lambda row: -row[1]["mean_ms"]))
+    outside = cpu_ms - sum(per_tick for key, per_tick in times.items() if key != "tick")
+    rows["(Drake and pybind outside Python callbacks)"] = {
+        "calls_per_tick": 0.0,
+        "mean_ms": float(outside.mean()),
+        **_distribution(outside),
+    }
+    return rows
+
+
 def record_reference(mission: str, period: float, ticks: int, path: Path) -> None:
     """Writes the status of the first `ticks` replayed ticks and the commands sent for them."""
     samples, _ = record_status(mission, period)
@@ -299,6 +418,7 @@ def main() -> None:
         default=None,
         help="the whole-body controller's tick: compiled (the default) or the reference with daqp or dense_qp",
     )
+    parser.add_argument("--callbacks", action="store_true", help="one more pass: every Python callback timed")
     args = parser.parse_args()
     if args.record_reference:
         record_reference(args.mission, args.period, args.reference_ticks, args.record_reference)
@@ -325,6 +445,11 @@ def main() -> None:
         stages[name] = {"mean_ms": float(per_tick.mean()), **_distribution(per_tick)}
     framework = timed_run["cpu_ms"] - sum(stage_times[name] for name, _, _ in STAGES)
     stages["framework"] = {"mean_ms": float(framework.mean()), **_distribution(framework)}
+    callbacks = None
+    if args.callbacks:
+        with callback_timers(ticks) as (callback_times, callback_calls):
+            timed = Replay(args.mission, args.period, samples)
+        callbacks = _callback_table(callback_times, callback_calls, timed.run(ticks, callback_times)["cpu_ms"])
 
     rows = {"python_gc": _summary(default_gc, period_ms), "hardware_run_gc": _summary(frozen_gc, period_ms)}
     load_end = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
@@ -356,6 +481,14 @@ def main() -> None:
             f"  {name:<12}{stage['mean_ms']:8.3f}{stage['median']:8.3f}{stage['p99']:8.3f}{stage['max']:8.2f}"
             f"{100 * stage['mean_ms'] / total:7.1f}%"
         )
+    if callbacks is not None:
+        print("CPU time per tick by Python callback (callbacks pass) [us]:")
+        print(f"  {'callback':<58}{'calls':>7}{'mean':>8}{'median':>8}{'p99':>8}")
+        for name, row in callbacks.items():
+            print(
+                f"  {name:<58}{row['calls_per_tick']:7.2f}{1e3 * row['mean_ms']:8.1f}"
+                f"{1e3 * row['median']:8.1f}{1e3 * row['p99']:8.1f}"
+            )
     sim_tick = sim["controller_tick_ms"]
     print(
         f"simulation: real-time factor {sim['real_time_factor']:.2f}; whole-body controller tick median "
@@ -377,6 +510,7 @@ def main() -> None:
                 "bare_plant": {"real_time_factor": baseline_rtf, "ms_per_period": baseline_ms},
                 "replay": rows,
                 "stage_cpu_ms_per_tick": stages,
+                "callback_cpu_ms_per_tick": callbacks,
                 "simulation": sim,
             },
             indent=2,

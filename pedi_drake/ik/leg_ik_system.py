@@ -21,20 +21,24 @@ the selected leg. The memo of the last solved target, the goal and the flags liv
 discrete state, so the system has no mutable Python members and contexts can be cloned.
 A non-finite target or pose gives solved = 0 and holds the measured leg angles as the goal.
 
+The check runs at every update (most find nothing to do), so it is one compiled kernel
+(`_retarget`): the target in the trunk frame and its comparison with the last one.
+
 A client that asks for several targets in turn (the MissionManager) reads `solved_target_B` to
 tell the answer to its request from the previous one: the answer is its own once that output is
 within `retarget_tolerance` of the requested trunk-frame target. Such a client may feed its own
 seed into `q_measured` (e.g. the previous waypoint's answer) to chain solves along a path.
 """
 
+import math
+
 import numpy as np
-from pydrake.common.eigen_geometry import Quaternion
 from pydrake.common.value import AbstractValue
-from pydrake.math import RotationMatrix
 from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
 
 from pedi_drake import robot
 from pedi_drake.ik.fabrik import DEFAULT_MAX_ITERATIONS, solve_leg_ik
+from pedi_drake.jit import kernel
 
 # Layout of the discrete state vector.
 _TARGET_B = slice(0, 3)  # trunk-frame target of the last solve [m] (NaN before the first one)
@@ -47,6 +51,49 @@ _STATE_SIZE = 10
 # Trunk-frame target motion that triggers a new solve [m]; also the distance within which a
 # client matches an answer to its request (see the module docstring).
 RETARGET_TOLERANCE = 1e-4
+
+
+@kernel
+def _retarget(p_WF, pose, state, leg_index, tolerance, p_target_B) -> bool:
+    """Whether a new solve is due; writes the target in the trunk frame into p_target_B (3) [m].
+
+    p_WF (3): the world target [m]; pose (7): quaternion (w, x, y, z) and p_WB [m]; state: the
+    discrete state (layout above). The trunk-frame target is R_WB^T (p_WF - p_WB), NaN when the
+    target or the pose is not finite or the quaternion is near zero. A solve is due for another
+    leg, or when the target moved by more than `tolerance` [m] in any coordinate (two targets
+    that are both NaN are the same).
+    """
+    finite = True
+    for i in range(3):
+        finite = finite and math.isfinite(p_WF[i])
+    for i in range(7):
+        finite = finite and math.isfinite(pose[i])
+    w, x, y, z = pose[0], pose[1], pose[2], pose[3]
+    norm_squared = w * w + x * x + y * y + z * z
+    if not (finite and math.sqrt(norm_squared) > 1e-9):
+        p_target_B[:] = np.nan
+    else:
+        # R_WB of the normalised quaternion, as Drake's RotationMatrix(Quaternion).
+        s = 2.0 / norm_squared
+        xx, yy, zz, xy, xz, yz = x * x * s, y * y * s, z * z * s, x * y * s, x * z * s, y * z * s
+        wx, wy, wz = w * x * s, w * y * s, w * z * s
+        d0, d1, d2 = p_WF[0] - pose[4], p_WF[1] - pose[5], p_WF[2] - pose[6]
+        # R^T d, column by column of R.
+        p_target_B[0] = (1.0 - yy - zz) * d0 + (xy + wz) * d1 + (xz - wy) * d2
+        p_target_B[1] = (xy - wz) * d0 + (1.0 - xx - zz) * d1 + (yz + wx) * d2
+        p_target_B[2] = (xz + wy) * d0 + (yz - wx) * d1 + (1.0 - xx - yy) * d2
+    if int(state[_LEG]) != leg_index:
+        return True
+    new_valid, old_valid = True, True
+    for i in range(3):
+        new_valid = new_valid and math.isfinite(p_target_B[i])
+        old_valid = old_valid and math.isfinite(state[i])
+    if not new_valid and not old_valid:
+        return False
+    for i in range(3):
+        if not abs(p_target_B[i] - state[i]) <= tolerance:
+            return True
+    return False
 
 
 class LegIkSystem(LeafSystem):
@@ -84,6 +131,11 @@ class LegIkSystem(LeafSystem):
         self._state_index = self.DeclareDiscreteState(initial)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         self.DeclareInitializationDiscreteUpdateEvent(self._update)
+        # Compiled (or loaded) here, not in a control tick; with the argument types of `_update`
+        # (a Context's discrete state is a read-only array).
+        state = initial.copy()
+        state.flags.writeable = False
+        _retarget(np.zeros(3), np.array([1.0, 0, 0, 0, 0, 0, 0]), state, 0, self._retarget_tolerance, np.empty(3))
 
         state_ticket = {self.discrete_state_ticket(self._state_index)}
         self._leg_q_goal = self.DeclareVectorOutputPort(
@@ -97,17 +149,6 @@ class LegIkSystem(LeafSystem):
             "solved_target_B", 3, self._calc_solved_target_B, prerequisites_of_calc=state_ticket
         )
 
-    def _target_in_trunk(self, context: Context) -> np.ndarray:
-        """The foot target in the trunk frame [m]; NaN if the target or pose is not finite."""
-        p_WF = np.asarray(self._foot_target_W.Eval(context), dtype=float)
-        pose = np.asarray(self._X_WB.Eval(context), dtype=float)
-        quaternion = pose[0:4]
-        norm = np.linalg.norm(quaternion)
-        if not (np.all(np.isfinite(p_WF)) and np.all(np.isfinite(pose)) and norm > 1e-9):
-            return np.full(3, np.nan)
-        R_WB = RotationMatrix(Quaternion(quaternion / norm))
-        return R_WB.inverse().multiply(p_WF - pose[4:7])
-
     def _update(self, context: Context, discrete_state: DiscreteValues) -> EventStatus:
         leg = self._leg.Eval(context)
         leg_index = robot.LEG_NAMES.index(leg) if leg in robot.LEG_NAMES else None
@@ -115,12 +156,16 @@ class LegIkSystem(LeafSystem):
             # A wiring error, not a bad target: fail loudly with the offending value.
             robot.leg_slice(leg)
         state = context.get_discrete_state(self._state_index).get_value()
-        p_target_B = self._target_in_trunk(context)
-        same_leg = int(state[_LEG]) == leg_index
-        previous = state[_TARGET_B]
-        both_invalid = not np.all(np.isfinite(p_target_B)) and not np.all(np.isfinite(previous))
-        unchanged = both_invalid or bool(np.all(np.abs(p_target_B - previous) <= self._retarget_tolerance))
-        if same_leg and unchanged:
+        p_target_B = np.empty(3)
+        due = _retarget(
+            self._foot_target_W.Eval(context),
+            self._X_WB.Eval(context),
+            state,
+            leg_index,
+            self._retarget_tolerance,
+            p_target_B,
+        )
+        if not due:
             return EventStatus.DidNothing()
 
         q_leg = np.asarray(self._q_measured.Eval(context), dtype=float)[robot.leg_slice(leg)]

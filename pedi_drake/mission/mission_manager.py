@@ -5,6 +5,14 @@ ports (layouts in pedi_drake/control/references.py) and a status vector. The mis
 is one abstract state value (MissionProgress), updated at `period`; references are quintic
 trajectories sampled at output time, so the controller sees smooth references at its own rate.
 
+What a tick costs: at each update the references are packed into a ReferenceTable (abstract
+state), which `references` (body_reference then leg_reference, 19 + 48) samples with one
+compiled kernel: the diagram splits it for the controller and the logs (a Demultiplexer), so one
+Python call a tick serves both; `body_reference` and `leg_reference` give the same vectors
+separately (tests, scripts). Every other output changes only at the updates, so it is discrete
+state written there and its port is a state output port (no Python runs when the controller,
+the estimator or a log reads it).
+
 Joint angles for foot targets come from one LegIkSystem per leg the mission moves (`ik_legs`),
 through ports: the manager asks on `ik_foot_target_W.<leg>` (NaN when it asks nothing), with
 the trunk pose the target was planned in on `ik_X_WB` and the solve's start angles on
@@ -26,6 +34,7 @@ a teleop sequence at the next safe point and the mission resumes afterwards
 
 import numpy as np
 from pydrake.common.value import AbstractValue
+from pydrake.math import RotationMatrix
 from pydrake.systems.framework import BasicVector, LeafSystem
 
 from pedi_drake import robot
@@ -45,7 +54,6 @@ from pedi_drake.mission.phases import (
 )
 from pedi_drake.mission.progress import (
     FAILED,
-    LEG_MODE_FOOT,
     RECOVERING,
     RUNNING,
     STATUS_CODES,
@@ -55,10 +63,17 @@ from pedi_drake.mission.progress import (
     PhaseRecord,
     References,
 )
+from pedi_drake.mission.reference_table import (
+    REFERENCES_SIZE,
+    body_reference_into,
+    leg_reference_into,
+    reference_table,
+    references_into,
+    warm_up,
+)
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.operator.command import MODE_AUTONOMOUS, MODE_TELEOP, OPERATOR_COMMAND_SIZE, OperatorCommand
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.trajectory import smooth_start_time_law
 
 MISSION_STATUS_SIZE = 4  # [phase index, status code, pedipulation active, number of phases]
 _IDENTITY_POSE = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
@@ -132,40 +147,40 @@ class MissionManager(LeafSystem):
             for leg in self.ik_legs
         }
         self._progress = self.DeclareAbstractState(AbstractValue.Make(MissionProgress()))
+        # What the outputs read, written with every progress stored (`_store`); until the first
+        # one, the values of a mission that has not started (references: holding the origin).
+        holding = References.holding(np.zeros(3), RotationMatrix(), 0.0, self._env.num_prongs)
+        self._references = self.DeclareAbstractState(AbstractValue.Make(reference_table(holding)))
         self._polygon = self.DeclareDiscreteState(controller_refs.SAFETY_POLYGON_SIZE)
+        self._contacts = self.DeclareDiscreteState(np.concatenate([np.ones(4), np.zeros(self._env.num_prongs)]))
+        self._status = self.DeclareDiscreteState(self._status_vector(MissionProgress()))
+        self._ik_pose = self.DeclareDiscreteState(_IDENTITY_POSE)
+        self._ik_seed = self.DeclareDiscreteState(robot.STANDING_Q)
+        self._ik_targets = {leg: self.DeclareDiscreteState(np.full(3, np.nan)) for leg in self.ik_legs}
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
-        # Trajectory samples change with time; the contact set and the status only with the progress
-        # (so they are computed once per mission update, not at every step).
-        deps = {self.time_ticket(), self.abstract_state_ticket(self._progress)}
-        progress_only = {self.abstract_state_ticket(self._progress)}
+        # Trajectory samples change with time: computed when evaluated, from the packed references.
+        samples = {self.time_ticket(), self.abstract_state_ticket(self._references)}
         self.DeclareVectorOutputPort(
-            "body_reference", controller_refs.BODY_REFERENCE_SIZE, self._calc_body, prerequisites_of_calc=deps
+            "body_reference", controller_refs.BODY_REFERENCE_SIZE, self._calc_body, prerequisites_of_calc=samples
         )
         self.DeclareVectorOutputPort(
-            "leg_reference", controller_refs.LEG_REFERENCE_SIZE, self._calc_legs, prerequisites_of_calc=deps
+            "leg_reference", controller_refs.LEG_REFERENCE_SIZE, self._calc_legs, prerequisites_of_calc=samples
         )
         self.DeclareVectorOutputPort(
-            "contact_set", num_contacts, self._calc_contacts, prerequisites_of_calc=progress_only
+            "references", REFERENCES_SIZE, self._calc_references, prerequisites_of_calc=samples
         )
+        self.DeclareStateOutputPort("contact_set", self._contacts)
         self.DeclareStateOutputPort("safety_polygon", self._polygon)
         for leg in self.ik_legs:
-            self.DeclareVectorOutputPort(
-                f"ik_foot_target_W.{leg}",
-                3,
-                lambda context, output, leg=leg: output.SetFromVector(self._ik_target_W(context, leg)),
-                prerequisites_of_calc=progress_only,
-            )
-        self.DeclareVectorOutputPort("ik_X_WB", 7, self._calc_ik_pose, prerequisites_of_calc=progress_only)
-        self.DeclareVectorOutputPort(
-            "ik_q_seed", robot.NUM_JOINTS, self._calc_ik_seed, prerequisites_of_calc=progress_only
-        )
+            self.DeclareStateOutputPort(f"ik_foot_target_W.{leg}", self._ik_targets[leg])
+        self.DeclareStateOutputPort("ik_X_WB", self._ik_pose)
+        self.DeclareStateOutputPort("ik_q_seed", self._ik_seed)
         self.DeclareVectorOutputPort(
             "friction", 1, lambda c, o: o.SetFromVector([self._friction]), prerequisites_of_calc={self.nothing_ticket()}
         )
-        self.DeclareVectorOutputPort(
-            "mission_status", MISSION_STATUS_SIZE, self._calc_status, prerequisites_of_calc=progress_only
-        )
+        self.DeclareStateOutputPort("mission_status", self._status)
+        warm_up(holding)
 
     @property
     def mission(self) -> spec.MissionSpec:
@@ -204,9 +219,26 @@ class MissionManager(LeafSystem):
         view = self._view(context)
         progress = MissionProgress(phase_start=view.time)
         progress.references = References.holding(view.base.p_WB, view.X_WB.rotation(), view.time, self._env.num_prongs)
-        state.get_mutable_abstract_state(self._progress).set_value(progress)
+        self._store(state, progress)
         # The polygon stays the default (zeros) until the first update: the estimate seen here
         # may not be initialised yet (see `_update`).
+
+    def _store(self, state, progress: MissionProgress, previous: MissionProgress | None = None) -> None:
+        """Stores `progress` and what the outputs read of it (the parts that changed since
+        `previous`, the progress stored before: the update's state starts as a copy of it)."""
+        state.get_mutable_abstract_state(self._progress).set_value(progress)
+        refs = progress.references
+        if previous is None or not refs.same_trajectories(previous.references):
+            state.get_mutable_abstract_state(self._references).set_value(reference_table(refs))
+        state.get_mutable_discrete_state(self._contacts).SetFromVector(refs.contacts)
+        state.get_mutable_discrete_state(self._status).SetFromVector(self._status_vector(progress))
+        plan = progress.ik
+        if previous is not None and plan is previous.ik:
+            return
+        state.get_mutable_discrete_state(self._ik_pose).SetFromVector(_IDENTITY_POSE if plan is None else plan.X_WB)
+        state.get_mutable_discrete_state(self._ik_seed).SetFromVector(robot.STANDING_Q if plan is None else plan.q_seed)
+        for leg, index in self._ik_targets.items():
+            state.get_mutable_discrete_state(index).SetFromVector(self._ik_target_W(plan, leg))
 
     def _set_polygon(self, state, view: RobotView, progress: MissionProgress) -> None:
         polygon = stance_safety_polygon(view, self._env, progress.references.contacts, self._safety_margin)
@@ -224,14 +256,15 @@ class MissionManager(LeafSystem):
         return answers
 
     def _update(self, context, state) -> None:
-        progress = self.progress(context).copy()
+        previous = self.progress(context)
+        progress = previous.copy()
         view = self._view(context)
         if progress.status in (SUCCEEDED, FAILED):
             self._set_polygon(state, view, progress)  # the robot still stands on whatever it stands on
             return
         if view.operator is not None and view.operator.estop:
             self._stop_for_estop(progress, view)
-            state.get_mutable_abstract_state(self._progress).set_value(progress)
+            self._store(state, progress, previous)
             self._set_polygon(state, view, progress)
             return
         if view.operator is not None and self._mission.teleop is not None:
@@ -273,7 +306,7 @@ class MissionManager(LeafSystem):
             progress.records[-1].metrics["estimate_fell"] = True
         if outcome != RUNNING:
             self._finish_phase(progress, phases, outcome, view)
-        state.get_mutable_abstract_state(self._progress).set_value(progress)
+        self._store(state, progress, previous)
         self._set_polygon(state, view, progress)
 
     def _stop_for_estop(self, progress: MissionProgress, view: RobotView) -> None:
@@ -413,59 +446,28 @@ class MissionManager(LeafSystem):
     # Outputs ---------------------------------------------------------------------------------
 
     def _calc_body(self, context, output: BasicVector) -> None:
-        refs = self.progress(context).references
-        t = context.get_time()
-        p = refs.body_position.sample(t)
-        R = refs.body_orientation.sample(t)
-        # The layout of controller_refs.body_reference_vector, filled in place (every tick).
-        x = np.empty(controller_refs.BODY_REFERENCE_SIZE)
-        x[0:3], x[3:7], x[7:10], x[10:13] = p.position, R.quaternion_wxyz(), p.velocity, p.acceleration
-        x[13:16], x[16:19] = R.angular_velocity, R.angular_acceleration
-        output.SetFromVector(x)
+        table = context.get_abstract_state(self._references).get_value()
+        body_reference_into(table.body, context.get_time(), output.get_mutable_value())
 
     def _calc_legs(self, context, output: BasicVector) -> None:
-        refs = self.progress(context).references
-        t = context.get_time()
-        entries, foot_gains = {}, {}
-        for leg, leg_traj in refs.legs.items():
-            sample = leg_traj.trajectory.sample(t)
-            last = sample.acceleration if leg_traj.calf_rotation is None else leg_traj.calf_rotation
-            entries[leg] = (leg_traj.mode, sample.position, sample.velocity, last)
-            if leg_traj.foot_gains is not None:
-                foot_gains[leg] = leg_traj.foot_gains
-        press = refs.press
-        if press is not None and press["frozen_at"] is None:
-            s, sd, sdd = smooth_start_time_law(t, press["t0"], press["ramp"])
-            entries[press["leg"]] = (
-                LEG_MODE_FOOT,
-                press["start"] + press["speed"] * s * press["direction"],
-                press["speed"] * sd * press["direction"],
-                press["speed"] * sdd * press["direction"],
-            )
-        output.SetFromVector(controller_refs.leg_reference_vector(entries, foot_gains))
+        table = context.get_abstract_state(self._references).get_value()
+        leg_reference_into(table.legs, context.get_time(), output.get_mutable_value())
 
-    def _ik_target_W(self, context, leg: str) -> np.ndarray:
+    def _calc_references(self, context, output: BasicVector) -> None:
+        table = context.get_abstract_state(self._references).get_value()
+        references_into(table.body, table.legs, context.get_time(), output.get_mutable_value())
+
+    @staticmethod
+    def _ik_target_W(plan, leg: str) -> np.ndarray:
         """The world-frame foot target `leg` is asked for; NaN when nothing is asked."""
-        plan = self.progress(context).ik
         p_B = plan.pending(leg) if plan is not None else None
         if p_B is None:
             return np.full(3, np.nan)
         pose = BaseState(plan.X_WB[0:4], plan.X_WB[4:7], np.zeros(3), np.zeros(3)).pose()
         return pose @ p_B
 
-    def _calc_ik_pose(self, context, output: BasicVector) -> None:
-        plan = self.progress(context).ik
-        output.SetFromVector(_IDENTITY_POSE if plan is None else plan.X_WB)
-
-    def _calc_ik_seed(self, context, output: BasicVector) -> None:
-        plan = self.progress(context).ik
-        output.SetFromVector(robot.STANDING_Q if plan is None else plan.q_seed)
-
-    def _calc_contacts(self, context, output: BasicVector) -> None:
-        output.SetFromVector(self.progress(context).references.contacts)
-
-    def _calc_status(self, context, output: BasicVector) -> None:
-        progress = self.progress(context)
-        active = 1.0 if progress.references.legs else 0.0
+    def _status_vector(self, progress: MissionProgress) -> list[float]:
+        """The `mission_status` vector of `progress`."""
+        active = 1.0 if progress.references is not None and progress.references.legs else 0.0
         index = progress.resume_index if progress.interlude else progress.index
-        output.SetFromVector([index, STATUS_CODES[progress.status], active, len(self._mission.phases)])
+        return [index, STATUS_CODES[progress.status], active, len(self._mission.phases)]

@@ -81,12 +81,15 @@ def _move_body(progress: MissionProgress, t: float, p_end=None, R_end=None, dura
 
 def _support_points_W(view: RobotView, env: MissionEnvironment, contacts: np.ndarray, exclude: str = "") -> np.ndarray:
     """Positions of the loaded contacts (feet, prong tips) in the world, except `exclude` [m]."""
-    points = [view.foot_W(leg) for k, leg in enumerate(robot.LEG_NAMES) if contacts[k] > 0.5 and leg != exclude]
+    loaded = np.asarray(contacts[:4]) > 0.5
+    if exclude:
+        loaded[robot.LEG_NAMES.index(exclude)] = False
+    points = view.feet_W_array()[loaded]
     if env.prongs is not None:
-        for k, tip_B in enumerate(env.prongs.tip_positions_B()):
-            if contacts[4 + k] > 0.5:
-                points.append(view.X_WB @ tip_B)
-    return np.array(points)
+        tips = [view.X_WB @ tip_B for k, tip_B in enumerate(env.prongs.tip_positions_B()) if contacts[4 + k] > 0.5]
+        if tips:
+            points = np.concatenate([points, tips])
+    return points
 
 
 def stance_safety_polygon(view: RobotView, env: MissionEnvironment, contacts: np.ndarray, margin: float) -> np.ndarray:
@@ -102,7 +105,7 @@ def stance_safety_polygon(view: RobotView, env: MissionEnvironment, contacts: np
     vertices_W = shrink_polygon(points[:, :2], margin)
     if len(vertices_W) < 3:
         return safety_polygon_vector()
-    origin = vertices_W.mean(axis=0)
+    origin = vertices_W.sum(axis=0) / len(vertices_W)  # the mean, without np.mean's overhead
     yaw = RollPitchYaw(view.X_WB.rotation()).yaw_angle()
     c, s = math.cos(yaw), math.sin(yaw)
     # Rows are vertices: (v - origin) R_WP, i.e. R_PW (v - origin) for each.

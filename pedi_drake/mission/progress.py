@@ -2,7 +2,11 @@
 
 It is plain data: the phase index and timing, the reference trajectories the controller is
 following, the contact set, and the record of finished phases. Once stored in a Context it is
-treated as immutable (`MissionProgress.copy()` gives the copy to change).
+treated as immutable (`MissionProgress.copy()` gives the copy to change). Its parts are either
+values, shared by every copy (trajectories, LegTrajectory, IkPlan, ModeSwitch: frozen, and
+their `__deepcopy__` returns them), or containers that the runners change in place, which a
+copy duplicates: the memo, the references' leg table, contact set and press, the running
+phase's record and the lists.
 """
 
 import copy
@@ -25,10 +29,12 @@ STATUS_CODES = {RUNNING: 0, SUCCEEDED: 1, FAILED: 2, RECOVERING: 3}
 LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS, LEG_MODE_FOOT_POSE = 0, 1, 2, 3
 
 
-@dataclasses.dataclass
+@dataclasses.dataclass(frozen=True)
 class LegTrajectory:
     """Reference of one pedipulation leg: joint angles (mode 2), foot position in W (mode 1), or
-    a held foot pose in W (mode 3: the trajectory's position and the calf's orientation)."""
+    a held foot pose in W (mode 3: the trajectory's position and the calf's orientation).
+
+    A value (a new reference replaces it): shared by the copies of a progress."""
 
     mode: int
     trajectory: PiecewiseQuintic | QuinticSegment | RampSegment
@@ -36,6 +42,9 @@ class LegTrajectory:
     calf_rotation: np.ndarray | None = None
     # Modes 1 and 3: the foot task's own (kp [1/s^2], kd [1/s]); None: the controller's gains.
     foot_gains: tuple[float, float] | None = None
+
+    def __deepcopy__(self, memo) -> "LegTrajectory":
+        return self
 
 
 @dataclasses.dataclass
@@ -49,6 +58,21 @@ class References:
     # A press phase drives the foot along d at its speed, reached smoothly over `ramp` [s] from t0
     # (trajectory.smooth_start_time_law), until frozen.
     press: dict | None = None
+
+    def copy(self) -> "References":
+        """A copy whose leg table, contact set and press can be changed (the trajectories are values)."""
+        press = None if self.press is None else dict(self.press)
+        return References(self.body_position, self.body_orientation, dict(self.legs), self.contacts.copy(), press)
+
+    def same_trajectories(self, other: "References") -> bool:
+        """Whether `other` holds the same trajectory values and press (not the contact set)."""
+        if self.body_position is not other.body_position or self.body_orientation is not other.body_orientation:
+            return False
+        if self.legs.keys() != other.legs.keys() or any(self.legs[leg] is not other.legs[leg] for leg in self.legs):
+            return False
+        if self.press is None or other.press is None:
+            return self.press is other.press
+        return self.press.keys() == other.press.keys() and all(self.press[k] is other.press[k] for k in self.press)
 
     @staticmethod
     def holding(p_WB: np.ndarray, R_WB: RotationMatrix, t: float, num_prongs: int) -> "References":
@@ -98,6 +122,9 @@ class IkPlan:
     def done(self) -> bool:
         return all(self.pending(leg) is None for leg in self.targets_B)
 
+    def __deepcopy__(self, memo) -> "IkPlan":
+        return self  # a value: `answered` makes a new plan
+
 
 @dataclasses.dataclass
 class PhaseRecord:
@@ -123,6 +150,30 @@ class ModeSwitch:
     reason: str
     # The mission phase the switch interrupted, or the one the mission resumes with.
     phase: str
+
+    def __deepcopy__(self, memo) -> "ModeSwitch":
+        return self  # a value
+
+
+def _shallow(obj):
+    """A new object of obj's class with the same attributes (copy.copy without its protocol's cost)."""
+    clone = object.__new__(type(obj))
+    clone.__dict__.update(obj.__dict__)
+    return clone
+
+
+def _duplicate(value):
+    """A deep copy of plain data (dicts, lists, tuples, arrays, scalars, values), at a fraction of
+    copy.deepcopy's cost on the small memos and metrics copied at every mission update."""
+    if isinstance(value, dict):
+        return {key: _duplicate(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_duplicate(item) for item in value]
+    if isinstance(value, np.ndarray):
+        return value.copy()
+    if isinstance(value, (float, int, str, bool, type(None), np.floating, np.integer, np.bool_)):
+        return value
+    return copy.deepcopy(value)
 
 
 @dataclasses.dataclass
@@ -152,13 +203,21 @@ class MissionProgress:
     switches: list[ModeSwitch] = dataclasses.field(default_factory=list)
 
     def copy(self) -> "MissionProgress":
-        """A copy that is safe to change (a progress in a Context is never changed): deep, except
-        for the records of finished phases, which nothing changes."""
-        clone = copy.copy(self)
-        clone.__dict__.update(copy.deepcopy({k: v for k, v in self.__dict__.items() if k != "records"}))
+        """A copy that is safe to change (a progress in a Context is never changed): its containers
+        are duplicated, its values shared (see the module docstring)."""
+        clone = _shallow(self)
+        clone.memo = _duplicate(self.memo)
+        clone.references = None if self.references is None else self.references.copy()
         # Only the current phase's record (the last) is ever changed: the finished phases'
         # records are shared, so a tick's copy does not grow with the mission.
-        clone.records = self.records[:-1] + copy.deepcopy(self.records[-1:])
+        clone.records = self.records[:-1]
+        if self.records:
+            last = self.records[-1]
+            record = _shallow(last)
+            record.metrics = _duplicate(last.metrics)
+            clone.records.append(record)
+        # Lists of phases (never changed during a run) and of ModeSwitch values.
+        clone.recovery, clone.interlude, clone.switches = list(self.recovery), list(self.interlude), list(self.switches)
         return clone
 
     def __deepcopy__(self, memo) -> "MissionProgress":

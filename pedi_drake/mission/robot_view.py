@@ -3,19 +3,37 @@ the operator's command.
 
 Everything here is computed from the base-state estimate and the joint sensors through the
 model, never from simulation ground truth.
+
+The whole-robot quantities (centre of mass, gravity torques) need a Context of the Go1 plant:
+making one costs 0.1 to 1.5 ms, too much for a mission update (a press or a teleoperated foot
+reads a force estimate at every one), so each thread keeps one to compute in (`_plant_context`);
+every use sets the positions it reads first, so nothing is carried from one use to the next.
 """
 
 import dataclasses
 import functools
+import threading
 
 import numpy as np
 from pydrake.math import RigidTransform
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import Context
 
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BaseState
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
-from pedi_drake.leg_kinematics import foot_jacobian_B, joint_frames, leg_geometry
+from pedi_drake.leg_kinematics import joint_frames, leg_geometry
 from pedi_drake.operator.command import OperatorCommand
+
+_workspace = threading.local()
+
+
+def _plant_context(plant: MultibodyPlant) -> Context:
+    """This thread's Context of `plant` to compute in (see the module docstring)."""
+    contexts = _workspace.__dict__.setdefault("contexts", {})
+    if id(plant) not in contexts:
+        contexts[id(plant)] = plant.CreateDefaultContext()
+    return contexts[id(plant)]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -43,20 +61,32 @@ class RobotView:
         return self.q[robot.leg_slice(leg)]
 
     @functools.cached_property
+    def _feet_kinematics_B(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every foot centre (4, 3) [m] and its Jacobian wrt its leg's joints (4, 3, 3), trunk
+        frame, Unitree leg order (made once per view: the stance polygon alone reads three or four
+        feet every mission update)."""
+        feet, jacobians = foot_kinematics_B(self.q)
+        feet.flags.writeable = jacobians.flags.writeable = False
+        return feet, jacobians
+
+    @property
     def _feet_B(self) -> np.ndarray:
-        """(4, 3) every foot centre in the trunk frame [m], Unitree leg order (made once per view:
-        the stance polygon alone reads three or four of them every mission tick)."""
-        feet, _ = foot_kinematics_B(self.q)
-        feet.flags.writeable = False
-        return feet
+        return self._feet_kinematics_B[0]
 
     def foot_B(self, leg: str) -> np.ndarray:
         """Foot centre in the trunk frame [m]."""
         return self._feet_B[robot.LEG_NAMES.index(leg)].copy()
 
+    @functools.cached_property
+    def _feet_W(self) -> np.ndarray:
+        """(4, 3) every foot centre in the world [m], Unitree leg order (made once per view)."""
+        feet = self._feet_B @ self.X_WB.rotation().matrix().T + self.X_WB.translation()
+        feet.flags.writeable = False
+        return feet
+
     def foot_W(self, leg: str) -> np.ndarray:
         """Foot centre in the world [m]."""
-        return self.X_WB @ self.foot_B(leg)
+        return self._feet_W[robot.LEG_NAMES.index(leg)].copy()
 
     def calf_rotation_W(self, leg: str) -> np.ndarray:
         """(3, 3) orientation of the calf of `leg` in the world, R_WC (estimate and joint angles)."""
@@ -66,10 +96,14 @@ class RobotView:
     def feet_W(self) -> dict[str, np.ndarray]:
         return {leg: self.foot_W(leg) for leg in robot.LEG_NAMES}
 
+    def feet_W_array(self) -> np.ndarray:
+        """(4, 3) every foot centre in the world [m], Unitree leg order (read-only)."""
+        return self._feet_W
+
     def com_W(self) -> np.ndarray:
         """Whole-robot centre of mass in the world [m] (plain Go1 model)."""
         plant, plant_map = robot.make_go1_plant()
-        context = plant.CreateDefaultContext()
+        context = _plant_context(plant)
         q = plant_map.full_positions(self.base.quaternion_wxyz, self.base.p_WB, self.q, plant.num_positions())
         plant.SetPositions(context, q)
         return plant.CalcCenterOfMassPositionInWorld(context)
@@ -81,11 +115,11 @@ class RobotView:
         tau + tau_g + J^T F = 0, so F = -J^-T (tau + tau_g). Valid for slow leg motions.
         """
         plant, plant_map = robot.make_go1_plant()
-        context = plant.CreateDefaultContext()
+        context = _plant_context(plant)
         q = plant_map.full_positions(self.base.quaternion_wxyz, self.base.p_WB, self.q, plant.num_positions())
         plant.SetPositions(context, q)
         tau_g = plant.CalcGravityGeneralizedForces(context)[plant_map.v_index][robot.leg_slice(leg)]
-        J_W = self.X_WB.rotation().matrix() @ foot_jacobian_B(leg, self.leg_q(leg))
+        J_W = self.X_WB.rotation().matrix() @ self._feet_kinematics_B[1][robot.LEG_NAMES.index(leg)]
         tau = self.tau[robot.leg_slice(leg)]
         return -np.linalg.solve(J_W.T, tau + tau_g)
 
