@@ -41,6 +41,12 @@ def fell_during(quaternion_wxyz: np.ndarray, height: np.ndarray, *, has_prongs: 
     The robot has stood from the first sample above STOOD_HEIGHT on; with prongs the trunk may rest
     on them throughout.
     """
+    return first_fallen_sample(quaternion_wxyz, height, has_prongs=has_prongs) is not None
+
+
+def first_fallen_sample(quaternion_wxyz: np.ndarray, height: np.ndarray, *, has_prongs: bool) -> int | None:
+    """The index of the first sample at which the fall rule held (see `fell_during`), or None."""
     height = np.asarray(height, dtype=float)
     has_stood = np.maximum.accumulate(height > STOOD_HEIGHT) if height.size else height.astype(bool)
-    return bool(np.any(trunk_has_fallen(quaternion_wxyz, height, has_stood=has_stood, resting_on_prongs=has_prongs)))
+    fallen = np.atleast_1d(trunk_has_fallen(quaternion_wxyz, height, has_stood=has_stood, resting_on_prongs=has_prongs))
+    return int(np.argmax(fallen)) if np.any(fallen) else None

@@ -48,7 +48,8 @@ def _source_hash() -> str:
     return digest.hexdigest()[:16]
 
 
-def _cache_folder() -> Path:
+def cache_folder() -> Path:
+    """The disk cache folder of this version of the package's kernels."""
     base = os.environ.get("NUMBA_CACHE_DIR") or os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(base) / "pedi_drake" / "numba" / _source_hash()
 
@@ -76,7 +77,7 @@ if ENABLED:
             pass
 
     # Read by numba when a kernel is decorated (below, as each module is imported).
-    numba.config.CACHE_DIR = str(_cache_folder())
+    numba.config.CACHE_DIR = str(cache_folder())
     event.register("numba:compile", _CompileNotice())
 
 

@@ -31,6 +31,7 @@ from pedi_drake.go1_driver.config import Go1DriverConfig
 from pedi_drake.go1_driver.constants import DEFAULT_GO1_LCM_URL, GO1_BUS_NAME
 from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.realtime_priority import priority_problem
 from pedi_drake.resources import models_dir, scenarios_dir
 
 SCENE_OBJECT_KINDS = ("door", "box", "target_panel", "back_object", "fixed_obstacle", "soft_obstacle", "hand")
@@ -314,6 +315,8 @@ class Scenario:
                 "whole_body.period",
                 f"the control period must be the same everywhere, got {periods}",
             )
+        problem = priority_problem(self.go1_driver.realtime_priority)
+        need(problem is None, "go1_driver.realtime_priority", problem or "")
         for problem in self.kalman.validate(where="kalman"):
             raise ScenarioError(f"{where}: {problem}")
         need(

@@ -115,6 +115,8 @@ def run_sil(
                 raise RuntimeError(f"the simulator bridge exited with {bridge.returncode} before starting:\n{output}")
             if time.monotonic() - start > BRIDGE_START_TIMEOUT:
                 raise RuntimeError("the simulator bridge did not start within 60 s")
+        # "go1_sim_bridge: running on URL (its scheduling)"
+        bridge_scheduling = line.strip().rpartition("(")[2].rstrip(")")
         result = run(
             scenario=scenario, name=mission, out_dir=out_dir, quiet=True, hardware=True, realtime_rate=realtime_rate
         )
@@ -130,6 +132,7 @@ def run_sil(
         "estimator_trunk_position_error": estimator_error(logs, truth),
         "lcm_url": url,
         "realtime_rate": realtime_rate,
+        "bridge_scheduling": bridge_scheduling,
     }
     (out_dir / "sil.json").write_text(json.dumps(result["sil"], indent=2))
     return result
@@ -173,6 +176,7 @@ def main() -> int:
         f"(longest {loop['longest_miss_ms']:.1f} ms), lateness median {lateness.get('median', 0):.2f} ms, "
         f"max {lateness.get('max', 0):.1f} ms; driver latched: {result['driver']['latched']}"
     )
+    print(f"scheduling: controller {loop['scheduling']}, bridge {result['sil']['bridge_scheduling']}")
     print(f"wrote {out_dir / 'sil.json'}")
     return 0 if result["success"] else 1
 

@@ -45,6 +45,7 @@ from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimato
 from pedi_drake.go1_driver.link import Inbox
 from pedi_drake.go1_driver.status_receiver import MakeLcmReceiver, ReceiverChannel
 from pedi_drake.mission.spec import load_mission
+from pedi_drake.realtime_priority import realtime_priority
 from pedi_drake.scenario import Scenario, load_scenario
 from pedi_drake.station_interface import MakeStation
 from pedi_drake.wall_clock import WallClock
@@ -275,11 +276,12 @@ def main(argv: list[str] | None = None) -> int:
     # SIGTERM ends the run like Ctrl-C, so a supervising test or script can stop the bridge cleanly.
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     simulator.Initialize()
-    print(f"go1_sim_bridge: running on {lcm.get_lcm_url()}", flush=True)
     try:
-        # AdvanceTo needs a finite time: advance in 1 s chunks until the duration (or forever).
-        while simulator.get_context().get_time() < args.duration:
-            simulator.AdvanceTo(min(simulator.get_context().get_time() + 1.0, args.duration))
+        with realtime_priority(scenario.go1_driver.realtime_priority, who="go1_sim_bridge") as scheduling:
+            print(f"go1_sim_bridge: running on {lcm.get_lcm_url()} ({scheduling})", flush=True)
+            # AdvanceTo needs a finite time: advance in 1 s chunks until the duration (or forever).
+            while simulator.get_context().get_time() < args.duration:
+                simulator.AdvanceTo(min(simulator.get_context().get_time() + 1.0, args.duration))
     except KeyboardInterrupt:
         pass
     finally:

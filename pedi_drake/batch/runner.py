@@ -6,6 +6,7 @@ from pathlib import Path
 
 from pedi_drake.batch.results_file import ResultsFile, code_version
 from pedi_drake.batch.study import Study
+from pedi_drake.compile_kernels import compile_kernels
 
 
 class Progress:
@@ -49,5 +50,9 @@ def run_study(study: Study, folder: Path, engine, *, resume: bool = False, quiet
             progress.update(row)
 
     if todo:
+        if study.kind == "mission":
+            # Compiled once here: workers starting together on an empty cache would each compile
+            # the same kernels and write them concurrently (see pedi_drake.compile_kernels).
+            compile_kernels()
         engine.run(todo, on_row, code_version())
     return results

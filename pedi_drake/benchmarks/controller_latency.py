@@ -87,6 +87,8 @@ def _scenario(mission: str, period: float, lcm_url: str = "", qp_backend: str | 
     scenario.go1_driver.safety.status_timeout = 1e9
     scenario.go1_driver.safety.command_timeout = 1e9
     scenario.go1_driver.shutdown_damping_duration = 0.0
+    # An unpaced loop never sleeps: at real-time priority it would hold a core for the whole replay.
+    scenario.go1_driver.realtime_priority = 0
     return scenario
 
 

@@ -18,7 +18,7 @@ from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_re
 from pedi_drake.evaluation.result_file import write_result
 from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
 from pedi_drake.evaluation.touches import judge_touches
-from pedi_drake.fall import fell_during
+from pedi_drake.fall import fell_during, first_fallen_sample
 from pedi_drake.go1_driver.hardware_station import hardware_link
 from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
@@ -179,8 +179,13 @@ def judge_run(record) -> dict:
         stand_failed = (progress is None and reason) or any(
             row["kind"] == "stand_up" and row["status"] == FAILED for row in result["phases"]
         )
-        if stand_failed and not fell and states.shape[1]:
+        if stand_failed and states.shape[1]:
             t_fail = next((row["t_end"] for row in result["phases"] if row["status"] == FAILED), sim_time)
+            if fell:
+                # Feet that slid away while the trunk was still up made it fall; the collapse
+                # itself moves the feet too, so only the slide before it counts.
+                first = first_fallen_sample(states[q0 : q0 + 4], states[q0 + 6], has_prongs=has_prongs)
+                t_fail = min(t_fail, float(t_state[first]))
             slip = mission_results.max_foot_slip(plant, states, t_state, t_fail)
             if slip > SLIP_DISTANCE:
                 reason = (

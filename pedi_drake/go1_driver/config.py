@@ -60,6 +60,11 @@ class Go1DriverConfig:
     # wire for this long before the process leaves [s]: the bridge holds the last command it
     # received, so the last one must be damping, repeated in case a datagram is lost.
     shutdown_damping_duration: float = 0.3
+    # SCHED_FIFO priority [1-99] of every thread of a wall-clock loop: the driver's (controller
+    # side) and the simulator bridge's (robot side); 0: the OS's normal scheduling. Where the OS
+    # refuses (no root, CAP_SYS_NICE or `ulimit -r`), the loop runs at normal priority with a
+    # warning, and result.json says which it got (see pedi_drake.realtime_priority).
+    realtime_priority: int = 50
     # Safety layer bounds and watchdogs.
     safety: Go1SafetyConfig = dataclasses.field(default_factory=Go1SafetyConfig)
     # The simulator bridge's latency and message drops.

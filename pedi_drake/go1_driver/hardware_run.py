@@ -16,6 +16,10 @@ of the garbage collector (gc.freeze): a full collection walks the whole heap, te
 milliseconds on this kind of machine, so without it the loop misses deadlines whenever one runs.
 Only objects made during the loop are then collected, in sub-millisecond young collections.
 
+Every thread of the process runs under SCHED_FIFO at the driver's `realtime_priority` while the
+block runs, where the OS allows it (see pedi_drake.realtime_priority); the link's report says
+which scheduling the loop had.
+
 The interpreter's thread switch interval is shortened (SWITCH_INTERVAL) while the loop runs: the
 link's receive thread needs the GIL to stamp a message, and by default a thread computing in
 Python keeps it for 5 ms at a time.
@@ -30,6 +34,7 @@ import threading
 from pydrake.systems.framework import Diagram
 
 from pedi_drake.go1_driver.hardware_station import hardware_link
+from pedi_drake.realtime_priority import realtime_priority
 
 # [s] how long a thread computing in Python may keep the GIL while another waits for it.
 SWITCH_INTERVAL = 0.0005
@@ -58,13 +63,14 @@ def hardware_run(diagram: Diagram, *, realtime_rate: float = 1.0, shutdown_dampi
     switch_interval = sys.getswitchinterval()
     sys.setswitchinterval(SWITCH_INTERVAL)
     try:
-        yield link
+        with realtime_priority(link.config.realtime_priority, who="Go1 driver loop") as link.scheduling:
+            try:
+                yield link
+            finally:
+                link.hold_damping(duration)
     finally:
-        try:
-            link.hold_damping(duration)
-        finally:
-            link.close()
-            sys.setswitchinterval(switch_interval)
-            gc.unfreeze()
-            if in_main and previous in (signal.SIG_DFL, None):
-                signal.signal(signal.SIGTERM, previous or signal.SIG_DFL)
+        link.close()
+        sys.setswitchinterval(switch_interval)
+        gc.unfreeze()
+        if in_main and previous in (signal.SIG_DFL, None):
+            signal.signal(signal.SIGTERM, previous or signal.SIG_DFL)

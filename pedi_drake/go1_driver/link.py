@@ -229,6 +229,8 @@ class Go1Link:
         self._publish_lock = threading.Lock()
         # The pace of the loop against the wall clock (the Simulator's target real-time rate).
         self.realtime_rate = 1.0
+        # The loop's scheduling while it ran (see pedi_drake.realtime_priority), for the report.
+        self.scheduling = "normal scheduling"
         self.leg_control = self._add(c.LEG_CONTROL_CHANNEL, _leg_control_vector)
         self.state_estimator = self._add(c.STATE_ESTIMATOR_CHANNEL, _state_estimator_vector)
         self.rc_command = self._add(
@@ -410,6 +412,7 @@ class Go1Link:
             "messages": {inbox.channel: inbox.counts() for inbox in self.inboxes},
             "loop": {
                 "period_s": self._period,
+                "scheduling": self.scheduling,
                 "ticks": len(lateness),
                 "lateness_ms": _distribution_ms(lateness),
                 "deadline_misses": misses,
