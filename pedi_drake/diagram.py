@@ -64,6 +64,8 @@ MISSION_IK_TOLERANCE = 5e-4
 # The one log of a run's signals, and the multiplexer that feeds it (subsystem names).
 LOG_SINK = "log"
 LOG_MULTIPLEXER = "log.signals"
+# The sample-and-hold of the SAMPLED_SENSOR_SIGNALS (subsystem name).
+LOG_HOLD = "log_hold"
 # Simulated sensor signals that are costly to compute: logged through a sample-and-hold.
 SAMPLED_SENSOR_SIGNALS = (
     "go1.imu",
@@ -284,16 +286,29 @@ def MakePedipulationDiagram(
         # The host's clock beside the signals: aligns this run's logs with the robot side's.
         sources["wall_clock"] = builder.AddNamedSystem("wall_clock", WallClock()).clock
     logged, log_rows = [], {}
+
+    def log(port) -> slice:
+        start = sum(previous.size() for previous in logged)
+        logged.append(port)
+        return slice(start, start + port.size())
+
+    held = [name for name in sources if not hardware and name in SAMPLED_SENSOR_SIGNALS]
     for name, port in sources.items():
         builder.ExportOutput(port, name)
-        if not hardware and name in SAMPLED_SENSOR_SIGNALS:
-            # Logged directly, these sensors would be computed twice a tick (see LogHold).
-            hold = builder.AddNamedSystem(f"log_hold.{name}", LogHold(port.size(), log_period))
-            builder.Connect(port, hold.get_input_port())
-            port = hold.get_output_port()
-        start = sum(previous.size() for previous in logged)
-        log_rows[name] = slice(start, start + port.size())
-        logged.append(port)
+        if name not in held:
+            log_rows[name] = log(port)
+    if held:
+        # Logged directly, these sensors would be computed twice a tick (see LogHold); one hold
+        # for all of them is one Python callback a tick instead of one each.
+        sizes = [sources[name].size() for name in held]
+        gather = builder.AddNamedSystem(f"{LOG_HOLD}.signals", Multiplexer(sizes))
+        for k, name in enumerate(held):
+            builder.Connect(sources[name], gather.get_input_port(k))
+        hold = builder.AddNamedSystem(LOG_HOLD, LogHold(sum(sizes), log_period))
+        builder.Connect(gather.get_output_port(), hold.get_input_port())
+        block = log(hold.get_output_port())
+        for name, start in zip(held, np.cumsum([0, *sizes[:-1]]), strict=True):
+            log_rows[name] = slice(block.start + int(start), block.start + int(start) + sources[name].size())
     signals = builder.AddNamedSystem(LOG_MULTIPLEXER, Multiplexer([port.size() for port in logged]))
     for k, port in enumerate(logged):
         builder.Connect(port, signals.get_input_port(k))

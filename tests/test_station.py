@@ -7,12 +7,12 @@ from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.go1_command import pack_command
+from pedi_drake.go1_command import COMMAND_SIZE, pack_command
 from pedi_drake.go1_driver.config import Go1DriverConfig
 from pedi_drake.go1_driver.hardware_station import MakeHardwareStation
 from pedi_drake.go1_driver.link import DrakeLcmTransport, Go1Link
 from pedi_drake.scenario import Scenario, load_scenario
-from pedi_drake.station.motor_model import Go1MotorModel, motor_torque
+from pedi_drake.station.motor_model import Go1MotorModel, _guard_kernel, guarded_command, motor_torque
 from pedi_drake.station_interface import STATION_PORTS, MakeStation
 
 STAND_HOLD_START = 2.0  # [s] the stand blend (1.5 s) is over and the trunk has settled.
@@ -71,6 +71,19 @@ def test_the_motor_model_system_applies_the_motor_law_in_plant_order():
         plant_map.actuation(expected, plant.num_actuators()),
         rtol=1e-14,
     )
+
+
+def test_the_command_guard_kernel_equals_guarded_command():
+    """MotorCommandGuard's compiled kernel against the reference, exactly, on commands with
+    non-finite, huge and ordinary entries (the kernel runs once per controller tick)."""
+    rng = np.random.default_rng(4)
+    for trial in range(200):
+        command = rng.normal(scale=10.0 ** rng.integers(0, 8), size=COMMAND_SIZE)
+        for k in rng.integers(0, COMMAND_SIZE, size=rng.integers(0, 4)):
+            command[k] = rng.choice([np.nan, np.inf, -np.inf, 1e300, -1e300])
+        out = np.full(COMMAND_SIZE, np.nan)
+        _guard_kernel(command, out)
+        np.testing.assert_array_equal(out, guarded_command(command), err_msg=f"trial {trial}")
 
 
 @pytest.fixture(scope="module")

@@ -6,6 +6,8 @@ from the plant state, which is what the driver's encoders would read, in Drake's
 (see Go1MotorModel).
 """
 
+import math
+
 import numpy as np
 import scipy.sparse
 from pydrake import symbolic
@@ -14,6 +16,7 @@ from pydrake.systems.primitives import Multiplexer, SparseMatrixGain, SymbolicVe
 
 from pedi_drake import robot
 from pedi_drake.go1_command import COMMAND_SIZE, pd_torque
+from pedi_drake.jit import kernel
 
 # Command entries are clipped to this magnitude before the motor law, so that no product or sum of
 # them can overflow to inf (or inf - inf to NaN) [rad, rad/s, N m/rad, N m s/rad, N m].
@@ -35,6 +38,19 @@ def guarded_command(command: np.ndarray) -> np.ndarray:
     return np.clip(parts, -COMMAND_MAGNITUDE_LIMIT, COMMAND_MAGNITUDE_LIMIT).ravel()
 
 
+@kernel
+def _guard_kernel(command: np.ndarray, out: np.ndarray) -> None:
+    """`guarded_command(command)` written into `out`, compiled: the same values (clipping a
+    finite entry within the limit returns it unchanged)."""
+    for k in range(12):
+        finite = True
+        for row in range(5):
+            finite = finite and math.isfinite(command[12 * row + k])
+        for row in range(5):
+            value = command[12 * row + k]
+            out[12 * row + k] = min(max(value, -COMMAND_MAGNITUDE_LIMIT), COMMAND_MAGNITUDE_LIMIT) if finite else 0.0
+
+
 def motor_torque(command: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """Motor torques [N m] the drivers apply for `command` at joint angles q and rates qd.
 
@@ -46,7 +62,7 @@ def motor_torque(command: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarr
 
 
 class MotorCommandGuard(LeafSystem):
-    """go1.command -> `guarded_command(go1.command)`.
+    """go1.command -> `guarded_command(go1.command)`, by a compiled kernel.
 
     Its output depends on the command alone, so Drake computes it once per new command (once
     per controller tick), not once per plant step.
@@ -54,6 +70,7 @@ class MotorCommandGuard(LeafSystem):
 
     def __init__(self) -> None:
         super().__init__()
+        _guard_kernel(np.zeros(COMMAND_SIZE), np.zeros(COMMAND_SIZE))  # compiled now, not in a tick
         self._command = self.DeclareVectorInputPort("command", COMMAND_SIZE)
         self.DeclareVectorOutputPort(
             "guarded_command",
@@ -63,10 +80,10 @@ class MotorCommandGuard(LeafSystem):
         )
 
     def _calc(self, context, output: BasicVector) -> None:
-        output.SetFromVector(guarded_command(self._command.Eval(context)))
+        _guard_kernel(self._command.Eval(context), output.get_mutable_value())
 
 
-def _selection(rows: np.ndarray, num_columns: int) -> scipy.sparse.csc_matrix:
+def selection_matrix(rows: np.ndarray, num_columns: int) -> scipy.sparse.csc_matrix:
     """The sparse matrix S with (S x)[i] = x[rows[i]]."""
     rows = np.asarray(rows)
     return scipy.sparse.csc_matrix((np.ones(len(rows)), (np.arange(len(rows)), rows)), shape=(len(rows), num_columns))
@@ -91,7 +108,7 @@ class Go1MotorModel(Diagram):
         guard = builder.AddNamedSystem("command_guard", MotorCommandGuard())
         state_rows = np.concatenate([plant_map.q_index, num_positions + plant_map.v_index])
         joints = builder.AddNamedSystem(
-            "joint_state", SparseMatrixGain(_selection(state_rows, num_positions + num_velocities))
+            "joint_state", SparseMatrixGain(selection_matrix(state_rows, num_positions + num_velocities))
         )
         inputs = builder.AddNamedSystem("law_inputs", Multiplexer([COMMAND_SIZE, 24]))
         u = symbolic.MakeVectorVariable(COMMAND_SIZE + 24, "u")
@@ -104,7 +121,7 @@ class Go1MotorModel(Diagram):
             actuation[plant_map.u_index[k]] = symbolic.min(symbolic.max(tau, -limit), limit)
         law = builder.AddNamedSystem("motor_law", SymbolicVectorSystem(input=u, output=actuation))
         torque = builder.AddNamedSystem(
-            "unitree_torque", SparseMatrixGain(_selection(plant_map.u_index, num_actuators))
+            "unitree_torque", SparseMatrixGain(selection_matrix(plant_map.u_index, num_actuators))
         )
         builder.Connect(guard.get_output_port(), inputs.get_input_port(0))
         builder.Connect(joints.get_output_port(), inputs.get_input_port(1))

@@ -5,12 +5,14 @@ normal contact force [N] between that object's bodies and each foot (FR, FL, RR,
 it and any other body of the robot (trunk, legs, prongs), summed over their point contacts. Read
 from the plant's contact results, the simulation's ground truth, for logging and judging only;
 controllers and missions never read it.
+
+The station computes it with the sensors in one callback (`plant_readings.PlantReadings`);
+`scene_contact_forces` here is the same sum on the plant's contact results, the reference its
+compiled kernel is tested against.
 """
 
 import numpy as np
-from pydrake.common.value import AbstractValue
 from pydrake.multibody.plant import ContactResults
-from pydrake.systems.framework import BasicVector, LeafSystem
 
 from pedi_drake import robot
 
@@ -44,30 +46,3 @@ def scene_contact_forces(
         normal = abs(float(np.dot(info.contact_force(), info.point_pair().nhat_BA_W)))
         forces[obj * len(ROBOT_CONTACT_SOURCES) + source] += normal
     return forces
-
-
-class SceneContactForces(LeafSystem):
-    """contact_results -> scene_contact_forces (see the module docstring for the layout)."""
-
-    def __init__(self, plant, plant_map, scene_names: list[str]) -> None:
-        super().__init__()
-        feet = {int(plant.GetBodyByName(name, plant_map.model).index()) for name in robot.FOOT_BODY_NAMES}
-        self._source_of_body = {
-            int(body): (robot.FOOT_BODY_NAMES.index(plant.get_body(body).name()) if int(body) in feet else len(feet))
-            for body in plant.GetBodyIndices(plant_map.model)
-        }
-        self._object_of_body = {
-            int(body): k
-            for k, name in enumerate(scene_names)
-            for body in plant.GetBodyIndices(plant.GetModelInstanceByName(name))
-        }
-        self._num_objects = len(scene_names)
-        self._contacts = self.DeclareAbstractInputPort("contact_results", AbstractValue.Make(ContactResults()))
-        self.DeclareVectorOutputPort("scene_contact_forces", len(scene_names) * len(ROBOT_CONTACT_SOURCES), self._calc)
-
-    def _calc(self, context, output: BasicVector) -> None:
-        output.SetFromVector(
-            scene_contact_forces(
-                self._contacts.Eval(context), self._source_of_body, self._object_of_body, self._num_objects
-            )
-        )

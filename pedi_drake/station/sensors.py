@@ -1,133 +1,115 @@
-"""Simulated Go1 sensors: joint encoders, torque estimate, IMU and foot force sensors.
+"""Simulated Go1 sensors: joint encoders, and the reference maths of the IMU and the foot sensors.
 
 Outputs follow the station ports of docs/conventions.md (Unitree order). Optional Gaussian
-noise is drawn from a generator seeded by (scenario seed, sample index), so a run is
+noise is drawn from a generator seeded by (scenario seed, sample index, channel), so a run is
 deterministic and the sensors keep no hidden state.
+
+The joint encoders (`JointEncoders`) are read twice a control tick (by the controller side at
+the tick, by the log after it, at the next plant state), so without noise they are Drake's C++
+selection of the plant state. The IMU, the foot sensors and the torque estimate are computed
+with the simulation's contact ground truth in one callback (`plant_readings.PlantReadings`); the
+functions here (`imu_reading`, `foot_normal_forces`, `foot_contact_forces_W`) are the same maths
+on plain arrays and the plant's objects: the reference its compiled kernel is tested against.
 """
 
 import numpy as np
-from pydrake.common.value import AbstractValue
 from pydrake.math import RotationMatrix
-from pydrake.multibody.plant import ContactResults, MultibodyPlant
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.multibody.plant import ContactResults
+from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, LeafSystem
+from pydrake.systems.primitives import SparseMatrixGain
 
 from pedi_drake import robot
 from pedi_drake.scenario import SensorNoiseConfig
+from pedi_drake.station.motor_model import selection_matrix
 from pedi_drake.vector3 import axis_angle_matrix, cross3, rotation_matrix_wxyz
 
-IMU_SIZE = 10  # quaternion w, x, y, z; gyro (3); accelerometer (3)
+# Noise channels of the encoders' generators (the other sensors draw 2 to 4, see PlantReadings).
+POSITION_CHANNEL, VELOCITY_CHANNEL = 0, 1
 
 
-class Go1SensorModel(LeafSystem):
-    """Plant signals -> go1.position_measured, velocity_measured, imu, foot_contact (+ noisy torque)."""
+class NoisyJointEncoders(LeafSystem):
+    """plant_state -> position_measured, velocity_measured (12 each, Unitree order) with noise."""
 
-    def __init__(
-        self,
-        plant: MultibodyPlant,
-        plant_map: robot.Go1PlantMap,
-        noise: SensorNoiseConfig,
-        seed: int,
-        sample_period: float,
-    ):
+    def __init__(self, plant_map: robot.Go1PlantMap, nq: int, nv: int, noise: SensorNoiseConfig, seed: int, period):
         super().__init__()
-        self._plant = plant
-        self._map = plant_map
-        self._nq = plant.num_positions()
-        self._noise = noise
-        self._seed = int(seed)
-        self._period = sample_period
-        trunk = plant.GetBodyByName(robot.TRUNK_BODY_NAME, plant_map.model)
-        imu = plant.GetBodyByName(robot.IMU_BODY_NAME, plant_map.model)
-        if not trunk.is_floating_base_body() or not trunk.has_quaternion_dofs():
-            raise ValueError(f"Go1SensorModel: the trunk {trunk.name()!r} must be a quaternion floating body")
-        # The trunk's floating joint: q = [quaternion R_WB (w, x, y, z), p_WB], v = [w_WB, v_WB]
-        # (world frame), so its slices of the state and of vdot are the trunk's pose, velocity
-        # and acceleration: cheaper to read than the plant's per-body output ports (a Python
-        # object per body each).
-        self._quaternion = slice(trunk.floating_positions_start(), trunk.floating_positions_start() + 4)
-        v_start = self._nq + trunk.floating_velocities_start_in_v()
-        self._w_WB = slice(v_start, v_start + 3)
-        a_start = trunk.floating_velocities_start_in_v()
-        self._alpha_WB = slice(a_start, a_start + 3)
-        self._a_WB = slice(a_start + 3, a_start + 6)
-        # The IMU is welded to the trunk with the trunk's orientation; keep its offset p_BI.
-        context = plant.CreateDefaultContext()
-        self._p_BI = plant.CalcRelativeTransform(context, trunk.body_frame(), imu.body_frame()).translation()
-        self._gravity_W = plant.gravity_field().gravity_vector()
-        # Foot number by body index (plain ints), made once: the contact loop looks up every
-        # contact's two bodies in it, every tick.
-        self._foot_of_body = foot_index_of_body(
-            [plant.GetBodyByName(name, plant_map.model).index() for name in robot.FOOT_BODY_NAMES]
-        )
-
-        nx = plant.num_positions() + plant.num_velocities()
-        self._state = self.DeclareVectorInputPort("plant_state", nx)
-        self._vdot = self.DeclareVectorInputPort("generalized_acceleration", plant.num_velocities())
-        self._contacts = self.DeclareAbstractInputPort(
-            "contact_results", plant.get_contact_results_output_port().Allocate()
-        )
-        self._torque = self.DeclareVectorInputPort("motor_torque", 12)
+        self._map, self._nq, self._noise, self._seed, self._period = plant_map, nq, noise, int(seed), period
+        self._state = self.DeclareVectorInputPort("plant_state", nq + nv)
         self.DeclareVectorOutputPort("position_measured", 12, self._calc_position)
         self.DeclareVectorOutputPort("velocity_measured", 12, self._calc_velocity)
-        self.DeclareVectorOutputPort("torque_estimated", 12, self._calc_torque)
-        self.DeclareVectorOutputPort("imu", IMU_SIZE, self._calc_imu)
-        self.DeclareVectorOutputPort("foot_contact", 4, self._calc_foot_contact)
 
-    def _rng(self, context, channel: int) -> np.random.Generator | None:
-        """A generator for this sample and signal channel, or None when noise is off."""
-        if not self._noise.enabled:
-            return None
+    def _rng(self, context, channel: int) -> np.random.Generator:
         sample = int(round(context.get_time() / self._period))
         return np.random.default_rng((self._seed, sample, channel))
 
     def _calc_position(self, context, output: BasicVector) -> None:
         q = self._map.joint_positions(self._state.Eval(context)[: self._nq])
-        rng = self._rng(context, 0)
-        if rng is not None:
-            q = q + rng.normal(0.0, self._noise.joint_position, 12)
-        output.SetFromVector(q)
+        output.SetFromVector(q + self._rng(context, POSITION_CHANNEL).normal(0.0, self._noise.joint_position, 12))
 
     def _calc_velocity(self, context, output: BasicVector) -> None:
         qd = self._map.joint_velocities(self._state.Eval(context)[self._nq :])
-        rng = self._rng(context, 1)
-        if rng is not None:
-            qd = qd + rng.normal(0.0, self._noise.joint_velocity, 12)
-        output.SetFromVector(qd)
+        output.SetFromVector(qd + self._rng(context, VELOCITY_CHANNEL).normal(0.0, self._noise.joint_velocity, 12))
 
-    def _calc_torque(self, context, output: BasicVector) -> None:
-        tau = self._torque.Eval(context).copy()
-        rng = self._rng(context, 2)
-        if rng is not None:
-            tau = tau + rng.normal(0.0, self._noise.joint_torque, 12)
-        output.SetFromVector(tau)
 
-    def _calc_imu(self, context, output: BasicVector) -> None:
-        x = self._state.Eval(context)
-        vdot = self._vdot.Eval(context)
-        R_WB = rotation_matrix_wxyz(x[self._quaternion])
-        w_W = x[self._w_WB]
-        alpha_W = vdot[self._alpha_WB]
-        p_BI_W = R_WB @ self._p_BI
-        # Acceleration of the IMU point, then the specific force a - g in the trunk frame.
-        a_WI = vdot[self._a_WB] + cross3(alpha_W, p_BI_W) + cross3(w_W, cross3(w_W, p_BI_W))
-        gyro = R_WB.T @ w_W
-        accel = R_WB.T @ (a_WI - self._gravity_W)
-        rng = self._rng(context, 3)
-        if rng is not None:
-            R_WB = R_WB @ axis_angle_matrix(rng.normal(0.0, self._noise.orientation, 3))
-            gyro = gyro + rng.normal(0.0, self._noise.gyro, 3)
-            accel = accel + rng.normal(0.0, self._noise.accelerometer, 3)
-        quaternion = RotationMatrix(R_WB).ToQuaternion()
-        output.SetFromVector(
-            np.concatenate([[quaternion.w(), quaternion.x(), quaternion.y(), quaternion.z()], gyro, accel])
-        )
+class JointEncoders(Diagram):
+    """plant_state -> position_measured, velocity_measured (12 each, Unitree order) [rad, rad/s].
 
-    def _calc_foot_contact(self, context, output: BasicVector) -> None:
-        forces = foot_normal_forces(self._contacts.Eval(context), self._foot_of_body)
-        rng = self._rng(context, 4)
-        if rng is not None:
-            forces = np.maximum(forces + rng.normal(0.0, self._noise.foot_force, 4), 0.0)
-        output.SetFromVector(forces)
+    Without noise each is a C++ selection of the plant state (exact: one 1.0 per row); with
+    noise a Python system adds the seeded noise (channels POSITION_CHANNEL, VELOCITY_CHANNEL).
+    """
+
+    def __init__(self, plant_map: robot.Go1PlantMap, nq: int, nv: int, noise: SensorNoiseConfig, seed: int, period):
+        super().__init__()
+        builder = DiagramBuilder()
+        if noise.enabled:
+            encoders = builder.AddNamedSystem("noisy", NoisyJointEncoders(plant_map, nq, nv, noise, seed, period))
+            builder.ExportInput(encoders.get_input_port(), "plant_state")
+            for name in ("position_measured", "velocity_measured"):
+                builder.ExportOutput(encoders.GetOutputPort(name), name)
+        else:
+            positions = builder.AddNamedSystem(
+                "positions", SparseMatrixGain(selection_matrix(plant_map.q_index, nq + nv))
+            )
+            rates = builder.AddNamedSystem(
+                "velocities", SparseMatrixGain(selection_matrix(nq + plant_map.v_index, nq + nv))
+            )
+            builder.ExportInput(positions.get_input_port(), "plant_state")
+            builder.ConnectInput("plant_state", rates.get_input_port())
+            builder.ExportOutput(positions.get_output_port(), "position_measured")
+            builder.ExportOutput(rates.get_output_port(), "velocity_measured")
+        builder.BuildInto(self)
+
+
+def imu_reading(
+    x: np.ndarray,
+    vdot: np.ndarray,
+    starts: tuple[int, int, int, int],
+    p_BI: np.ndarray,
+    gravity_W: np.ndarray,
+    rng: np.random.Generator | None = None,
+    noise: SensorNoiseConfig | None = None,
+) -> np.ndarray:
+    """The IMU's reading (IMU_SIZE: quaternion w, x, y, z; gyro [rad/s]; specific force [m/s^2],
+    trunk frame) from the plant state `x` and accelerations `vdot`.
+
+    starts: where the trunk's quaternion and angular velocity are in x, its angular and linear
+    acceleration in vdot; p_BI: the IMU's offset in the trunk [m]; `rng`: the sample's generator
+    of the IMU channel when noise is on (orientation, gyro, accelerometer drawn in that order).
+    """
+    q0, w0, alpha0, a0 = starts
+    R_WB = rotation_matrix_wxyz(x[q0 : q0 + 4])
+    w_W = x[w0 : w0 + 3]
+    alpha_W = vdot[alpha0 : alpha0 + 3]
+    p_BI_W = R_WB @ p_BI
+    # Acceleration of the IMU point, then the specific force a - g in the trunk frame.
+    a_WI = vdot[a0 : a0 + 3] + cross3(alpha_W, p_BI_W) + cross3(w_W, cross3(w_W, p_BI_W))
+    gyro = R_WB.T @ w_W
+    accel = R_WB.T @ (a_WI - gravity_W)
+    if rng is not None:
+        R_WB = R_WB @ axis_angle_matrix(rng.normal(0.0, noise.orientation, 3))
+        gyro = gyro + rng.normal(0.0, noise.gyro, 3)
+        accel = accel + rng.normal(0.0, noise.accelerometer, 3)
+    quaternion = RotationMatrix(R_WB).ToQuaternion()
+    return np.concatenate([[quaternion.w(), quaternion.x(), quaternion.y(), quaternion.z()], gyro, accel])
 
 
 def foot_index_of_body(foot_bodies) -> dict[int, int]:
@@ -167,18 +149,3 @@ def foot_contact_forces_W(contact_results: ContactResults, foot_of_body: dict[in
         if a is not None:
             forces[a] -= info.contact_force()
     return forces
-
-
-class FootContactForces(LeafSystem):
-    """Simulation only (`sim.foot_contact_forces`): the true contact force on each foot, world
-    frame [N], FR, FL, RR, RL x (x, y, z). For judging force estimates; controllers never read it."""
-
-    def __init__(self, plant, plant_map) -> None:
-        super().__init__()
-        feet = [plant.GetBodyByName(name, plant_map.model).index() for name in robot.FOOT_BODY_NAMES]
-        self._foot_of_body = foot_index_of_body(feet)
-        self._contacts = self.DeclareAbstractInputPort("contact_results", AbstractValue.Make(ContactResults()))
-        self.DeclareVectorOutputPort("foot_contact_forces", 12, self._calc)
-
-    def _calc(self, context, output: BasicVector) -> None:
-        output.SetFromVector(foot_contact_forces_W(self._contacts.Eval(context), self._foot_of_body).ravel())

@@ -4,18 +4,20 @@ Exports exactly the station ports of docs/conventions.md (`go1.*`), plus simulat
 ports (`sim.*`) for logging and tests, which controllers and estimators never read.
 """
 
+import numpy as np
 from pydrake.geometry import Meshcat, MeshcatVisualizer, MeshcatVisualizerParams, Role
 from pydrake.multibody.plant import AddMultibodyPlant
 from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource, Demultiplexer
 
 from pedi_drake import robot
 from pedi_drake.scenario import Scenario
-from pedi_drake.station.disturbance import PushDisturbance
+from pedi_drake.station.disturbance import PUSH_FORCE_SIZE, PushDisturbance
 from pedi_drake.station.initial_state import initial_trunk_pose, set_default_go1_state
 from pedi_drake.station.motor_model import Go1MotorModel
+from pedi_drake.station.plant_readings import PlantReadings
 from pedi_drake.station.scene import add_ground, add_scene_object
-from pedi_drake.station.scene_contact import SceneContactForces
-from pedi_drake.station.sensors import FootContactForces, Go1SensorModel
+from pedi_drake.station.sensors import JointEncoders
 
 GO1_OUTPUT_PORTS = (
     "go1.position_measured",
@@ -23,6 +25,16 @@ GO1_OUTPUT_PORTS = (
     "go1.torque_estimated",
     "go1.imu",
     "go1.foot_contact",
+)
+SIM_OUTPUT_PORTS = (
+    "sim.foot_contact_forces",
+    "sim.scene_contact_forces",
+    "sim.plant_state",
+    "sim.contact_results",
+    "sim.body_poses",
+    "sim.motor_torque",
+    "sim.push_force",
+    "sim.query_object",
 )
 
 
@@ -46,34 +58,59 @@ def MakeSimulationStation(scenario: Scenario, meshcat: Meshcat | None = None) ->
     builder.Connect(motors.GetOutputPort("actuation"), plant.get_actuation_input_port())
     builder.ExportInput(motors.GetInputPort("command"), "go1.command")
 
-    sensors = builder.AddNamedSystem(
-        "sensors",
-        Go1SensorModel(plant, plant_map, scenario.sensor_noise, scenario.random_seed, plant.time_step()),
+    encoders = builder.AddNamedSystem(
+        "encoders",
+        JointEncoders(
+            plant_map,
+            plant.num_positions(),
+            plant.num_velocities(),
+            scenario.sensor_noise,
+            scenario.random_seed,
+            plant.time_step(),
+        ),
     )
-    builder.Connect(plant.get_state_output_port(), sensors.GetInputPort("plant_state"))
-    builder.Connect(plant.get_generalized_acceleration_output_port(), sensors.GetInputPort("generalized_acceleration"))
-    builder.Connect(plant.get_contact_results_output_port(), sensors.GetInputPort("contact_results"))
-    builder.Connect(motors.GetOutputPort("torque"), sensors.GetInputPort("motor_torque"))
-    for name in GO1_OUTPUT_PORTS:
-        builder.ExportOutput(sensors.GetOutputPort(name.removeprefix("go1.")), name)
+    builder.Connect(plant.get_state_output_port(), encoders.GetInputPort("plant_state"))
+    outputs = {name: encoders.GetOutputPort(name.removeprefix("go1.")) for name in GO1_OUTPUT_PORTS[:2]}
+
+    # The IMU, foot sensors, torque estimate and contact ground truth: one callback, split in C++.
+    scene_names = [obj.instance_name for obj in scenario.scene]
+    readings = builder.AddNamedSystem(
+        "readings",
+        PlantReadings(plant, plant_map, scene_names, scenario.sensor_noise, scenario.random_seed, plant.time_step()),
+    )
+    builder.Connect(plant.get_state_output_port(), readings.GetInputPort("plant_state"))
+    builder.Connect(plant.get_generalized_acceleration_output_port(), readings.GetInputPort("generalized_acceleration"))
+    builder.Connect(plant.get_contact_results_output_port(), readings.GetInputPort("contact_results"))
+    builder.Connect(motors.GetOutputPort("torque"), readings.GetInputPort("motor_torque"))
+    sizes = {name: size for name, size in readings.sizes.items() if size > 0}
+    split = builder.AddNamedSystem("readings.split", Demultiplexer(list(sizes.values())))
+    builder.Connect(readings.get_output_port(), split.get_input_port())
+    outputs.update({name: split.get_output_port(k) for k, name in enumerate(sizes)})
+    for name in readings.sizes.keys() - sizes.keys():
+        # No scene objects: an empty ground truth of robot-object contact.
+        outputs[name] = builder.AddNamedSystem(f"readings.{name}", ConstantVectorSource(np.zeros(0))).get_output_port()
 
     # The world's disturbances: the plant's applied forces come from the scenario only.
-    pushes = builder.AddNamedSystem("pushes", PushDisturbance(plant, scenario.pushes))
-    builder.Connect(pushes.forces_port, plant.get_applied_spatial_force_input_port())
+    if scenario.pushes:
+        pushes = builder.AddNamedSystem("pushes", PushDisturbance(plant, scenario.pushes))
+        builder.Connect(pushes.forces_port, plant.get_applied_spatial_force_input_port())
+        push_force = pushes.push_force_port
+    else:
+        # Nothing to apply, and zero force to log, without a Python callback every plant step.
+        push_force = builder.AddNamedSystem("pushes", ConstantVectorSource(np.zeros(PUSH_FORCE_SIZE))).get_output_port()
 
-    feet = builder.AddNamedSystem("foot_contact_forces", FootContactForces(plant, plant_map))
-    builder.Connect(plant.get_contact_results_output_port(), feet.GetInputPort("contact_results"))
-    builder.ExportOutput(feet.GetOutputPort("foot_contact_forces"), "sim.foot_contact_forces")
-    scene_names = [obj.instance_name for obj in scenario.scene]
-    touches = builder.AddNamedSystem("scene_contact_forces", SceneContactForces(plant, plant_map, scene_names))
-    builder.Connect(plant.get_contact_results_output_port(), touches.GetInputPort("contact_results"))
-    builder.ExportOutput(touches.GetOutputPort("scene_contact_forces"), "sim.scene_contact_forces")
-    builder.ExportOutput(plant.get_state_output_port(), "sim.plant_state")
-    builder.ExportOutput(plant.get_contact_results_output_port(), "sim.contact_results")
-    builder.ExportOutput(plant.get_body_poses_output_port(), "sim.body_poses")
-    builder.ExportOutput(motors.GetOutputPort("torque"), "sim.motor_torque")
-    builder.ExportOutput(pushes.push_force_port, "sim.push_force")
-    builder.ExportOutput(scene_graph.get_query_output_port(), "sim.query_object")
+    outputs.update(
+        {
+            "sim.plant_state": plant.get_state_output_port(),
+            "sim.contact_results": plant.get_contact_results_output_port(),
+            "sim.body_poses": plant.get_body_poses_output_port(),
+            "sim.motor_torque": motors.GetOutputPort("torque"),
+            "sim.push_force": push_force,
+            "sim.query_object": scene_graph.get_query_output_port(),
+        }
+    )
+    for name in (*GO1_OUTPUT_PORTS, *SIM_OUTPUT_PORTS):
+        builder.ExportOutput(outputs[name], name)
 
     if meshcat is not None:
         params = MeshcatVisualizerParams(publish_period=scenario.visualization_period, role=Role.kIllustration)
