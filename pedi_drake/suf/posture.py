@@ -162,6 +162,9 @@ class PostureResult:
     best: PostureEvaluation
     evaluations: int
     method: str
+    # The start without the margins (joint limits, CoM inside the polygon): what the start posture
+    # gives even where it breaks a margin, for comparison.
+    start_reference: PostureEvaluation | None = None
 
 
 def _joint_limit_distance(q: np.ndarray) -> float:
@@ -366,7 +369,11 @@ def optimise_posture(
             best = found
     if rank(start_evaluation) > rank(best):
         best = start_evaluation
-    return PostureResult(start_evaluation, best, len(cache), method)
+    reference = start_evaluation
+    if not start_evaluation.feasible:
+        bare = dataclasses.replace(limits, joint_margin=0.0, com_margin=-math.inf, trunk_clearance=0.0)
+        reference = evaluate_posture(case, start, bare, method)
+    return PostureResult(start_evaluation, best, len(cache), method, reference)
 
 
 def grid_posture(
