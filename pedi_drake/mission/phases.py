@@ -372,8 +372,9 @@ def posture_request(
     return PostureRequest(case, start, fixed=fixed)
 
 
-def _posture_metrics(result) -> dict:
-    """The lift record's `posture` metrics: the fixed and the optimal posture and their SUFs."""
+def _posture_metrics(request: PostureRequest, result) -> dict:
+    """The lift record's `posture` metrics: the case (stance, targets), the fixed and the optimal
+    posture and their SUFs."""
 
     def row(evaluation) -> dict:
         return {
@@ -385,7 +386,13 @@ def _posture_metrics(result) -> dict:
             "reason": evaluation.reason,
         }
 
+    case = request.case
     return {
+        "stance_W": {leg: list(p) for leg, p in case.stance_W},
+        "frame": case.frame,
+        "targets": [list(p) for p in case.targets],
+        "reach_only": [list(p) for p in case.reach_only],
+        "fixed_coordinates": list(request.fixed),
         "fixed": row(result.start_reference),
         "optimal": row(result.best),
         "method": result.method,
@@ -427,7 +434,7 @@ class LegToPedipulationRunner(PhaseRunner):
             result = env.planner.answer(memo["request"], wait=env.wait_for_plans) if t >= memo["t_due"] else None
             if result is None:
                 return RUNNING
-            progress.records[-1].metrics.update(leg=leg, posture=_posture_metrics(result))
+            progress.records[-1].metrics.update(leg=leg, posture=_posture_metrics(memo["request"], result))
             if not result.best.feasible:
                 raise UnreachableTarget(
                     f"{phase.name}: no posture within the limits reaches the targets of {leg} ({result.best.reason})"

@@ -41,7 +41,7 @@ from pedi_drake import robot
 from pedi_drake.exceptions import PediError, SufError
 from pedi_drake.ik.analytic import leg_ik_solutions
 from pedi_drake.suf.methods import smallest_unrejectable_force
-from pedi_drake.suf.problem import ContactPoint, build_problem
+from pedi_drake.suf.problem import ContactPoint, RejectableForceProblem, build_problem
 
 FRAMES = ("world", "trunk")
 # The posture's coordinates, in the order of a posture vector.
@@ -202,22 +202,18 @@ def polygon_margin(points_xy: np.ndarray, p_xy: np.ndarray) -> float:
     return margin
 
 
-def _infeasible(posture: Posture, reason: str, count: int) -> PostureEvaluation:
-    return PostureEvaluation(posture, False, 0.0, (0.0,) * count, reason)
-
-
-def evaluate_posture(
-    case: PostureCase, posture: Posture, limits: PostureLimits = PostureLimits(), method: str = "affine"
-) -> PostureEvaluation:
-    """The smallest SUF over the case's targets at `posture`, or why the posture is infeasible."""
+def posture_problems(
+    case: PostureCase, posture: Posture, limits: PostureLimits = PostureLimits()
+) -> tuple[list[RejectableForceProblem] | None, str, float]:
+    """(the Rejectable Force Polytope problem of each target, "", the smallest CoM margin [m]) at
+    `posture`, or (None, why the posture is infeasible, the CoM margin or NaN)."""
     X_WB = posture.pose()
     X_BW = X_WB.inverse()
-    count = len(case.targets)
     q = robot.STANDING_Q.copy()
     for leg, p_W in case.stance_W:
         angles = leg_angles(leg, X_BW @ np.asarray(p_W, float), limits.joint_margin)
         if angles is None:
-            return _infeasible(posture, f"stance foot {leg} out of reach", count)
+            return None, f"stance foot {leg} out of reach", math.nan
         q[robot.leg_slice(leg)] = angles
     half = np.asarray(robot.TRUNK_HALF_EXTENTS) + robot.FOOT_RADIUS + limits.trunk_clearance
     target_angles = []
@@ -225,12 +221,12 @@ def evaluate_posture(
         p = np.asarray(point, float)
         p_B, p_W = (X_BW @ p, p) if case.frame == "world" else (p, X_WB @ p)
         if p_W[2] < robot.FOOT_RADIUS:
-            return _infeasible(posture, f"point {k} below the floor", count)
+            return None, f"point {k} below the floor", math.nan
         if np.all(np.abs(p_B) < half):
-            return _infeasible(posture, f"point {k} inside the trunk", count)
+            return None, f"point {k} inside the trunk", math.nan
         angles = leg_angles(case.leg, p_B, limits.joint_margin)
         if angles is None:
-            return _infeasible(posture, f"point {k} out of reach of {case.leg}", count)
+            return None, f"point {k} out of reach of {case.leg}", math.nan
         target_angles.append(angles)
     plant, plant_map = robot.make_go1_plant(case.prongs_key)
     context = plant.CreateDefaultContext()
@@ -239,22 +235,33 @@ def evaluate_posture(
     contacts = [ContactPoint(leg, f"{leg}_foot", np.zeros(3)) for leg, _ in case.stance_W]
     effector = ContactPoint(case.leg, f"{case.leg}_foot", np.zeros(3))
     torque_limits = CONTROLLER_TORQUE_SCALE * robot.EFFORT_LIMIT
-    sufs, com_margin = [], math.inf
-    for angles in target_angles[:count]:
+    problems, com_margin = [], math.inf
+    for angles in target_angles[: len(case.targets)]:
         q[robot.leg_slice(case.leg)] = angles
         q_plant = plant_map.full_positions(quaternion, X_WB.translation(), q, plant.num_positions())
         plant.SetPositions(context, q_plant)
         com_margin = min(com_margin, polygon_margin(stance_xy, plant.CalcCenterOfMassPositionInWorld(context)[:2]))
         if com_margin < limits.com_margin:
-            return dataclasses.replace(
-                _infeasible(posture, "centre of mass too close to the support polygon's edge", count),
-                com_margin=com_margin,
-            )
+            return None, "centre of mass too close to the support polygon's edge", com_margin
         try:
-            problem = build_problem(plant, q_plant, contacts, effector, mu=case.mu, torque_limits=torque_limits)
-            sufs.append(smallest_unrejectable_force(problem, method).value)
+            problems.append(build_problem(plant, q_plant, contacts, effector, mu=case.mu, torque_limits=torque_limits))
         except SufError as error:
-            return _infeasible(posture, f"SUF: {error}", count)
+            return None, f"SUF: {error}", com_margin
+    return problems, "", com_margin
+
+
+def evaluate_posture(
+    case: PostureCase, posture: Posture, limits: PostureLimits = PostureLimits(), method: str = "affine"
+) -> PostureEvaluation:
+    """The smallest SUF over the case's targets at `posture`, or why the posture is infeasible."""
+    problems, reason, com_margin = posture_problems(case, posture, limits)
+    count = len(case.targets)
+    if problems is None:
+        return PostureEvaluation(posture, False, 0.0, (0.0,) * count, reason, com_margin)
+    try:
+        sufs = [smallest_unrejectable_force(problem, method).value for problem in problems]
+    except SufError as error:
+        return PostureEvaluation(posture, False, 0.0, (0.0,) * count, f"SUF: {error}", com_margin)
     return PostureEvaluation(posture, True, float(min(sufs)), tuple(sufs), "", com_margin)
 
 
