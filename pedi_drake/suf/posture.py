@@ -187,19 +187,83 @@ def leg_angles(leg: str, p_B: np.ndarray, joint_margin: float) -> np.ndarray | N
 
 def polygon_margin(points_xy: np.ndarray, p_xy: np.ndarray) -> float:
     """Signed distance [m] of `p_xy` inside the convex polygon of `points_xy` (< 0 outside)."""
+    return polygon_margin_and_normal(points_xy, p_xy)[0]
+
+
+def polygon_margin_and_normal(points_xy: np.ndarray, p_xy: np.ndarray) -> tuple[float, np.ndarray]:
+    """(signed distance [m] of `p_xy` inside the convex polygon of `points_xy`, the inward unit
+    normal of the nearest edge)."""
     points = np.asarray(points_xy, float)
     centre = points.mean(axis=0)
     order = np.argsort(np.arctan2(points[:, 1] - centre[1], points[:, 0] - centre[0]))
     ring = points[order]
-    margin = math.inf
+    margin, normal = math.inf, np.zeros(2)
     for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
         edge = b - a
         length = float(np.linalg.norm(edge))
         if length < 1e-9:
             continue
         # Counter-clockwise ring: the inside is to the left of each edge.
-        margin = min(margin, float(edge[0] * (p_xy[1] - a[1]) - edge[1] * (p_xy[0] - a[0])) / length)
-    return margin
+        distance = float(edge[0] * (p_xy[1] - a[1]) - edge[1] * (p_xy[0] - a[0])) / length
+        if distance < margin:
+            margin, normal = distance, np.array([-edge[1], edge[0]]) / length
+    return margin, normal
+
+
+def _configurations(case: PostureCase, posture: Posture, joint_margin: float, trunk_clearance: float):
+    """(the 12 joint angles [rad] with the lifted foot at each target, "") at `posture`, or
+    (None, why a stance foot or a point is out of reach)."""
+    X_WB = posture.pose()
+    X_BW = X_WB.inverse()
+    q = robot.STANDING_Q.copy()
+    for leg, p_W in case.stance_W:
+        angles = leg_angles(leg, X_BW @ np.asarray(p_W, float), joint_margin)
+        if angles is None:
+            return None, f"stance foot {leg} out of reach"
+        q[robot.leg_slice(leg)] = angles
+    half = np.asarray(robot.TRUNK_HALF_EXTENTS) + robot.FOOT_RADIUS + trunk_clearance
+    configurations = []
+    for k, point in enumerate([*case.targets, *case.reach_only]):
+        p = np.asarray(point, float)
+        p_B, p_W = (X_BW @ p, p) if case.frame == "world" else (p, X_WB @ p)
+        if p_W[2] < robot.FOOT_RADIUS:
+            return None, f"point {k} below the floor"
+        if np.all(np.abs(p_B) < half):
+            return None, f"point {k} inside the trunk"
+        angles = leg_angles(case.leg, p_B, joint_margin)
+        if angles is None:
+            return None, f"point {k} out of reach of {case.leg}"
+        if k < len(case.targets):
+            q[robot.leg_slice(case.leg)] = angles
+            configurations.append(q.copy())
+    return configurations, ""
+
+
+def _plant_positions(case: PostureCase, posture: Posture, q: np.ndarray):
+    """(plant, its Context at the posture and joint angles `q`, the plant's positions)."""
+    plant, plant_map = robot.make_go1_plant(case.prongs_key)
+    context = plant.CreateDefaultContext()
+    X_WB = posture.pose()
+    q_plant = plant_map.full_positions(
+        X_WB.rotation().ToQuaternion().wxyz(), X_WB.translation(), q, plant.num_positions()
+    )
+    plant.SetPositions(context, q_plant)
+    return plant, context, q_plant
+
+
+def balance_margin(case: PostureCase, posture: Posture, limits: PostureLimits) -> tuple[float, np.ndarray] | None:
+    """(the smallest CoM distance inside the stance polygon over the targets [m], the inward
+    normal of the edge it is nearest), or None when a point is out of reach at `posture`."""
+    configurations, _ = _configurations(case, posture, limits.joint_margin, limits.trunk_clearance)
+    if configurations is None:
+        return None
+    stance_xy = np.array([p[:2] for _, p in case.stance_W], float)
+    worst = (math.inf, np.zeros(2))
+    for q in configurations:
+        plant, context, _ = _plant_positions(case, posture, q)
+        found = polygon_margin_and_normal(stance_xy, plant.CalcCenterOfMassPositionInWorld(context)[:2])
+        worst = min(worst, found, key=lambda m: m[0])
+    return worst
 
 
 def posture_problems(
@@ -207,39 +271,16 @@ def posture_problems(
 ) -> tuple[list[RejectableForceProblem] | None, str, float]:
     """(the Rejectable Force Polytope problem of each target, "", the smallest CoM margin [m]) at
     `posture`, or (None, why the posture is infeasible, the CoM margin or NaN)."""
-    X_WB = posture.pose()
-    X_BW = X_WB.inverse()
-    q = robot.STANDING_Q.copy()
-    for leg, p_W in case.stance_W:
-        angles = leg_angles(leg, X_BW @ np.asarray(p_W, float), limits.joint_margin)
-        if angles is None:
-            return None, f"stance foot {leg} out of reach", math.nan
-        q[robot.leg_slice(leg)] = angles
-    half = np.asarray(robot.TRUNK_HALF_EXTENTS) + robot.FOOT_RADIUS + limits.trunk_clearance
-    target_angles = []
-    for k, point in enumerate([*case.targets, *case.reach_only]):
-        p = np.asarray(point, float)
-        p_B, p_W = (X_BW @ p, p) if case.frame == "world" else (p, X_WB @ p)
-        if p_W[2] < robot.FOOT_RADIUS:
-            return None, f"point {k} below the floor", math.nan
-        if np.all(np.abs(p_B) < half):
-            return None, f"point {k} inside the trunk", math.nan
-        angles = leg_angles(case.leg, p_B, limits.joint_margin)
-        if angles is None:
-            return None, f"point {k} out of reach of {case.leg}", math.nan
-        target_angles.append(angles)
-    plant, plant_map = robot.make_go1_plant(case.prongs_key)
-    context = plant.CreateDefaultContext()
-    quaternion = X_WB.rotation().ToQuaternion().wxyz()
+    configurations, reason = _configurations(case, posture, limits.joint_margin, limits.trunk_clearance)
+    if configurations is None:
+        return None, reason, math.nan
     stance_xy = np.array([p[:2] for _, p in case.stance_W], float)
     contacts = [ContactPoint(leg, f"{leg}_foot", np.zeros(3)) for leg, _ in case.stance_W]
     effector = ContactPoint(case.leg, f"{case.leg}_foot", np.zeros(3))
     torque_limits = CONTROLLER_TORQUE_SCALE * robot.EFFORT_LIMIT
     problems, com_margin = [], math.inf
-    for angles in target_angles[: len(case.targets)]:
-        q[robot.leg_slice(case.leg)] = angles
-        q_plant = plant_map.full_positions(quaternion, X_WB.translation(), q, plant.num_positions())
-        plant.SetPositions(context, q_plant)
+    for q in configurations:
+        plant, context, q_plant = _plant_positions(case, posture, q)
         com_margin = min(com_margin, polygon_margin(stance_xy, plant.CalcCenterOfMassPositionInWorld(context)[:2]))
         if com_margin < limits.com_margin:
             return None, "centre of mass too close to the support polygon's edge", com_margin
@@ -286,6 +327,24 @@ _REFINED_SEEDS = 3
 _TRANSLATION = (0, 1, 2)
 
 
+# Shifts that move the centre of mass back inside the balance margin, at most this many [-].
+_BALANCE_STEPS = 3
+
+
+def _onto_balance(case: PostureCase, v: np.ndarray, limits: PostureLimits, lower, upper) -> Posture:
+    """The posture `v`, its trunk shifted (x, y, within the box) until the centre of mass is
+    `com_margin` inside the stance polygon if it was not: the search then slides along the
+    balance boundary, where the SUF is often largest, instead of stalling at it."""
+    v = np.asarray(v, float).copy()
+    for _ in range(_BALANCE_STEPS):
+        found = balance_margin(case, Posture.from_vector(v), limits)
+        if found is None or found[0] >= limits.com_margin:
+            break
+        # The CoM moves with the trunk (the stance legs' mass a little less): aim 0.1 mm inside.
+        v[0:2] = np.clip(v[0:2] + (limits.com_margin - found[0] + 1e-4) * found[1], lower[0:2], upper[0:2])
+    return Posture.from_vector(v)
+
+
 def _search_directions(free: list[int]) -> list[np.ndarray]:
     """Unit steps along every free coordinate and, within the translation, along the diagonals
     of every pair: the feasible set's edges (reach against balance) run diagonally in (x, y, z),
@@ -317,12 +376,14 @@ def optimise_posture(
     """The feasible posture of largest SUF found in the box of `limits` around `start`
     (coordinates named in `fixed`, of COORDINATES, stay at the start's values).
 
-    First a coarse grid over the trunk's origin (`_COARSE_POINTS`, at the start's attitude), then
-    a compass search from each of its best `_REFINED_SEEDS` points: each round tries a step along every
-    search direction (`_search_directions`) and moves to the best improvement; without one, the
-    steps halve (`_HALVINGS` times). Feasible beats infeasible, then the larger SUF; the start
-    is evaluated first, so the answer is never worse than the start. Raises SufError for an
-    invalid case.
+    Every posture tried is first shifted back inside the balance margin if it left it
+    (`_onto_balance`). First a coarse grid over the trunk's origin (`_COARSE_POINTS`, at the
+    start's attitude), then a compass search from each of its best `_REFINED_SEEDS` points:
+    each round tries a step along every search direction (`_search_directions`) and moves to the
+    best improvement; without one, the steps halve (`_HALVINGS` times). The search runs on the
+    trunk's x and y first, then on every free coordinate from the best point found. Feasible beats
+    infeasible, then the larger SUF; the start is evaluated first, so the answer is never worse
+    than the start. Raises SufError for an invalid case.
     """
     for field, problem in [*case.problems(), *limits.problems()]:
         raise SufError(f"posture case: {field}: {problem}")
@@ -339,26 +400,25 @@ def optimise_posture(
     def evaluate(v: np.ndarray) -> PostureEvaluation:
         key = tuple(np.round(v, 9))
         if key not in cache:
-            cache[key] = evaluate_posture(case, Posture.from_vector(v), limits, method)
+            cache[key] = evaluate_posture(case, _onto_balance(case, v, limits, lower, upper), limits, method)
         return cache[key]
 
     def rank(evaluation: PostureEvaluation) -> tuple[bool, float]:
         return evaluation.feasible, evaluation.suf
 
-    start_evaluation = evaluate(start.vector())
+    start_evaluation = evaluate_posture(case, start, limits, method)
     centre = np.clip(start.vector(), lower, upper)
     coarse = []
     for k in range(6):
         points = _COARSE_POINTS[k] if k in free else 1
         coarse.append(np.linspace(lower[k], upper[k], points) if points > 1 else [centre[k]])
-    seeds = [(centre, evaluate(centre))]
+    seeds = []
     for values in itertools.product(*coarse):
-        trial = np.array(values)
-        seeds.append((trial, evaluate(trial)))
+        found = evaluate(np.array(values))
+        seeds.append((found.posture.vector(), found))
     seeds.sort(key=lambda seed: rank(seed[1]), reverse=True)
-    directions = _search_directions(free)
-    best = seeds[0][1]
-    for v, found in seeds[:_REFINED_SEEDS]:
+
+    def climb(v: np.ndarray, found: PostureEvaluation, directions: list[np.ndarray]) -> PostureEvaluation:
         step = _FIRST_STEP.copy()
         for _ in range(_HALVINGS + 1):
             while True:
@@ -366,14 +426,24 @@ def optimise_posture(
                 for d in directions:
                     trial = np.clip(v + d * step, lower, upper)
                     if not np.array_equal(trial, v):
-                        candidates.append((trial, evaluate(trial)))
-                improving = [c for c in candidates if rank(c[1]) > rank(found)]
+                        candidates.append(evaluate(trial))
+                improving = [c for c in candidates if rank(c) > rank(found)]
                 if not improving:
                     break
-                v, found = max(improving, key=lambda c: rank(c[1]))
+                found = max(improving, key=rank)
+                v = found.posture.vector()
             step /= 2.0
+        return found
+
+    # The trunk's x and y first (where the feasible set is narrowest), from the best seeds; then
+    # every free coordinate from the best of those.
+    best = seeds[0][1]
+    planar = _search_directions([k for k in free if k in (0, 1)])
+    for v, found in seeds[:_REFINED_SEEDS]:
+        found = climb(v, found, planar)
         if rank(found) > rank(best):
             best = found
+    best = climb(best.posture.vector(), best, _search_directions(free))
     if rank(start_evaluation) > rank(best):
         best = start_evaluation
     reference = start_evaluation
