@@ -229,8 +229,9 @@ class MissionProgress:
             clone.records.append(record)
         # Lists of phases (never changed during a run) and of ModeSwitch values.
         clone.recovery, clone.interlude, clone.switches = list(self.recovery), list(self.interlude), list(self.switches)
+        # Of (array, RotationMatrix) values and of TargetRequest values, never changed.
         clone.pre_posture = dict(self.pre_posture)
-        clone.target_requests = list(self.target_requests)  # of (array, RotationMatrix) values, never changed
+        clone.target_requests = list(self.target_requests)
         return clone
 
     def __deepcopy__(self, memo) -> "MissionProgress":

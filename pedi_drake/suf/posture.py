@@ -40,6 +40,7 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from pedi_drake import robot
 from pedi_drake.exceptions import PediError, SufError
 from pedi_drake.ik.analytic import leg_ik_solutions
+from pedi_drake.polygon import polygon_halfplanes
 from pedi_drake.suf.methods import smallest_unrejectable_force
 from pedi_drake.suf.problem import ContactPoint, RejectableForceProblem, build_problem
 
@@ -191,23 +192,12 @@ def polygon_margin(points_xy: np.ndarray, p_xy: np.ndarray) -> float:
 
 
 def polygon_margin_and_normal(points_xy: np.ndarray, p_xy: np.ndarray) -> tuple[float, np.ndarray]:
-    """(signed distance [m] of `p_xy` inside the convex polygon of `points_xy`, the inward unit
+    """(signed distance [m] of `p_xy` inside the convex hull of `points_xy`, the inward unit
     normal of the nearest edge)."""
-    points = np.asarray(points_xy, float)
-    centre = points.mean(axis=0)
-    order = np.argsort(np.arctan2(points[:, 1] - centre[1], points[:, 0] - centre[0]))
-    ring = points[order]
-    margin, normal = math.inf, np.zeros(2)
-    for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
-        edge = b - a
-        length = float(np.linalg.norm(edge))
-        if length < 1e-9:
-            continue
-        # Counter-clockwise ring: the inside is to the left of each edge.
-        distance = float(edge[0] * (p_xy[1] - a[1]) - edge[1] * (p_xy[0] - a[0])) / length
-        if distance < margin:
-            margin, normal = distance, np.array([-edge[1], edge[0]]) / length
-    return margin, normal
+    N, d = polygon_halfplanes(np.asarray(points_xy, float), 0.0)
+    distances = d - N @ np.asarray(p_xy, float)
+    nearest = int(np.argmin(distances))
+    return float(distances[nearest]), -N[nearest]
 
 
 def _configurations(case: PostureCase, posture: Posture, joint_margin: float, trunk_clearance: float):
