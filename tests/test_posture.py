@@ -11,6 +11,7 @@ from pedi_drake import robot
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
 from pedi_drake.exceptions import SufError
 from pedi_drake.leg_kinematics import foot_position_B
+from pedi_drake.mission.phases import working_position_B
 from pedi_drake.mission.posture_planner import PosturePlanner, PostureRequest, solve_request
 from pedi_drake.suf.posture import (
     Posture,
@@ -89,6 +90,22 @@ def test_the_optimal_posture_reaches_every_point_inside_the_margins():
         assert np.all(q <= robot.Q_UPPER[0:3] - limits.joint_margin + 1e-9)
         assert np.linalg.norm(foot_position_B(leg, q) - p_B) < 1e-6
     assert result.best.com_margin >= limits.com_margin
+
+
+def test_the_lift_keeps_its_working_position_off_the_floor():
+    """A low trunk pitched nose-down puts the lift's working position (15 cm below the hip) into
+    the ground, where the foot can never arrive: such a posture is refused, and the optimiser,
+    free in all six coordinates, keeps it at least lift_height up."""
+    case, start = standing_case()
+    lifted = dataclasses.replace(case, lift_B=tuple(working_position_B("FR", 0.15)))
+    low_pitched = Posture((*start.p_WB[:2], 0.22), (0.0, 0.2, 0.0))
+    assert "floor" in evaluate_posture(lifted, low_pitched).reason
+    limits = PostureLimits()
+    result = optimise_posture(lifted, start, limits)
+    height = (result.best.posture.pose() @ np.asarray(lifted.lift_B))[2]
+    print(f"\nworking position {1000 * height:.1f} mm up at {result.best.posture}, {result.best.suf:.3f} N")
+    assert result.best.feasible and result.best.suf > result.start.suf
+    assert height >= limits.lift_height
 
 
 def test_a_target_out_of_reach_has_no_feasible_posture():

@@ -136,6 +136,7 @@ def case_of(posture: dict) -> PostureCase:
         targets=tuple(tuple(p) for p in posture["targets"]),
         frame=posture["frame"],
         reach_only=tuple(tuple(p) for p in posture["reach_only"]),
+        lift_B=tuple(posture["lift_B"]) if "lift_B" in posture else None,
     )
 
 

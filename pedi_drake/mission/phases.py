@@ -348,6 +348,13 @@ def _on_prongs(refs) -> bool:
     return bool(np.any(np.asarray(refs.contacts[4:]) > 0.5))
 
 
+def working_position_B(leg: str, working_depth: float) -> np.ndarray:
+    """Where leg_to_pedipulation lifts the foot of `leg` [m], trunk frame: `working_depth` [m]
+    below the hip joint, beside it as the thigh offset puts it."""
+    geometry = leg_geometry(leg)
+    return geometry.p_BH + geometry.p_HT - np.array([0.0, 0.0, working_depth])
+
+
 def posture_request(
     phase, view: RobotView, env: MissionEnvironment, contacts: np.ndarray, p_fixed_W: np.ndarray, R_WB: RotationMatrix
 ) -> PostureRequest:
@@ -362,6 +369,7 @@ def posture_request(
         targets=tuple(tuple(float(v) for v in p) for p in goal.targets),
         frame=goal.frame,
         reach_only=tuple(tuple(float(v) for v in p) for p in goal.reach_only),
+        lift_B=tuple(float(v) for v in working_position_B(phase.leg, phase.working_depth)),
         prongs_key=robot.design_key(env.prongs),
     )
     rpy = RollPitchYaw(R_WB).vector()
@@ -393,6 +401,7 @@ def _posture_metrics(request: PostureRequest, result) -> dict:
         "frame": case.frame,
         "targets": [list(p) for p in case.targets],
         "reach_only": [list(p) for p in case.reach_only],
+        "lift_B": list(case.lift_B),
         "fixed_coordinates": list(request.fixed),
         "fixed": row(result.start_reference),
         "optimal": row(result.best),
@@ -450,8 +459,7 @@ class LegToPedipulationRunner(PhaseRunner):
         elif memo["stage"] == "shift" and t >= memo["t_shifted"]:
             refs.contacts[k] = 0.0
             # The working pose's joint angles are asked now, to be there when the force has ramped away.
-            geometry = leg_geometry(leg)
-            p_work_B = geometry.p_BH + geometry.p_HT - np.array([0.0, 0.0, phase.working_depth])
+            p_work_B = working_position_B(leg, phase.working_depth)
             _ask_ik(progress, view, {leg: [p_work_B]}, phase.name)
             memo.update(stage="release", t_release=t, p_work_B=p_work_B)
         elif memo["stage"] == "release" and t >= memo["t_release"] + CONTACT_RAMP_WAIT:

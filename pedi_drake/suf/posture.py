@@ -11,7 +11,9 @@ the same posture); a posture counts only where it is feasible:
 
   * IK reachability: every stance foot and every target (and every point the foot must pass,
     `reach_only`) has a closed-form solution at least `joint_margin` inside every joint limit;
-    a target stays clear of the trunk's box and above the floor;
+    a target stays clear of the trunk's box and above the floor; the lift's working position
+    (`lift_B`, where leg_to_pedipulation takes the foot before any reach) is reachable and at
+    least `lift_height` above the floor (a low, pitched trunk would put it into the ground);
   * balance: the centre of mass, projected on the ground, lies at least `com_margin` inside the
     stance feet's support polygon at every target (at rest the capture point is the CoM's
     projection; the controller keeps it in the polygon shrunk by its safety margin);
@@ -73,11 +75,13 @@ class PostureLimits:
     com_margin: float = 0.05
     # A target's foot centre stays this far from the trunk's box [m].
     trunk_clearance: float = 0.01
+    # The foot centre at the lift's working position stays this high above the ground [m].
+    lift_height: float = 0.05
 
     def problems(self) -> list[tuple[str, str]]:
         """(field, problem) for every invalid value; empty when valid."""
         found = []
-        for field in ("shift", "roll", "pitch", "yaw", "joint_margin", "com_margin", "trunk_clearance"):
+        for field in ("shift", "roll", "pitch", "yaw", "joint_margin", "com_margin", "trunk_clearance", "lift_height"):
             value = getattr(self, field)
             if not (math.isfinite(value) and value >= 0):
                 found.append((field, f"must be a finite number >= 0, got {value}"))
@@ -100,6 +104,8 @@ class PostureCase:
     frame: str = "world"
     # Further points the foot must reach with the same posture (approach, via, press ends) [m].
     reach_only: tuple[tuple[float, float, float], ...] = ()
+    # The lift's working position, trunk frame [m] (the foot goes there first), or None.
+    lift_B: tuple[float, float, float] | None = None
     # Prongs on the trunk (their mass counts; they are not contacts here), or None.
     prongs_key: tuple | None = None
     mu: float = DEFAULT_MU
@@ -117,6 +123,7 @@ class PostureCase:
         if not self.targets:
             found.append(("targets", "expected at least one target"))
         points = [p for _, p in self.stance_W] + list(self.targets) + list(self.reach_only)
+        points += [] if self.lift_B is None else [self.lift_B]
         if any(len(p) != 3 or not all(math.isfinite(v) for v in p) for p in points):
             found.append(("targets", "every point must be three finite numbers [m]"))
         if not (math.isfinite(self.mu) and self.mu > 0):
@@ -200,9 +207,10 @@ def polygon_margin_and_normal(points_xy: np.ndarray, p_xy: np.ndarray) -> tuple[
     return float(distances[nearest]), -N[nearest]
 
 
-def _configurations(case: PostureCase, posture: Posture, joint_margin: float, trunk_clearance: float):
+def _configurations(case: PostureCase, posture: Posture, limits: PostureLimits):
     """(the 12 joint angles [rad] with the lifted foot at each target, "") at `posture`, or
-    (None, why a stance foot or a point is out of reach)."""
+    (None, why a stance foot, the lift's working position or a point is out of reach)."""
+    joint_margin = limits.joint_margin
     X_WB = posture.pose()
     X_BW = X_WB.inverse()
     q = robot.STANDING_Q.copy()
@@ -211,7 +219,13 @@ def _configurations(case: PostureCase, posture: Posture, joint_margin: float, tr
         if angles is None:
             return None, f"stance foot {leg} out of reach"
         q[robot.leg_slice(leg)] = angles
-    half = np.asarray(robot.TRUNK_HALF_EXTENTS) + robot.FOOT_RADIUS + trunk_clearance
+    if case.lift_B is not None:
+        p_B = np.asarray(case.lift_B, float)
+        if (X_WB @ p_B)[2] < limits.lift_height:
+            return None, "the lift's working position too close to the floor"
+        if leg_angles(case.leg, p_B, joint_margin) is None:
+            return None, f"the lift's working position out of reach of {case.leg}"
+    half = np.asarray(robot.TRUNK_HALF_EXTENTS) + robot.FOOT_RADIUS + limits.trunk_clearance
     configurations = []
     for k, point in enumerate([*case.targets, *case.reach_only]):
         p = np.asarray(point, float)
@@ -244,7 +258,7 @@ def _plant_positions(case: PostureCase, posture: Posture, q: np.ndarray):
 def balance_margin(case: PostureCase, posture: Posture, limits: PostureLimits) -> tuple[float, np.ndarray] | None:
     """(the smallest CoM distance inside the stance polygon over the targets [m], the inward
     normal of the edge it is nearest), or None when a point is out of reach at `posture`."""
-    configurations, _ = _configurations(case, posture, limits.joint_margin, limits.trunk_clearance)
+    configurations, _ = _configurations(case, posture, limits)
     if configurations is None:
         return None
     stance_xy = np.array([p[:2] for _, p in case.stance_W], float)
@@ -261,7 +275,7 @@ def posture_problems(
 ) -> tuple[list[RejectableForceProblem] | None, str, float]:
     """(the Rejectable Force Polytope problem of each target, "", the smallest CoM margin [m]) at
     `posture`, or (None, why the posture is infeasible, the CoM margin or NaN)."""
-    configurations, reason = _configurations(case, posture, limits.joint_margin, limits.trunk_clearance)
+    configurations, reason = _configurations(case, posture, limits)
     if configurations is None:
         return None, reason, math.nan
     stance_xy = np.array([p[:2] for _, p in case.stance_W], float)
