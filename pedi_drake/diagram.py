@@ -237,6 +237,7 @@ def MakePedipulationDiagram(
                     friction=scenario.ground_friction,
                     force_estimate=force_estimate,
                     safety_margin=scenario.whole_body.safety_margin,
+                    wait_for_plans=not hardware,
                 ),
             )
             _add_leg_ik(builder, manager)

@@ -71,6 +71,8 @@ def judge_run(record) -> dict:
         "interrupt_reason": record.interrupted or "",
         "phases": [],
         "mode_switches": [],
+        "postures": [],
+        "operator_targets": {"requests": [], "refused": 0},
         "foot_errors_m": [],
         "max_base_drift_m": 0.0,
         "fell": fell,
@@ -120,6 +122,8 @@ def judge_run(record) -> dict:
     else:
         result["phases"] = mission_results.phase_table(progress)
         result["mode_switches"] = mission_results.mode_switch_table(progress)
+        result["postures"] = mission_results.posture_table(progress)
+        result["operator_targets"] = mission_results.target_table(progress)
         if not hardware:
             _check_stand_up_phases(result["phases"], record.built.mission, p_WB, t_WB)
         failed = [row for row in result["phases"] if row["status"] == FAILED]

@@ -47,6 +47,26 @@ def mode_switch_table(progress: MissionProgress) -> list[dict]:
     ]
 
 
+def posture_table(progress: MissionProgress) -> list[dict]:
+    """The `postures` list of result.json: every lift with posture: optimal, its fixed and optimal
+    postures and their SUFs at its targets (pedi_drake.suf.posture; the estimate's stance)."""
+    return [
+        {"phase": r.name, "leg": r.metrics.get("leg", ""), **r.metrics["posture"]}
+        for r in progress.records
+        if r.kind == "leg_to_pedipulation" and "posture" in r.metrics
+    ]
+
+
+def target_table(progress: MissionProgress) -> dict:
+    """The `operator_targets` of result.json: every target the operator sent in the
+    semi-autonomous mode ({time [s], target_W [m], accepted, reason}) and how many were refused."""
+    rows = [
+        {"time": r.time, "target_W": list(r.target_W), "accepted": r.accepted, "reason": r.reason}
+        for r in progress.target_requests
+    ]
+    return {"requests": rows, "refused": sum(not row["accepted"] for row in rows)}
+
+
 def _reach_rows(progress: MissionProgress):
     """(record, leg, target_W, estimated error) for every leg of every finished reach phase."""
     for record in progress.records:

@@ -32,6 +32,8 @@ a teleop sequence at the next safe point and the mission resumes afterwards
 (pedi_drake.mission.mode_switch); every switch is in `MissionProgress.switches`.
 """
 
+import dataclasses
+
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RotationMatrix
@@ -42,7 +44,7 @@ from pedi_drake.control import references as controller_refs
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE, BaseState
 from pedi_drake.exceptions import ConfigError, PediError
 from pedi_drake.fall import trunk_has_fallen
-from pedi_drake.mission import mode_switch, spec
+from pedi_drake.mission import mode_switch, semi_autonomous, spec
 from pedi_drake.mission.phases import (
     RUNNERS,
     IkAnswer,
@@ -52,6 +54,7 @@ from pedi_drake.mission.phases import (
     receive_ik_answers,
     stance_safety_polygon,
 )
+from pedi_drake.mission.posture_planner import shared_planner
 from pedi_drake.mission.progress import (
     FAILED,
     RECOVERING,
@@ -72,11 +75,23 @@ from pedi_drake.mission.reference_table import (
     warm_up,
 )
 from pedi_drake.mission.robot_view import RobotView
-from pedi_drake.operator.command import MODE_AUTONOMOUS, MODE_TELEOP, OPERATOR_COMMAND_SIZE, OperatorCommand
+from pedi_drake.operator.command import (
+    MODE_AUTONOMOUS,
+    MODE_SEMI_AUTONOMOUS,
+    MODE_TELEOP,
+    OPERATOR_COMMAND_SIZE,
+    OperatorCommand,
+)
 from pedi_drake.prongs import ProngDesign
 
 MISSION_STATUS_SIZE = 4  # [phase index, status code, pedipulation active, number of phases]
 _IDENTITY_POSE = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+
+
+def needs_posture_planner(mission: spec.MissionSpec) -> bool:
+    """Whether the mission can ask for an optimal posture (a phase's or the semi-autonomous mode's)."""
+    optimal = any(isinstance(p, spec.LegToPedipulation) and p.posture == "optimal" for p in mission.phases)
+    return optimal or mission.semi_autonomous is not None
 
 
 def ik_legs_of(mission: spec.MissionSpec) -> tuple[str, ...]:
@@ -89,6 +104,8 @@ def ik_legs_of(mission: spec.MissionSpec) -> tuple[str, ...]:
             legs.update([phase.leg, *(companion.leg for companion in phase.together)])
     if mission.teleop is not None:
         legs.add(mission.teleop.leg)
+    if mission.semi_autonomous is not None:
+        legs.add(mission.semi_autonomous.leg)
     return tuple(leg for leg in robot.LEG_NAMES if leg in legs)
 
 
@@ -104,6 +121,7 @@ class MissionManager(LeafSystem):
         safety_margin: float = 0.03,
         period: float = 0.01,
         force_estimate: str = "joint_torque",
+        wait_for_plans: bool = True,
     ):
         """
         Args:
@@ -112,10 +130,14 @@ class MissionManager(LeafSystem):
             friction: ground friction coefficient sent to the controller [-].
             safety_margin: the stance's support polygon is shrunk by this for the capture point [m].
             period: update period [s].
+            wait_for_plans: a posture answer later than its due time is waited for (lock-step
+                simulation: runs do not depend on the machine's speed) or polled for (real time).
         """
         super().__init__()
         self._mission = mission
-        self._env = MissionEnvironment(prongs, force_estimate)
+        # The posture planner's worker starts here, not in an update (pedi_drake.mission.posture_planner).
+        planner = shared_planner() if needs_posture_planner(mission) else None
+        self._env = MissionEnvironment(prongs, force_estimate, planner, wait_for_plans)
         self._friction = friction
         self._safety_margin = float(safety_margin)
         num_contacts = 4 + self._env.num_prongs
@@ -269,6 +291,8 @@ class MissionManager(LeafSystem):
             return
         if view.operator is not None and self._mission.teleop is not None:
             self._follow_mode_request(progress, view)
+        if view.operator is not None and self._mission.semi_autonomous is not None:
+            self._follow_target(progress, view)
         phases = self._phases(progress)
         phase = phases[progress.index]
         runner = RUNNERS[type(phase)]
@@ -350,9 +374,13 @@ class MissionManager(LeafSystem):
             if progress.index < len(phases):
                 return
             if progress.interlude:  # the teleop sequence is done: the interrupted phase restarts
-                progress.interlude, progress.index = [], progress.resume_index
+                if progress.interlude_mode == semi_autonomous.SEMI_AUTONOMOUS:
+                    self._record_switch(progress, view, semi_autonomous.SEMI_AUTONOMOUS, "target served")
+                progress.interlude, progress.index, progress.interlude_mode = [], progress.resume_index, ""
                 return
             progress.status = SUCCEEDED if progress.status == RUNNING else FAILED
+            return
+        if self._refuse_unplannable_target(progress, phases, view):
             return
         # A failure: mark the rest skipped and, once, put lifted legs back down.
         if progress.status == RUNNING:
@@ -403,6 +431,49 @@ class MissionManager(LeafSystem):
                 view.time, mode_switch.AUTONOMOUS, mode_switch.TELEOP, f"operator request ({why})", interrupted.name
             )
         )
+
+    def _follow_target(self, progress: MissionProgress, view: RobotView) -> None:
+        """Takes a new target of the operator (checked, refused or queued) and starts the queued
+        one's sequence at a phase boundary (pedi_drake.mission.semi_autonomous)."""
+        block = self._mission.semi_autonomous
+        if progress.status != RUNNING:
+            return
+        if view.operator.mode_request == MODE_SEMI_AUTONOMOUS:
+            semi_autonomous.take_target(progress, block, view.operator, view.X_WB, view.time)
+        if progress.target_pending is None or block.leg in progress.references.legs:
+            return
+        why = mode_switch.safe_point(progress, view, block)
+        if why is None:
+            return
+        number = 1 + sum(switch.to_mode == semi_autonomous.SEMI_AUTONOMOUS for switch in progress.switches)
+        progress.interlude = semi_autonomous.target_sequence(block, np.array(progress.target_pending), number)
+        progress.resume_index, progress.index, progress.target_pending = progress.index, 0, None
+        progress.interlude_mode = semi_autonomous.SEMI_AUTONOMOUS
+        interrupted = self._mission.phases[progress.resume_index].name
+        reason = f"operator target ({why})"
+        progress.switches.append(
+            ModeSwitch(view.time, mode_switch.AUTONOMOUS, semi_autonomous.SEMI_AUTONOMOUS, reason, interrupted)
+        )
+
+    def _record_switch(self, progress: MissionProgress, view: RobotView, from_mode: str, reason: str) -> None:
+        """Records the switch back to the autonomous mission at the end of an interlude."""
+        resumed = self._mission.phases[progress.resume_index].name
+        progress.switches.append(ModeSwitch(view.time, from_mode, mode_switch.AUTONOMOUS, reason, resumed))
+
+    def _refuse_unplannable_target(self, progress: MissionProgress, phases, view: RobotView) -> bool:
+        """Whether a failed phase was the semi-autonomous lift still planning (nothing moved: no
+        posture reaches the target): the target is then refused and the mission resumes."""
+        phase = phases[progress.index]
+        planning = isinstance(phase, spec.LegToPedipulation) and progress.memo.get("stage") == "plan"
+        if progress.interlude_mode != semi_autonomous.SEMI_AUTONOMOUS or not planning:
+            return False
+        progress.records[-1].status = "refused"
+        request = progress.target_requests[-1]
+        progress.target_requests[-1] = dataclasses.replace(request, accepted=False, reason=progress.reason)
+        progress.reason = ""
+        self._record_switch(progress, view, semi_autonomous.SEMI_AUTONOMOUS, "target refused: no posture reaches it")
+        progress.interlude, progress.index, progress.interlude_mode = [], progress.resume_index, ""
+        return True
 
     def _drop_teleop_not_started(self, progress: MissionProgress, view: RobotView) -> None:
         """The operator asked for the autonomous mode before the teleop phase began: it is left

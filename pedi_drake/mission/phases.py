@@ -18,6 +18,7 @@ from pedi_drake.exceptions import UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
 from pedi_drake.mission import spec
+from pedi_drake.mission.posture_planner import PLAN_LATENCY, POSTURE_DURATION, PosturePlanner, PostureRequest
 from pedi_drake.mission.progress import (
     FAILED,
     LEG_MODE_FOOT,
@@ -33,6 +34,7 @@ from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_foot import TeleopFootRunner
 from pedi_drake.polygon import shrink_polygon
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.suf.posture import Posture, PostureCase
 from pedi_drake.trajectory import (
     CircularPath,
     PiecewiseQuintic,
@@ -53,13 +55,24 @@ PRESS_SPEED_RAMP = 0.1
 
 
 class MissionEnvironment:
-    """Constant facts a phase needs: the robot variant and the controller's contact layout."""
+    """Constant facts a phase needs: the robot variant and the controller's contact layout, and
+    the posture planner's service (pedi_drake.mission.posture_planner)."""
 
-    def __init__(self, prongs: ProngDesign | None, force_estimate: str = "joint_torque"):
+    def __init__(
+        self,
+        prongs: ProngDesign | None,
+        force_estimate: str = "joint_torque",
+        planner: PosturePlanner | None = None,
+        wait_for_plans: bool = True,
+    ):
         self.prongs = prongs
         self.num_prongs = 0 if prongs is None else prongs.num_prongs
         # The foot force estimate press phases stop on: "joint_torque" or "impedance".
         self.force_estimate = force_estimate
+        # Solves posture: optimal requests off the control loop; None: the mission has none.
+        self.planner = planner
+        # Whether a phase waits for a late answer (lock-step simulation) or keeps polling (real time).
+        self.wait_for_plans = wait_for_plans
 
 
 def _fail(progress: MissionProgress, reason: str) -> str:
@@ -335,33 +348,118 @@ def _on_prongs(refs) -> bool:
     return bool(np.any(np.asarray(refs.contacts[4:]) > 0.5))
 
 
+def working_position_B(leg: str, working_depth: float) -> np.ndarray:
+    """Where leg_to_pedipulation lifts the foot of `leg` [m], trunk frame: `working_depth` [m]
+    below the hip joint, beside it as the thigh offset puts it."""
+    geometry = leg_geometry(leg)
+    return geometry.p_BH + geometry.p_HT - np.array([0.0, 0.0, working_depth])
+
+
+def posture_request(
+    phase, view: RobotView, env: MissionEnvironment, contacts: np.ndarray, p_fixed_W: np.ndarray, R_WB: RotationMatrix
+) -> PostureRequest:
+    """The optimal-posture request of a leg_to_pedipulation phase (its `goal`), made from the
+    loaded feet measured now (`contacts`: the contact set); the optimiser starts from the fixed
+    posture (p_fixed_W [m], R_WB), with the attitude of the goal's body_rotate if it has one."""
+    goal = phase.goal
+    stance = [leg for k, leg in enumerate(robot.LEG_NAMES) if leg != phase.leg and contacts[k] > 0.5]
+    case = PostureCase(
+        stance_W=tuple((leg, tuple(float(v) for v in view.foot_W(leg))) for leg in stance),
+        leg=phase.leg,
+        targets=tuple(tuple(float(v) for v in p) for p in goal.targets),
+        frame=goal.frame,
+        reach_only=tuple(tuple(float(v) for v in p) for p in goal.reach_only),
+        lift_B=tuple(float(v) for v in working_position_B(phase.leg, phase.working_depth)),
+        prongs_key=robot.design_key(env.prongs),
+    )
+    rpy = RollPitchYaw(R_WB).vector()
+    fixed: tuple[str, ...] = ()
+    if goal.attitude is not None:
+        rpy = np.array([goal.attitude[0], goal.attitude[1], rpy[2] + goal.attitude[2]])
+        fixed = ("roll", "pitch", "yaw")
+    start = Posture(tuple(float(v) for v in p_fixed_W), tuple(float(v) for v in rpy))
+    return PostureRequest(case, start, fixed=fixed)
+
+
+def _posture_metrics(request: PostureRequest, result) -> dict:
+    """The lift record's `posture` metrics: the case (stance, targets), the fixed and the optimal
+    posture and their SUFs."""
+
+    def row(evaluation) -> dict:
+        return {
+            "p_WB": list(evaluation.posture.p_WB),
+            "rpy": list(evaluation.posture.rpy),
+            "suf_n": evaluation.suf,
+            "suf_per_target_n": list(evaluation.suf_per_target),
+            "feasible": evaluation.feasible,
+            "reason": evaluation.reason,
+        }
+
+    case = request.case
+    return {
+        "stance_W": {leg: list(p) for leg, p in case.stance_W},
+        "frame": case.frame,
+        "targets": [list(p) for p in case.targets],
+        "reach_only": [list(p) for p in case.reach_only],
+        "lift_B": list(case.lift_B),
+        "fixed_coordinates": list(request.fixed),
+        "fixed": row(result.start_reference),
+        "optimal": row(result.best),
+        "method": result.method,
+        "evaluations": result.evaluations,
+    }
+
+
 class LegToPedipulationRunner(PhaseRunner):
-    """Shift the CoM over the other supports, release the contact, lift the foot to work height."""
+    """Place the trunk (the fixed shift of the CoM over the other supports, or the optimal
+    posture), release the contact, lift the foot to work height."""
 
     def start(self, phase, progress, view, env):
         refs = progress.references
         supports = _support_points_W(view, env, refs.contacts, exclude=phase.leg)
         if len(supports) < 3:
             raise UnreachableTarget(f"{phase.name}: lifting {phase.leg} would leave fewer than three supports")
-        p_now, _ = _body_sample(progress, view.time)
+        p_now, R_now = _body_sample(progress, view.time)
         if _on_prongs(refs):
             # The loaded prong tips pin the trunk: it cannot shift, and the prongs widen the support
             # enough to lift a leg where it stands (the balance task still bounds the CoM).
             goal = p_now
         else:
             goal = _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
+        if phase.posture == "optimal":
+            if env.planner is None:
+                raise UnreachableTarget(f"{phase.name}: posture: optimal needs the posture planner")
+            request = posture_request(phase, view, env, refs.contacts, goal, R_now)
+            env.planner.ask(request)
+            progress.memo.update(stage="plan", request=request, t_due=view.time + PLAN_LATENCY)
+            return
         _move_body(progress, view.time, goal, None, SHIFT_DURATION)
-        progress.memo.update(stage="shift")
+        progress.memo.update(stage="shift", t_shifted=view.time + SHIFT_DURATION)
 
     def step(self, phase, progress, view, env):
-        t, t0, leg = view.time, progress.phase_start, phase.leg
+        t, leg = view.time, phase.leg
         memo, refs = progress.memo, progress.references
         k = robot.LEG_NAMES.index(leg)
-        if memo["stage"] == "shift" and t >= t0 + SHIFT_DURATION:
+        if memo["stage"] == "plan":
+            result = env.planner.answer(memo["request"], wait=env.wait_for_plans) if t >= memo["t_due"] else None
+            if result is None:
+                return RUNNING
+            progress.records[-1].metrics.update(leg=leg, posture=_posture_metrics(memo["request"], result))
+            if not result.best.feasible:
+                raise UnreachableTarget(
+                    f"{phase.name}: no posture within the limits reaches the targets of {leg} ({result.best.reason})"
+                )
+            posture = result.best.posture
+            progress.pre_posture[leg] = _body_sample(progress, t)
+            # A body_rotate among the targets turns the trunk later (about its origin): only the
+            # position is taken now.
+            R_goal = None if phase.goal.attitude is not None else RotationMatrix(RollPitchYaw(*posture.rpy))
+            _move_body(progress, t, np.asarray(posture.p_WB), R_goal, POSTURE_DURATION)
+            memo.update(stage="shift", t_shifted=t + POSTURE_DURATION)
+        elif memo["stage"] == "shift" and t >= memo["t_shifted"]:
             refs.contacts[k] = 0.0
             # The working pose's joint angles are asked now, to be there when the force has ramped away.
-            geometry = leg_geometry(leg)
-            p_work_B = geometry.p_BH + geometry.p_HT - np.array([0.0, 0.0, phase.working_depth])
+            p_work_B = working_position_B(leg, phase.working_depth)
             _ask_ik(progress, view, {leg: [p_work_B]}, phase.name)
             memo.update(stage="release", t_release=t, p_work_B=p_work_B)
         elif memo["stage"] == "release" and t >= memo["t_release"] + CONTACT_RAMP_WAIT:
@@ -611,8 +709,13 @@ class LegToSupportRunner(PhaseRunner):
             supports = _support_points_W(view, env, refs.contacts)
             p_now, _ = _body_sample(progress, t)
             goal = p_now if _on_prongs(refs) else _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
-            _move_body(progress, t, goal, None, SHIFT_DURATION)
-            memo.update(stage="centre", t_centred=t + SHIFT_DURATION)
+            # After an optimal posture: back to the height and attitude the trunk had before it.
+            p_before, R_before = progress.pre_posture.pop(leg, (None, None))
+            duration = SHIFT_DURATION if p_before is None else POSTURE_DURATION
+            if p_before is not None:
+                goal[2] = p_before[2]
+            _move_body(progress, t, goal, R_before, duration)
+            memo.update(stage="centre", t_centred=t + duration)
         elif memo["stage"] == "centre" and t >= memo["t_centred"]:
             return SUCCEEDED if view.foot_force[k] > CONTACT_FORCE_THRESHOLD else RUNNING
         return RUNNING

@@ -201,6 +201,17 @@ class MissionProgress:
     operator_mode: int = 0
     teleop_pending: bool = False
     switches: list[ModeSwitch] = dataclasses.field(default_factory=list)
+    # The semi-autonomous mode (pedi_drake.mission.semi_autonomous): every target the operator
+    # sent (SemiAutonomous TargetRequest values), the last value seen [m], the accepted target
+    # waiting for a safe point (world [m], or None), and what the inserted interlude serves
+    # ("semi_autonomous", or "" for the teleop sequence).
+    target_requests: list = dataclasses.field(default_factory=list)
+    last_target: tuple | None = None
+    target_pending: tuple | None = None
+    interlude_mode: str = ""
+    # Per lifted leg, the trunk reference (p_WB [m], R_WB) before an optimal posture moved it:
+    # leg_to_support puts the trunk back there (re-centred over the feet as always).
+    pre_posture: dict = dataclasses.field(default_factory=dict)
 
     def copy(self) -> "MissionProgress":
         """A copy that is safe to change (a progress in a Context is never changed): its containers
@@ -218,6 +229,9 @@ class MissionProgress:
             clone.records.append(record)
         # Lists of phases (never changed during a run) and of ModeSwitch values.
         clone.recovery, clone.interlude, clone.switches = list(self.recovery), list(self.interlude), list(self.switches)
+        # Of (array, RotationMatrix) values and of TargetRequest values, never changed.
+        clone.pre_posture = dict(self.pre_posture)
+        clone.target_requests = list(self.target_requests)
         return clone
 
     def __deepcopy__(self, memo) -> "MissionProgress":

@@ -28,11 +28,16 @@ from pydrake.common.yaml import yaml_load
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import FORCE_ESTIMATES, STACKS
 from pedi_drake.exceptions import MissionFileError
+from pedi_drake.mission.posture_planner import PLAN_LATENCY, POSTURE_DURATION
 from pedi_drake.resources import missions_dir
 from pedi_drake.robot import FOOT_RADIUS, LEG_NAMES
 from pedi_drake.scenario import Push, RobotConfig, SceneObject, resolve_model_path, scene_problems
 
 FRAMES = ("world", "trunk")
+# How leg_to_pedipulation places the trunk before lifting: "fixed" shifts the centre of mass over
+# the centroid of the other supports at the current height and attitude; "optimal" takes the
+# posture of largest SUF at the foot's targets (pedi_drake.suf.posture).
+POSTURES = ("fixed", "optimal")
 
 
 @dataclasses.dataclass
@@ -124,14 +129,39 @@ class HoldFootPose(PhaseBase):
 
 
 @dataclasses.dataclass
+class PostureGoal:
+    """What an optimal posture is chosen for: the foot targets the lifted leg will visit before
+    it is put back. Made by the mission loader from the phases that follow, or by the
+    semi-autonomous mode from the operator's target; not a mission file field."""
+
+    leg: str = "FR"
+    # "world", or "trunk" (the trunk at the chosen posture).
+    frame: str = "world"
+    # Targets at which the SUF counts [m], in `frame`.
+    targets: list[list[float]] = dataclasses.field(default_factory=list)
+    # Points the foot must also reach with the same posture (approach, via points, press ends) [m].
+    reach_only: list[list[float]] = dataclasses.field(default_factory=list)
+    # Roll, pitch and yaw (yaw relative to the heading) [rad] a body_rotate sets before the
+    # targets: the posture keeps them. None: the attitude is optimised too.
+    attitude: list[float] | None = None
+
+
+@dataclasses.dataclass
 class LegToPedipulation(PhaseBase):
     """Shifts the support polygon away from `leg`, removes its contact and lifts the foot to the
-    working position `working_depth` below the shoulder (paper 000: 15 cm)."""
+    working position `working_depth` below the shoulder (paper 000: 15 cm).
+
+    `posture` says where the trunk goes first (POSTURES): with "optimal" the phase asks for the
+    posture of largest SUF at the targets the leg reaches next (`goal`) and waits for it (up to
+    pedi_drake.mission.posture_planner.PLAN_LATENCY and the optimiser's time) before moving."""
 
     leg: str = "FR"
     # Foot depth below the hip joint in the working position [m].
     working_depth: float = 0.15
     duration: float = 1.5
+    posture: str = "fixed"
+    # Set by the loader for posture: optimal (see PostureGoal); not a file field.
+    goal: PostureGoal | None = None
 
 
 @dataclasses.dataclass
@@ -305,6 +335,35 @@ class TeleopMode(TeleopFoot):
 
 
 @dataclasses.dataclass
+class SemiAutonomousMode:
+    """The mission file's `semi_autonomous:` block: the operator may give the `leg` foot a target.
+
+    A target (a foot_command_lcmt with the semi-autonomous mode request and a position) inside the
+    workspace below is taken at the next safe point: the mission manager inserts leg_to_pedipulation
+    with the optimal posture for it, a reach that holds the foot there for `hold`, and
+    leg_to_support; then the interrupted phase restarts. A target outside the workspace, or sent
+    while another is being served, is refused and counted (never followed)
+    (pedi_drake.mission.semi_autonomous)."""
+
+    name: str = "semi"
+    leg: str = "FR"
+    # Workspace: the target in the trunk frame at the request (trunk origin at the posture it
+    # has then) lies in this box [m] ...
+    box_min: list[float] = dataclasses.field(default_factory=lambda: [0.15, -0.35, -0.25])
+    box_max: list[float] = dataclasses.field(default_factory=lambda: [0.50, 0.05, 0.05])
+    # ... and its foot centre at least this high above the ground [m].
+    min_height: float = 0.04
+    # Foot depth below the hip joint after the lift [m].
+    working_depth: float = 0.15
+    # Duration of the lift's, the reach's and the placing's joint motions [s].
+    leg_duration: float = 1.5
+    # Success when the foot is within this distance of the target [m] ...
+    tolerance: float = 0.005
+    # ... held for this long [s].
+    hold: float = 1.0
+
+
+@dataclasses.dataclass
 class Wait(PhaseBase):
     """Holds the current references for `duration` [s]."""
 
@@ -392,6 +451,8 @@ class MissionSpec:
     leaves_trunk: str = ""
     # How the operator may take a foot mid-mission (None: the mission is autonomous only).
     teleop: TeleopMode | None = None
+    # How the operator may give a foot a target mid-mission (None: no semi-autonomous mode).
+    semi_autonomous: SemiAutonomousMode | None = None
 
     def longest_duration(self) -> float:
         """Simulated time [s] the mission can take at most: every phase running to its timeout,
@@ -420,6 +481,8 @@ class _MissionFile:
     leaves_trunk: str = ""
     # The operator's teleoperated foot, inserted on request (pedi_drake.mission.mode_switch).
     teleop: TeleopMode | None = None
+    # The operator's foot targets, served on request (pedi_drake.mission.semi_autonomous).
+    semi_autonomous: SemiAutonomousMode | None = None
     phases: list[dict] = dataclasses.field(default_factory=list)
 
 
@@ -535,6 +598,8 @@ def load_mission(name_or_path: str) -> MissionSpec:
                 f"{where}: {field}.kind: unknown phase kind {kind!r}; kinds: {', '.join(PHASE_KINDS)}"
             )
         body = {key: value for key, value in raw_phase.items() if key != "kind"}
+        if "goal" in body and kind == "leg_to_pedipulation":
+            raise MissionFileError(f"{where}: {field}.goal: set by the loader from the phases that follow, not a field")
         phase = _object(body, PHASE_KINDS[kind], field, where)
         phase.name = phase.name or f"{i}_{kind}"
         _check_phase_values(phase, f"{where}: {field}")
@@ -543,8 +608,11 @@ def load_mission(name_or_path: str) -> MissionSpec:
     duplicates = sorted({name for name in names if names.count(name) > 1})
     if duplicates:
         raise MissionFileError(f"{where}: phases: duplicate phase names {duplicates}")
+    _attach_posture_goals(phases, where)
     if header.teleop is not None:
         _check_phase_values(header.teleop, f"{where}: teleop")
+    if header.semi_autonomous is not None:
+        _check_semi_autonomous(header.semi_autonomous, f"{where}: semi_autonomous")
     if header.box_lift is not None:
         _check_box_lift(header.box_lift, header.scene, names, f"{where}: box_lift")
     for i, touch in enumerate(header.touches):
@@ -568,6 +636,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
         touches=header.touches,
         leaves_trunk=header.leaves_trunk,
         teleop=header.teleop,
+        semi_autonomous=header.semi_autonomous,
     )
 
 
@@ -692,6 +761,16 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
             need(math.isfinite(value) and value > 0, field, f"must be a finite number > 0, got {value}")
         need(phase.return_after > phase.hold_after, "return_after", "must be longer than hold_after")
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+    if isinstance(phase, LegToPedipulation):
+        need(phase.posture in POSTURES, "posture", f"must be one of {POSTURES}, got {phase.posture!r}")
+        if phase.posture == "optimal":
+            least = PLAN_LATENCY + POSTURE_DURATION + phase.duration
+            need(
+                phase.timeout > least,
+                "timeout",
+                f"posture: optimal plans for {PLAN_LATENCY} s and moves the trunk for {POSTURE_DURATION} s before "
+                f"the {phase.duration} s lift: must exceed {least} s, got {phase.timeout}",
+            )
     if isinstance(phase, Press):
         norm = math.sqrt(sum(v * v for v in phase.direction)) if len(phase.direction) == 3 else 0.0
         need(norm > 0.5, "direction", f"expected a unit [x, y, z] vector, got {phase.direction}")
@@ -699,6 +778,76 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         value = getattr(phase, field, None)
         if value is not None:
             need(len(value) == 3, field, f"expected 3 numbers, got {value}")
+
+
+def _attach_posture_goals(phases: list[PhaseBase], where: str) -> None:
+    """Gives every leg_to_pedipulation with posture: optimal its PostureGoal: the targets of the
+    leg's reach phases up to its leg_to_support (and the points it must pass on the way), with
+    the attitude of a body_rotate among them. Raises MissionFileError for what the optimiser
+    cannot serve: no reach, two legs moving, the trunk on its prongs, frames mixed."""
+    on_prongs = False
+    for i, phase in enumerate(phases):
+        if isinstance(phase, LeanOnProngs):
+            on_prongs = True
+        elif isinstance(phase, LeaveProngs):
+            on_prongs = False
+        if not (isinstance(phase, LegToPedipulation) and phase.posture == "optimal"):
+            continue
+        field = f"{where}: phases[{i}].posture"
+        if on_prongs:
+            raise MissionFileError(f"{field}: optimal: the trunk rests on its prongs here, which pin it")
+        goal = PostureGoal(leg=phase.leg)
+        frames, last_target = set(), None
+        for later in phases[i + 1 :]:
+            if isinstance(later, LegToSupport) and later.leg == phase.leg:
+                break
+            if isinstance(later, Reach) and later.leg == phase.leg:
+                if later.together:
+                    raise MissionFileError(f"{field}: optimal: {later.name} moves further legs (together)")
+                frames.add(later.frame)
+                goal.targets.append(list(later.target))
+                goal.reach_only.extend(list(p) for p in later.via_points)
+                if later.approach_offset:
+                    goal.reach_only.append([a + b for a, b in zip(later.target, later.approach_offset, strict=True)])
+                last_target = later.target
+            elif isinstance(later, Press) and later.leg == phase.leg and last_target is not None:
+                norm = math.sqrt(sum(v * v for v in later.direction))
+                goal.reach_only.append(
+                    [t + later.max_displacement * d / norm for t, d in zip(last_target, later.direction, strict=True)]
+                )
+            elif isinstance(later, BodyRotate) and not later.pivot and goal.attitude is None:
+                goal.attitude = list(later.rpy)
+            elif isinstance(later, LegToPedipulation | MoveFeet | BodyMove | BodyPath | LeanOnProngs):
+                raise MissionFileError(
+                    f"{field}: optimal: {later.name} ({type(later).__name__}) changes the stance or trunk "
+                    "before the leg is back on the ground; the optimiser chooses one posture for one lifted leg"
+                )
+        if not goal.targets:
+            raise MissionFileError(f"{field}: optimal: no reach of {phase.leg} follows before its leg_to_support")
+        if len(frames) > 1:
+            raise MissionFileError(f"{field}: optimal: the reaches of {phase.leg} mix frames {sorted(frames)}")
+        goal.frame = frames.pop()
+        phase.goal = goal
+
+
+def _check_semi_autonomous(block: SemiAutonomousMode, where: str) -> None:
+    def need(condition: bool, field: str, problem: str) -> None:
+        if not condition:
+            raise MissionFileError(f"{where}.{field}: {problem}")
+
+    need(block.leg in LEG_NAMES, "leg", f"must be one of {LEG_NAMES}, got {block.leg!r}")
+    for field in ("box_min", "box_max"):
+        value = getattr(block, field)
+        need(
+            len(value) == 3 and all(math.isfinite(v) for v in value),
+            field,
+            f"expected finite [x, y, z] [m], got {value}",
+        )
+    need(all(a < b for a, b in zip(block.box_min, block.box_max, strict=True)), "box_max", "must exceed box_min")
+    for field in ("min_height", "working_depth", "leg_duration", "tolerance", "hold"):
+        value = getattr(block, field)
+        need(math.isfinite(value) and value > 0, field, f"must be a finite number > 0, got {value}")
+    need(block.min_height >= FOOT_RADIUS, "min_height", f"must be at least the foot radius ({FOOT_RADIUS} m)")
 
 
 def _is_prong_name(name) -> bool:

@@ -3,7 +3,8 @@
   operator_command (10) = [mode_request, frame, kind, value (3), estop, age, received, dropped]
 
 mode_request  the last mode the operator asked for: MODE_NONE (nothing asked yet),
-              MODE_AUTONOMOUS (the mission's phases) or MODE_TELEOP (the teleoperated foot)
+              MODE_AUTONOMOUS (the mission's phases), MODE_TELEOP (the teleoperated foot) or
+              MODE_SEMI_AUTONOMOUS (value is a foot target the mission serves on its own)
 frame         FRAME_TRUNK or FRAME_WORLD: the frame of `value`
 kind          KIND_VELOCITY (value is a foot velocity [m/s]) or KIND_POSITION (a foot centre [m])
 estop         1 once any message asked for an E-stop (latched for the rest of the run)
@@ -16,8 +17,8 @@ import math
 
 import numpy as np
 
-MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP = 0, 1, 2
-MODES = (MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP)
+MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP, MODE_SEMI_AUTONOMOUS = 0, 1, 2, 3
+MODES = (MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP, MODE_SEMI_AUTONOMOUS)
 FRAME_TRUNK, FRAME_WORLD = 0, 1
 KIND_VELOCITY, KIND_POSITION = 0, 1
 OPERATOR_COMMAND_SIZE = 10
