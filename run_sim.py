@@ -14,6 +14,7 @@ Examples:
     python run_sim.py --scenario_name stand --out out/stand
     python run_sim.py --scenario_text "{sensor_noise: {enabled: true}, random_seed: 3}"
     python run_sim.py --graphviz out/diagram.dot       # also write the run's diagram (Graphviz)
+    python run_sim.py --meshcat --teleop               # drive the foot from the Meshcat page's panel
     python run_sim.py --hardware --mission hit_target_front   # over LCM: a Go1, or the simulator
         # bridge started first in another terminal:
         #   python -m pedi_drake.apps.sim_bridge --mission hit_target_front
@@ -40,6 +41,8 @@ from pedi_drake.run_checks import check_duration, check_out_dir, check_scene_geo
 from pedi_drake.scenario import MISSION_CONTROLLERS, default_scenario_file, load_scenario  # noqa: E402
 
 ERROR_FILE = "error.txt"
+# The mission of `--teleop` when neither --mission nor the scenario names one.
+TELEOP_MISSION = "operator/teleop_foot"
 
 
 def _prepare(args):
@@ -47,6 +50,10 @@ def _prepare(args):
     scenario = load_scenario(
         filename=args.scenario_file, scenario_name=args.scenario_name, scenario_text=args.scenario_text
     )
+    if args.teleop:
+        scenario.operator.source = "meshcat"
+        if args.mission is None and not scenario.mission:
+            args.mission = TELEOP_MISSION
     mission = None
     if args.mission is not None:
         overrides = yaml_load(data=args.scenario_text) if args.scenario_text.strip() else {}
@@ -103,6 +110,13 @@ def main() -> int:
     )
     parser.add_argument("--meshcat", action="store_true", help="Serve a live Meshcat view (prints its URL).")
     parser.add_argument(
+        "--teleop",
+        action="store_true",
+        help="Drive the foot from a panel in the Meshcat page (operator source meshcat: foot velocity sliders, "
+        f"teleop / autonomous / E-stop buttons; implies --meshcat; the mission {TELEOP_MISSION} unless one is "
+        "given). The simulation then runs in real time.",
+    )
+    parser.add_argument(
         "--hardware",
         action="store_true",
         help="Drive the Go1 over LCM (the scenario's bus 'go1') in real time instead of simulating it.",
@@ -119,13 +133,13 @@ def main() -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     meshcat = None
-    if args.meshcat:
+    if args.meshcat or args.teleop:
         meshcat = Meshcat()
         print(f"Meshcat: {meshcat.web_url()}")
     if args.graphviz:
         # The same function builds the run's diagram below; this copy is only drawn. Depth 1
         # keeps the station one box, as controllers see it.
-        diagram = MakePedipulationDiagram(scenario, hardware=args.hardware).diagram
+        diagram = MakePedipulationDiagram(scenario, meshcat, hardware=args.hardware).diagram
         Path(args.graphviz).parent.mkdir(parents=True, exist_ok=True)
         Path(args.graphviz).write_text(diagram.GetGraphvizString(max_depth=1))
         print(f"diagram written to {args.graphviz}")

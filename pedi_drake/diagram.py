@@ -35,6 +35,7 @@ from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
 from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE
 from pedi_drake.operator.estop_gate import OperatorEstopGate
+from pedi_drake.operator.meshcat_panel import MeshcatOperatorPanel
 from pedi_drake.operator.operator_input import OperatorInput
 from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
 from pedi_drake.station_interface import MakeStation
@@ -142,15 +143,22 @@ def _add_leg_ik(builder: DiagramBuilder, manager: MissionManager) -> None:
 _OPERATOR_ESTOP_INDEX = 6
 
 
-def _add_operator(builder: DiagramBuilder, scenario: Scenario, lcm: DrakeLcmInterface | None) -> OperatorInput:
-    """The operator's input system ("operator") on its bus (`lcm`, or one opened on the scenario's URL)."""
+def _add_operator(
+    builder: DiagramBuilder, scenario: Scenario, lcm: DrakeLcmInterface | None, meshcat: Meshcat | None
+) -> OperatorInput | MeshcatOperatorPanel:
+    """The operator's input system ("operator"): the panel on `meshcat`, or the input on its bus
+    (`lcm`, or one opened on the scenario's URL)."""
     config = scenario.operator
+    if config.source == "meshcat":
+        if meshcat is None:
+            raise ScenarioError("operator.source: 'meshcat' needs a Meshcat (run_sim.py --meshcat --teleop)")
+        return builder.AddNamedSystem("operator", MeshcatOperatorPanel(config.meshcat, meshcat, config.period))
     if lcm is None:
         lcm = DrakeLcm(scenario.lcm_buses[config.lcm_bus].lcm_url)
     return builder.AddNamedSystem("operator", OperatorInput(config, lcm))
 
 
-def _connect_operator_estop(builder, operator: OperatorInput, station, command, scenario: Scenario, hardware: bool):
+def _connect_operator_estop(builder, operator, station, command, scenario: Scenario, hardware: bool):
     """The command port that reaches the motors: on hardware the driver latches damping on the
     operator's E-stop (its `driver.estop`); in simulation an OperatorEstopGate does the same."""
     if hardware:
@@ -182,7 +190,8 @@ def MakePedipulationDiagram(
     of LOGGED_SIGNALS (and of the controller's diagnostics and the mission's outputs).
 
     `operator_lcm`: the bus of the operator's input (scenario `operator:`); None opens the URL of
-    its `lcm_bus`. In-process tests pass one DrakeLcm("memq://") shared with their publisher."""
+    its `lcm_bus`. In-process tests pass one DrakeLcm("memq://") shared with their publisher. The
+    Meshcat panel (`operator: {source: meshcat}`) goes on `meshcat`."""
     mission = load_mission(scenario.mission) if scenario.mission else None
     if mission is not None:
         if scenario.controller not in MISSION_CONTROLLERS:
@@ -206,7 +215,7 @@ def MakePedipulationDiagram(
     base_state = estimator.GetOutputPort("base_state")
 
     extra_logs = {}
-    operator = _add_operator(builder, scenario, operator_lcm) if scenario.operator.source != "none" else None
+    operator = _add_operator(builder, scenario, operator_lcm, meshcat) if scenario.operator.source != "none" else None
     if operator is not None:
         extra_logs["operator.command"] = operator.GetOutputPort("operator_command")
     if scenario.controller == "stand_pd":

@@ -81,7 +81,8 @@ def simulate(
     another process) and the diagram runs in real time; no replay is recorded then.
     `replay=False` skips the Meshcat recording too (a run without any visualisation).
     `realtime_rate` paces a hardware run (below 1 only against the simulator bridge run at the
-    same rate: a slow-motion run for a machine too slow for both processes in real time).
+    same rate: a slow-motion run for a machine too slow for both processes in real time), and a
+    simulation with an operator.
     `stop`: once its reason is set (by a signal, see `pedi_drake.interrupt`) the simulation ends at
     the current time and the record says why (`interrupted`).
     """
@@ -93,7 +94,8 @@ def simulate(
     diagram = built.diagram
     simulator = Simulator(diagram)
     built.reserve_logs(simulator.get_mutable_context(), scenario.simulation_duration)
-    if hardware:
+    if hardware or scenario.operator.source != "none":
+        # An operator (a person, a program on LCM) acts on the wall clock: a simulation runs at its pace.
         simulator.set_target_realtime_rate(realtime_rate)
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
     monitor = _MissionMonitor(diagram, manager, built.mission, scenario.simulation_duration, quiet, stop)

@@ -34,7 +34,16 @@ from pedi_drake.prongs import ProngDesign
 from pedi_drake.realtime_priority import priority_problem
 from pedi_drake.resources import models_dir, scenarios_dir
 
-SCENE_OBJECT_KINDS = ("door", "box", "target_panel", "back_object", "fixed_obstacle", "soft_obstacle", "hand")
+SCENE_OBJECT_KINDS = (
+    "door",
+    "box",
+    "target_panel",
+    "back_object",
+    "fixed_obstacle",
+    "soft_obstacle",
+    "hand",
+    "estop_button",
+)
 INITIAL_POSES = ("lying", "standing")
 ESTIMATORS = ("ground_truth", "kalman")
 CONTROLLERS = ("stand_pd", "whole_body", "projected_impedance")

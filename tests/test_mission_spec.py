@@ -8,7 +8,7 @@ from pydrake.common.yaml import yaml_load
 from pedi_drake.diagram import apply_mission
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.mission.spec import PHASE_KINDS, LegToSupport, Reach, load_mission, shipped_demos, shipped_missions
-from pedi_drake.resources import scenarios_dir
+from pedi_drake.resources import missions_dir, scenarios_dir
 from pedi_drake.scenario import Scenario, load_scenario
 
 PAPER_MISSIONS = {
@@ -38,6 +38,13 @@ def test_shipped_mission_loads_and_starts_by_standing_up(name):
     mission = load_mission(name)
     assert mission.phases[0].__class__.__name__ == "StandUp"
     assert any(isinstance(phase, Reach) for phase in mission.phases)
+
+
+@pytest.mark.parametrize("path", sorted((missions_dir() / "operator").glob("*.yaml")), ids=lambda path: path.stem)
+def test_every_operator_mission_loads_and_lets_the_operator_take_a_foot(path):
+    mission = load_mission(f"operator/{path.stem}")
+    teleop_phases = [phase for phase in mission.phases if phase.__class__.__name__ == "TeleopFoot"]
+    assert teleop_phases or mission.teleop is not None
 
 
 def test_every_demo_mission_loads_with_a_demo_scenario_of_its_name():

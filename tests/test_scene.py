@@ -7,6 +7,12 @@ from pydrake.systems.analysis import Simulator
 from pedi_drake import robot
 from pedi_drake.go1_command import pack_command
 from pedi_drake.scenario import Push, Scenario, SceneObject
+from pedi_drake.station.scene import (
+    ESTOP_BUTTON_JOINT,
+    ESTOP_BUTTON_PRELOAD,
+    ESTOP_BUTTON_STIFFNESS,
+    ESTOP_BUTTON_TRIP_TRAVEL,
+)
 from pedi_drake.station_interface import MakeStation
 
 
@@ -94,3 +100,28 @@ def test_fixed_obstacle_does_not_move_when_pushed():
     obj = SceneObject(kind="fixed_obstacle", position=[-0.6, 0.4, 0.0])
     _, _, _, start, end = _simulate(obj, "block", [50.0, 0, 0], 0.5)
     np.testing.assert_allclose(end.translation(), start.translation(), atol=1e-9)
+
+
+def _plunger_travel(force_down: float) -> tuple[float, float]:
+    """(travel [m], the plunger's own weight [N]) after pushing it down with `force_down` [N]."""
+    obj = SceneObject(kind="estop_button", position=[-0.6, 0.4, 0.0])
+    plant, context, model, _, _ = _simulate(obj, "plunger", [0.0, 0.0, -force_down], 0.6)
+    weight = plant.GetBodyByName("plunger", model).default_mass() * 9.81
+    return plant.GetJointByName(ESTOP_BUTTON_JOINT, model).get_translation(context), weight
+
+
+def test_estop_button_stays_out_under_less_than_its_preload():
+    # 1.2 N and the plunger's weight are below the 2 N preload (400 N/m x 5 mm): it stays on its stop.
+    assert _plunger_travel(1.2)[0] == pytest.approx(0.0, abs=2e-4)
+
+
+def test_estop_button_trips_under_a_force_below_the_teleop_bound():
+    # 6 N and the plunger's weight against 400 N/m x (travel + 5 mm): about 11 mm, past the 8 mm
+    # trip and short of the 12 mm stop.
+    travel, weight = _plunger_travel(6.0)
+    assert travel == pytest.approx((6.0 + weight) / ESTOP_BUTTON_STIFFNESS - ESTOP_BUTTON_PRELOAD, abs=2e-4)
+    assert travel > ESTOP_BUTTON_TRIP_TRAVEL
+
+
+def test_estop_button_plunger_stops_at_the_end_of_its_travel():
+    assert _plunger_travel(40.0)[0] == pytest.approx(0.012, abs=1e-3)

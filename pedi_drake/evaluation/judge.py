@@ -12,6 +12,7 @@ from pedi_drake import robot
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import capture_point, mission_results
 from pedi_drake.evaluation.box_lift import box_lift_trace, judge_box_lift
+from pedi_drake.evaluation.button_press import judge_button_press, plunger_travel
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
 from pedi_drake.evaluation.off_trunk import judge_off_trunk, off_trunk_trace
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_response
@@ -173,6 +174,21 @@ def judge_run(record) -> dict:
                     mission.touches, scene_names, result["phases"], contact.times, contact.data
                 )
                 reason = "; ".join(filter(None, [reason, touch_problem]))
+            if mission.button_press is not None and states.shape[1]:
+                check = mission.button_press
+                phase = next(phase for phase in mission.phases if phase.name == check.phase)
+                contact = logs["sim.scene_contact_forces"]
+                result["button_press"], press_problem = judge_button_press(
+                    check,
+                    phase.max_force,
+                    result["phases"],
+                    t_state,
+                    plunger_travel(plant, check.button, states),
+                    [obj.instance_name for obj in simulated.scene],
+                    contact.times,
+                    contact.data,
+                )
+                reason = "; ".join(filter(None, [reason, press_problem]))
             if mission.leaves_trunk and states.shape[1]:
                 trace = off_trunk_trace(plant, mission.leaves_trunk, t_state, states)
                 result[mission.leaves_trunk], left_problem = judge_off_trunk(mission.leaves_trunk, trace)

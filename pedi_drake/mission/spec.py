@@ -429,6 +429,21 @@ class Touch:
 
 
 @dataclasses.dataclass
+class ButtonPress:
+    """An E-stop button press the judge requires (pedi_drake.evaluation.button_press): during the
+    teleop_foot phase `phase`, the foot of `leg` pushed the plunger of the scene's estop_button
+    `button` past its trip travel, and the true contact force between them never exceeded that
+    phase's `max_force` (the force bound of the teleoperated foot)."""
+
+    # Scene object (model instance) name of the button; its kind must be estop_button.
+    button: str = "estop_button"
+    # The leg whose foot presses it.
+    leg: str = "FR"
+    # Name of the teleop_foot phase during which it is pressed.
+    phase: str = ""
+
+
+@dataclasses.dataclass
 class MissionSpec:
     """A loaded, validated mission."""
 
@@ -453,6 +468,8 @@ class MissionSpec:
     teleop: TeleopMode | None = None
     # How the operator may give a foot a target mid-mission (None: no semi-autonomous mode).
     semi_autonomous: SemiAutonomousMode | None = None
+    # The E-stop button press the judge requires (None: none).
+    button_press: ButtonPress | None = None
 
     def longest_duration(self) -> float:
         """Simulated time [s] the mission can take at most: every phase running to its timeout,
@@ -483,6 +500,8 @@ class _MissionFile:
     teleop: TeleopMode | None = None
     # The operator's foot targets, served on request (pedi_drake.mission.semi_autonomous).
     semi_autonomous: SemiAutonomousMode | None = None
+    # The E-stop button press the judge requires of the run (pedi_drake.evaluation.button_press).
+    button_press: ButtonPress | None = None
     phases: list[dict] = dataclasses.field(default_factory=list)
 
 
@@ -617,6 +636,8 @@ def load_mission(name_or_path: str) -> MissionSpec:
         _check_box_lift(header.box_lift, header.scene, names, f"{where}: box_lift")
     for i, touch in enumerate(header.touches):
         _check_touch(touch, header.scene, names, f"{where}: touches[{i}]")
+    if header.button_press is not None:
+        _check_button_press(header.button_press, header.scene, phases, f"{where}: button_press")
     objects = [obj.instance_name for obj in header.scene]
     if header.leaves_trunk and header.leaves_trunk not in objects:
         raise MissionFileError(
@@ -637,6 +658,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
         leaves_trunk=header.leaves_trunk,
         teleop=header.teleop,
         semi_autonomous=header.semi_autonomous,
+        button_press=header.button_press,
     )
 
 
@@ -665,6 +687,25 @@ def _check_touch(touch: Touch, scene: list[SceneObject], phase_names: list[str],
         "leg": (touch.leg in LEG_NAMES, f"must be one of {LEG_NAMES}, got {touch.leg!r}"),
         "phase": (touch.phase in phase_names, f"must name a phase of the mission, got {touch.phase!r}"),
         "force": (math.isfinite(touch.force) and touch.force > 0, f"must be > 0 [N], got {touch.force}"),
+    }
+    for field, (ok, problem) in problems.items():
+        if not ok:
+            raise MissionFileError(f"{where}.{field}: {problem}")
+
+
+def _check_button_press(check: ButtonPress, scene: list[SceneObject], phases: list[PhaseBase], where: str) -> None:
+    buttons = [obj.instance_name for obj in scene if obj.kind == "estop_button"]
+    teleop = [phase.name for phase in phases if isinstance(phase, TeleopFoot)]
+    problems = {
+        "button": (
+            check.button in buttons,
+            f"must name an estop_button of the scene {buttons}, got {check.button!r}",
+        ),
+        "leg": (check.leg in LEG_NAMES, f"must be one of {LEG_NAMES}, got {check.leg!r}"),
+        "phase": (
+            check.phase in teleop,
+            f"must name a teleop_foot phase {teleop}, got {check.phase!r}",
+        ),
     }
     for field, (ok, problem) in problems.items():
         if not ok:

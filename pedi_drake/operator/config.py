@@ -6,7 +6,9 @@ import math
 from pedi_drake.go1_driver.constants import GO1_BUS_NAME, RC_ESTOP_FIELDS
 from pedi_drake.go1_driver.lcmtypes import rc_command_lcmt
 
-OPERATOR_SOURCES = ("none", "lcm", "remote")
+OPERATOR_SOURCES = ("none", "lcm", "remote", "meshcat")
+# Sources read from an LCM bus (the Meshcat panel is read from the Meshcat server).
+LCM_SOURCES = ("lcm", "remote")
 REMOTE_FRAMES = ("trunk", "world")
 # The remote's switches (rc_command_lcmt fields, int16 on the wire: non-zero while pressed).
 REMOTE_BUTTONS = tuple(name for name in rc_command_lcmt.__slots__ if name.endswith("_switch"))
@@ -37,11 +39,28 @@ class RemoteMapping:
 
 
 @dataclasses.dataclass
+class MeshcatPanelConfig:
+    """The Meshcat panel (source: meshcat): sliders for the foot velocity, buttons for the modes.
+
+    The panel's keys (with the page focused) follow `pedi_drake.apps.teleop_lcm`: w/s, a/d, r/f
+    step the x, y, z sliders, space stops the foot, t asks for teleop, g for the autonomous
+    mission, e is the E-stop.
+    """
+
+    # The sliders' range: the foot velocity in [-max_speed, max_speed] along each axis [m/s].
+    max_speed: float = 0.1
+    # The sliders' step (and a key press's) [m/s].
+    step: float = 0.005
+    # Frame of the foot velocity: "trunk" or "world".
+    frame: str = "trunk"
+
+
+@dataclasses.dataclass
 class OperatorConfig:
     """Where the operator's commands come from and how they are read."""
 
-    # "none" (no operator), "lcm" (foot_command_lcmt on `channel`) or "remote" (the Go1 remote's
-    # rc_command, mapped by `remote`).
+    # "none" (no operator), "lcm" (foot_command_lcmt on `channel`), "remote" (the Go1 remote's
+    # rc_command, mapped by `remote`) or "meshcat" (a panel in the Meshcat page, `meshcat`).
     source: str = "none"
     # The LCM bus (a name in the scenario's lcm_buses) the commands arrive on.
     lcm_bus: str = GO1_BUS_NAME
@@ -51,18 +70,27 @@ class OperatorConfig:
     period: float = 0.01
     # The remote's mapping (source: remote).
     remote: RemoteMapping = dataclasses.field(default_factory=RemoteMapping)
+    # The Meshcat panel (source: meshcat).
+    meshcat: MeshcatPanelConfig = dataclasses.field(default_factory=MeshcatPanelConfig)
 
     def problems(self, lcm_buses) -> list[tuple[str, str]]:
         """(field, problem) for every invalid value (field relative to `operator`); empty when valid."""
         found = []
         if self.source not in OPERATOR_SOURCES:
             found.append(("source", f"must be one of {OPERATOR_SOURCES}, got {self.source!r}"))
-        if self.source != "none" and self.lcm_bus not in lcm_buses:
+        if self.source in LCM_SOURCES and self.lcm_bus not in lcm_buses:
             found.append(("lcm_bus", f"no bus named {self.lcm_bus!r} in lcm_buses ({sorted(lcm_buses)})"))
         if not self.channel:
             found.append(("channel", "must name an LCM channel"))
         if not (math.isfinite(self.period) and self.period > 0):
             found.append(("period", f"must be a finite number > 0 s, got {self.period}"))
+        panel = self.meshcat
+        if not (math.isfinite(panel.max_speed) and panel.max_speed > 0):
+            found.append(("meshcat.max_speed", f"must be a finite number > 0 m/s, got {panel.max_speed}"))
+        if not (math.isfinite(panel.step) and 0 < panel.step <= panel.max_speed):
+            found.append(("meshcat.step", f"must be in (0, max_speed] m/s, got {panel.step}"))
+        if panel.frame not in REMOTE_FRAMES:
+            found.append(("meshcat.frame", f"must be one of {REMOTE_FRAMES}, got {panel.frame!r}"))
         remote = self.remote
         if not (math.isfinite(remote.max_speed) and remote.max_speed > 0):
             found.append(("remote.max_speed", f"must be a finite number > 0 m/s, got {remote.max_speed}"))

@@ -19,8 +19,19 @@ SCENE_MODELS = {
     "fixed_obstacle": ("fixed_obstacle.sdf", "block"),
     "soft_obstacle": ("soft_obstacle.sdf", "base"),
     "hand": ("hand.sdf", "palm"),
+    "estop_button": ("estop_button.sdf", "post"),
 }
 SOFT_OBSTACLE_STIFFNESS = 400.0  # [N/m] spring holding the soft obstacle's plate at rest.
+# The E-stop button's plunger (joint "travel", its position how far it is pushed in [m]): a spring
+# of this stiffness holds it out against its stop with the force of ESTOP_BUTTON_PRELOAD of
+# compression; the button trips when the plunger is in ESTOP_BUTTON_TRIP_TRAVEL, 4 mm short of its
+# end stop. The spring then pushes back with 400 * 0.013 = 5.2 N, of which the plunger's own weight
+# (0.05 kg) carries 0.5 N: a foot trips it with 4.7 N, under a third of the teleoperated foot's
+# default force bound (15 N), so an operator can trip it without reaching the bound.
+ESTOP_BUTTON_JOINT = "travel"
+ESTOP_BUTTON_STIFFNESS = 400.0  # [N/m]
+ESTOP_BUTTON_PRELOAD = 0.005  # [m]
+ESTOP_BUTTON_TRIP_TRAVEL = 0.008  # [m]
 TRUNK_TOP_Z = robot.TRUNK_HALF_EXTENTS[2]  # [m] top face of the trunk box above the trunk origin.
 
 
@@ -66,4 +77,7 @@ def add_scene_object(plant: MultibodyPlant, obj: SceneObject, X_WB_initial: Rigi
         plant.GetJointByName("hinge", model).set_default_angle(obj.initial_angle)
     if obj.kind == "soft_obstacle":
         plant.AddForceElement(PrismaticSpring(plant.GetJointByName("slide", model), 0.0, SOFT_OBSTACLE_STIFFNESS))
+    if obj.kind == "estop_button":
+        plunger = plant.GetJointByName(ESTOP_BUTTON_JOINT, model)
+        plant.AddForceElement(PrismaticSpring(plunger, -ESTOP_BUTTON_PRELOAD, ESTOP_BUTTON_STIFFNESS))
     return model
