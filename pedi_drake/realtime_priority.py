@@ -1,13 +1,10 @@
 """Real-time scheduling for a wall-clock loop: every thread of this process under SCHED_FIFO.
 
 A 2 ms control loop on a general-purpose kernel is late whenever the scheduler gives its core to
-something else: another process, a compiler, a browser. Measured on this project's 2-core
-machines with the controller and the simulator bridge in two processes, nearly all deadline
-misses of a real-time run were such preemptions (2 to 14 ms, at random times, not tied to any
-work of the loop), and they grow with the machine's load. Under SCHED_FIFO a thread runs until
-it blocks or a higher real-time priority wants the core; ordinary processes wait. Robot software
+something else: another process, a compiler, a browser. Under SCHED_FIFO a thread runs until it
+blocks or a higher real-time priority wants the core; ordinary processes wait. Robot software
 does the same (ros2_control's controller manager asks for SCHED_FIFO priority 50 and warns when
-the OS refuses).
+the OS refuses). What it did to this project's loop, measured, is in go1_driver/README.md.
 
 Every thread of the process is raised, not only the caller: the driver's receive thread must
 stamp status messages promptly, and the threads share the GIL, so a normal-priority thread

@@ -63,8 +63,9 @@ class Go1DriverConfig:
     # SCHED_FIFO priority [1-99] of every thread of a wall-clock loop: the driver's (controller
     # side) and the simulator bridge's (robot side); 0: the OS's normal scheduling. Where the OS
     # refuses (no root, CAP_SYS_NICE or `ulimit -r`), the loop runs at normal priority with a
-    # warning, and result.json says which it got (see pedi_drake.realtime_priority).
-    realtime_priority: int = 50
+    # warning, and result.json says which it got (see pedi_drake.realtime_priority). Off by
+    # default: with it the first tick of a run has been measured a second late (go1_driver/README.md).
+    realtime_priority: int = 0
     # Safety layer bounds and watchdogs.
     safety: Go1SafetyConfig = dataclasses.field(default_factory=Go1SafetyConfig)
     # The simulator bridge's latency and message drops.
