@@ -10,7 +10,9 @@ from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 from pedi_drake import robot
 from pedi_drake.control import tasks
 from pedi_drake.control.robot_model import ControllerModel
+from pedi_drake.polygon import polygon_halfplanes
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.vector3 import orientation_error_W
 
 
 def random_state(rng):
@@ -135,7 +137,7 @@ def test_capture_point_rows_predict_capture_point():
     s = model.update(base, q, qd)
     layout = layout_for(model)
     balance = tasks.CapturePointBalance(horizon=0.05)
-    N, d = tasks.polygon_halfplanes(np.array([[0.0, -0.05], [0.2, -0.05], [0.2, 0.05], [0.0, 0.05]]))
+    N, d = polygon_halfplanes(np.array([[0.0, -0.05], [0.2, -0.05], [0.2, 0.05], [0.0, 0.05]]))
     row = balance.rows(s, layout, N, d, ground_height=0.0)
     vdot = rng.normal(size=model.nv)
     x = np.concatenate([vdot, np.zeros(3 * model.num_contacts)])
@@ -147,7 +149,7 @@ def test_capture_point_rows_predict_capture_point():
 
 def test_polygon_halfplanes_contain_inside_points_only():
     square = np.array([[1.0, 1.0], [-1.0, 1.0], [0.0, 0.0], [1.0, -1.0], [-1.0, -1.0]])
-    N, d = tasks.polygon_halfplanes(square, margin=0.1)
+    N, d = polygon_halfplanes(square, margin=0.1)
     assert len(d) == 4
     assert np.all(N @ [0.85, 0.0] <= d)
     assert not np.all(N @ [0.95, 0.0] <= d)
@@ -157,7 +159,7 @@ def test_orientation_error_is_the_rotation_vector():
     R = RotationMatrix(RollPitchYaw(0.2, -0.1, 0.5))
     theta = np.array([0.1, -0.2, 0.15])
     R_ref = RotationMatrix(AngleAxis(np.linalg.norm(theta), theta / np.linalg.norm(theta))).multiply(R)
-    np.testing.assert_allclose(tasks.orientation_error_W(R_ref.matrix(), R.matrix()), theta, atol=1e-12)
+    np.testing.assert_allclose(orientation_error_W(R_ref.matrix(), R.matrix()), theta, atol=1e-12)
 
 
 def test_joint_limit_bounds_keep_joints_inside_over_the_horizon():

@@ -7,7 +7,6 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
-from pedi_drake.control import tasks
 from pedi_drake.control.references import safety_polygon_vector, safety_polygon_vertices_W
 from pedi_drake.control.whole_body_controller import diagnostics_layout
 from pedi_drake.estimation.base_state import BaseState
@@ -16,6 +15,7 @@ from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.phases import MissionEnvironment, stance_safety_polygon
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.spec import MissionSpec, StandUp
+from pedi_drake.polygon import polygon_halfplanes, shrink_polygon
 from pedi_drake.run import run
 from pedi_drake.scenario import load_scenario
 
@@ -35,12 +35,12 @@ def test_shrunk_triangle_has_every_edge_moved_in_by_the_margin():
     # The 3-4-5 triangle's edges moved in by 0.03 m: legs at x = y = 0.03, the hypotenuse
     # 0.3 x + 0.4 y = 0.12 - 0.5 * 0.03.
     expected = np.array([[0.03, 0.03], [0.31, 0.03], [0.03, 0.24]])
-    np.testing.assert_allclose(tasks.shrink_polygon(triangle, MARGIN), expected, atol=1e-12)
+    np.testing.assert_allclose(shrink_polygon(triangle, MARGIN), expected, atol=1e-12)
 
 
 def test_a_margin_beyond_the_inradius_leaves_no_polygon():
     triangle = np.array([[0.0, 0.0], [0.4, 0.0], [0.0, 0.3]])  # inradius 0.1 m
-    assert tasks.shrink_polygon(triangle, 0.11).shape == (0, 2)
+    assert shrink_polygon(triangle, 0.11).shape == (0, 2)
 
 
 def test_three_foot_stance_polygon_is_the_feet_triangle_shrunk_and_turned_with_the_trunk():
@@ -51,7 +51,7 @@ def test_three_foot_stance_polygon_is_the_feet_triangle_shrunk_and_turned_with_t
     np.testing.assert_allclose(x[3], 0.6, atol=1e-12)  # the trunk's yaw
     vertices_W = safety_polygon_vertices_W(x)
     feet_xy = np.array([view.foot_W(leg)[:2] for leg in ("FL", "RR", "RL")])
-    N, d = tasks.polygon_halfplanes(feet_xy)
+    N, d = polygon_halfplanes(feet_xy)
     slack = d[None, :] - vertices_W @ N.T  # (vertex, edge) distance inside each feet edge [m]
     # Each vertex lies on two of the moved edges and well inside the third.
     np.testing.assert_allclose(np.sort(slack, axis=1)[:, :2], MARGIN, atol=1e-12)
@@ -65,7 +65,7 @@ def test_four_foot_stance_polygon_is_the_support_rectangle_shrunk_by_the_margin(
     x = stance_safety_polygon(view, MissionEnvironment(None), np.ones(4), MARGIN)
     assert x[0] == 4
     feet_xy = np.array([view.foot_W(leg)[:2] for leg in robot.LEG_NAMES])
-    np.testing.assert_allclose(safety_polygon_vertices_W(x), tasks.shrink_polygon(feet_xy, MARGIN), atol=1e-12)
+    np.testing.assert_allclose(safety_polygon_vertices_W(x), shrink_polygon(feet_xy, MARGIN), atol=1e-12)
 
 
 def test_fewer_than_three_supports_select_the_controllers_default():

@@ -7,7 +7,7 @@ import pytest
 
 from pedi_drake import robot
 from pedi_drake.benchmarks.demos import demo_scenario, run_demo
-from pedi_drake.control import references, tasks
+from pedi_drake.control import references
 from pedi_drake.control.config import WholeBodyControllerConfig
 from pedi_drake.control.stacks import ResolvedInputs
 from pedi_drake.control.whole_body_controller import (
@@ -20,6 +20,7 @@ from pedi_drake.control.whole_body_controller import (
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.scenario import RobotConfig
 from pedi_drake.station.initial_state import initial_trunk_pose
+from pedi_drake.vector3 import orientation_error_W
 
 # The tick implementations every closed-loop property must hold with: the compiled tick (the
 # default) and the Python reference with DAQP. The reference with pedi_drake.control.dense_qp equals
@@ -196,7 +197,7 @@ def test_hqp_takes_the_optional_5d_foot_task():
         0
     ]
     R_WC, _, _ = controller.model.calf_orientation(0)
-    rotation = tasks.orientation_error_W(R_WC, np.eye(3)) + np.array([0.05, -0.05, 0.0])
+    rotation = orientation_error_W(R_WC, np.eye(3)) + np.array([0.05, -0.05, 0.0])
     legs = references.leg_reference_vector({"FR": (references.LEG_MODE_FOOT_POSE, p_WF, np.zeros(3), rotation)})
     controller.leg_reference_port.FixValue(context, legs)
     _, diag = tick(controller, context, 1)

@@ -213,6 +213,10 @@ def solve_strict(
     h_all = np.empty(capacity)
     mh = 0
     num_verified = 0
+    # G_all Z for the first `gz_rows` carried rows, kept across levels: when Z shrinks to Z N, so
+    # does each row (GZ N), instead of a new G_all Z over all the rows and all n columns.
+    GZ_all = np.empty((capacity, n))
+    gz_rows = 0
     Y = np.empty((n, n))
     N = np.empty((n, n))
     R = np.empty((n, n))
@@ -243,7 +247,10 @@ def solve_strict(
                 _min_norm_least_squares(Az, rz, Y, rank, R, has_R, z)
             solved = True
         else:
-            GZ = G_all[:mh] @ Z
+            if gz_rows < mh:
+                GZ_all[gz_rows:mh, :nz] = G_all[gz_rows:mh] @ Z
+                gz_rows = mh
+            GZ = GZ_all[:mh, :nz]
             upper = np.empty(mh + ms)
             upper[:mh] = h_all[:mh] - G_all[:mh] @ x
             for i in range(num_verified):
@@ -298,7 +305,10 @@ def solve_strict(
         if m and nz and level + 1 < num_levels:
             if not have_split:
                 rank, has_R, ok = _row_space_split(Az, rank_tolerance, Y, N, R)
-            Z = Z @ np.ascontiguousarray(N[:nz, : nz - rank])
+            null_space = np.ascontiguousarray(N[:nz, : nz - rank])
+            Z = Z @ null_space
+            if gz_rows:
+                GZ_all[:gz_rows, : nz - rank] = np.ascontiguousarray(GZ_all[:gz_rows, :nz]) @ null_space
             nz = nz - rank
     for level in range(num_levels):
         e0, e1 = eq_start[level], eq_start[level + 1]

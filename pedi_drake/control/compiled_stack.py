@@ -24,6 +24,7 @@ from pedi_drake.control.config import WholeBodyControllerConfig
 from pedi_drake.control.stacks import SLIDING_SPEED
 from pedi_drake.control.tasks import GRAVITY
 from pedi_drake.jit import kernel, new_record
+from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rotation_matrix_kernel
 
 STACK_PAPER000, STACK_PAPER003 = 0, 1
 # Leg reference modes (references.py).
@@ -142,107 +143,6 @@ def table_dtype(nv: int, nc: int) -> np.dtype:
 
 # ------------------------------------------------------------------------------------------------
 # Small geometry (tasks.py's scalar forms).
-
-
-@kernel
-def orientation_error_W(R_ref: np.ndarray, R: np.ndarray, out: np.ndarray) -> None:
-    """Rotation vector of R_ref R^T (world frame) [rad] into out (3,) (tasks.orientation_error_W)."""
-    E = R_ref @ R.T
-    cos_angle = min(max((E[0, 0] + E[1, 1] + E[2, 2] - 1.0) / 2.0, -1.0), 1.0)
-    angle = math.acos(cos_angle)
-    out[0] = (E[2, 1] - E[1, 2]) / 2.0
-    out[1] = (E[0, 2] - E[2, 0]) / 2.0
-    out[2] = (E[1, 0] - E[0, 1]) / 2.0
-    if angle >= 1e-9:
-        scale = angle / math.sin(angle)
-        for i in range(3):
-            out[i] *= scale
-
-
-@kernel
-def axis_angle_matrix(axis_angle: np.ndarray) -> np.ndarray:
-    """Rodrigues: the rotation by |axis_angle| [rad] about its direction (vector3.axis_angle_matrix)."""
-    angle = math.sqrt(axis_angle[0] ** 2 + axis_angle[1] ** 2 + axis_angle[2] ** 2)
-    if angle < 1e-12:
-        return np.eye(3)
-    x, y, z = axis_angle[0] / angle, axis_angle[1] / angle, axis_angle[2] / angle
-    K = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
-
-
-@kernel
-def rotation_matrix_wxyz(quaternion: np.ndarray) -> np.ndarray:
-    """The rotation matrix of a quaternion (w, x, y, z), normalised here (vector3.rotation_matrix_wxyz)."""
-    w, x, y, z = quaternion[0], quaternion[1], quaternion[2], quaternion[3]
-    s = 2.0 / (w * w + x * x + y * y + z * z)
-    xx, yy, zz = x * x * s, y * y * s, z * z * s
-    xy, xz, yz = x * y * s, x * z * s, y * z * s
-    wx, wy, wz = w * x * s, w * y * s, w * z * s
-    return np.array(
-        [
-            [1.0 - yy - zz, xy - wz, xz + wy],
-            [xy + wz, 1.0 - xx - zz, yz - wx],
-            [xz - wy, yz + wx, 1.0 - xx - yy],
-        ]
-    )
-
-
-@kernel
-def polygon_halfplanes(points: np.ndarray, margin: float, N: np.ndarray, d: np.ndarray) -> int:
-    """N p <= d (rows written into N (k, 2), d (k,)) for the convex hull of `points` (k, 2) [m]
-    shrunk by `margin` [m]; returns the number of rows (tasks.polygon_halfplanes)."""
-    k = points.shape[0]
-    # Lexicographic sort (x, then y), insertion sort: at most eight points.
-    order = np.arange(k)
-    for i in range(1, k):
-        j = i
-        while j > 0:
-            a, b = order[j - 1], order[j]
-            if points[a, 0] > points[b, 0] or (points[a, 0] == points[b, 0] and points[a, 1] > points[b, 1]):
-                order[j - 1], order[j] = b, a
-                j -= 1
-            else:
-                break
-    hull = np.empty((2 * k + 1, 2))
-    count = 0
-    if k <= 2:
-        for i in range(k):
-            hull[i] = points[order[i]]
-        count = k
-    else:
-        # Andrew's monotone chain: the lower chain, then the upper one (each without its last point).
-        chain = np.empty((k, 2))
-        for upper in range(2):
-            length = 0
-            for step in range(k):
-                p = points[order[step]] if upper == 0 else points[order[k - 1 - step]]
-                while length >= 2:
-                    ax, ay = chain[length - 2, 0], chain[length - 2, 1]
-                    bx, by = chain[length - 1, 0], chain[length - 1, 1]
-                    if (bx - ax) * (p[1] - ay) - (by - ay) * (p[0] - ax) > 1e-12:
-                        break
-                    length -= 1
-                chain[length, 0] = p[0]
-                chain[length, 1] = p[1]
-                length += 1
-            for i in range(length - 1):
-                hull[count] = chain[i]
-                count += 1
-    rows = 0
-    for i in range(count):
-        ax, ay = hull[i, 0], hull[i, 1]
-        j = i + 1 if i + 1 < count else 0
-        bx, by = hull[j, 0], hull[j, 1]
-        nx, ny = by - ay, ax - bx
-        length = math.hypot(nx, ny)
-        if length < 1e-12:
-            continue
-        nx, ny = nx / length, ny / length
-        N[rows, 0] = nx
-        N[rows, 1] = ny
-        d[rows] = nx * ax + ny * ay - margin
-        rows += 1
-    return rows
 
 
 @kernel
@@ -444,8 +344,8 @@ def build_levels(
 
     # Trunk orientation and position (paper003: a level each; paper000: with the legs in "pose").
     error = np.empty(3)
-    R_ref = rotation_matrix_wxyz(body[3:7])
-    orientation_error_W(R_ref, s.R_WB, error)
+    R_ref = rotation_matrix_kernel(body[3:7])
+    orientation_error_kernel(R_ref, s.R_WB, error)
     kp, kd = p.trunk_orientation_gains[0], p.trunk_orientation_gains[1]
     row = _pd_row_targets(
         s.J_trunk[:3], s.v, error, body[13:16], body[16:19], kp, kd, s.Jdot_v_trunk[:3], eq_A, eq_b, row
@@ -479,7 +379,7 @@ def build_levels(
             )
             if mode == _FOOT_POSE:
                 calf_error = np.empty(3)
-                orientation_error_W(axis_angle_matrix(block[7:10]), s.R_WC[i], calf_error)
+                orientation_error_kernel(axis_angle_kernel(block[7:10]), s.R_WC[i], calf_error)
                 kp, kd = p.calf_gains[0], p.calf_gains[1]
                 for k in range(2):
                     rate = 0.0

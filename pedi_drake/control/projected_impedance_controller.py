@@ -64,7 +64,7 @@ from pedi_drake.exceptions import ConfigError, QpInfeasible
 from pedi_drake.go1_command import held_command
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
 from pedi_drake.prongs import ProngDesign
-from pedi_drake.vector3 import axis_angle_matrix, cross3
+from pedi_drake.vector3 import axis_angle_matrix, cross3, orientation_error_W
 
 # Force-estimate filter state: per leg, the last impedance error rate (3), the filtered error
 # acceleration (3), and whether the leg had a foot impedance at the last tick (1).
@@ -278,7 +278,7 @@ class ProjectedImpedanceController(LeafSystem):
         c = self.config
         R_WC, J_w, bias_w = self.model.calf_orientation(i)
         R_ref = axis_angle_matrix(ref.acceleration)
-        error = -tasks.orientation_error_W(R_ref, R_WC)  # e = x - x_ref, as a rotation vector
+        error = -orientation_error_W(R_ref, R_WC)  # e = x - x_ref, as a rotation vector
         return pd.ImpedanceTask(
             f"calf_{leg}",
             J_w[:2],
@@ -297,7 +297,7 @@ class ProjectedImpedanceController(LeafSystem):
         w, v = s.V_trunk[:3], s.V_trunk[3:]
         angular = (
             body.alpha
-            + c.trunk_orientation.kp * tasks.orientation_error_W(body.R, s.R_WB)
+            + c.trunk_orientation.kp * orientation_error_W(body.R, s.R_WB)
             + c.trunk_orientation.kd * (body.w - w)
         )
         linear = body.a + c.trunk_position.kp * (body.p - s.p_WB) + c.trunk_position.kd * (body.v - v)
@@ -484,7 +484,7 @@ class ProjectedImpedanceController(LeafSystem):
         diag[self.diag["consecutive_failures"]] = 0.0
         diag[self.diag["capture_point"]] = self.balance.capture_point(s, ground)[0]
         diag[self.diag["trunk_position_error"]] = body.p - s.p_WB
-        diag[self.diag["trunk_orientation_error"]] = tasks.orientation_error_W(body.R, s.R_WB)
+        diag[self.diag["trunk_orientation_error"]] = orientation_error_W(body.R, s.R_WB)
         foot_errors = np.zeros(4)
         for i, r in foot_rows.items():
             foot_errors[i] = np.linalg.norm(stacked.error[r])

@@ -26,16 +26,14 @@ from pedi_drake import robot
 from pedi_drake.control import compiled_projected_dynamics as cpd
 from pedi_drake.control import references
 from pedi_drake.control.compiled_stack import (
-    axis_angle_matrix,
     capture_point,
-    orientation_error_W,
-    rotation_matrix_wxyz,
 )
 from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.tasks import GRAVITY
 from pedi_drake.control.whole_body_tick import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED, held_command
 from pedi_drake.estimation.leg_odometry import _foot_kinematics_kernel, _offsets
 from pedi_drake.jit import kernel, new_record
+from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rotation_matrix_kernel
 
 # Slices of the diagnostics vector the tick writes, in this order (projected_diagnostics_layout).
 DIAGNOSTICS_FIELDS = (
@@ -281,7 +279,7 @@ def _impedance_tasks(tp, s, leg_x, held, foot_row, J, Jdot_v, error, error_rate,
             row += 3
             if mode == _FOOT_POSE:
                 # The calf's roll and pitch (rotation about world x and y) towards the reference.
-                orientation_error_W(axis_angle_matrix(block[7:10]), s.R_WC[i], rotation_error)
+                orientation_error_kernel(axis_angle_kernel(block[7:10]), s.R_WC[i], rotation_error)
                 for k in range(2):
                     rate = 0.0
                     for j in range(nv):
@@ -311,7 +309,7 @@ def _lower_tasks(tp, s, body, on_prongs, J, Jdot_v, desired, start) -> int:
     stacked rows; returns the number of levels (start[:levels + 1] their rows)."""
     nv = tp.nv
     orientation = np.empty(3)
-    orientation_error_W(rotation_matrix_wxyz(body[3:7]), s.R_WB, orientation)
+    orientation_error_kernel(rotation_matrix_kernel(body[3:7]), s.R_WB, orientation)
     kp_r, kd_r = tp.trunk_orientation_gains[0], tp.trunk_orientation_gains[1]
     kp_p, kd_p = tp.trunk_position_gains[0], tp.trunk_position_gains[1]
     angular = np.empty(3)
@@ -616,7 +614,7 @@ def projected_impedance_tick(
     capture_point(s, ground, diag[d[_CP] : d[_CP] + 2])
     for k in range(3):
         diag[d[_TRUNK_P] + k] = body[k] - s.p_WB[k]
-    orientation_error_W(rotation_matrix_wxyz(body[3:7]), s.R_WB, diag[d[_TRUNK_R] : d[_TRUNK_R] + 3])
+    orientation_error_kernel(rotation_matrix_kernel(body[3:7]), s.R_WB, diag[d[_TRUNK_R] : d[_TRUNK_R] + 3])
     for i in range(4):
         row = foot_row[i]
         diag[d[_FEET] + i] = _norm3(error, row) if row >= 0 else 0.0

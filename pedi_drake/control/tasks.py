@@ -19,13 +19,13 @@ Acceleration tasks follow Eq. 1 of paper 000: J vdot = a_ref + Kp (x_ref - x) + 
 
 import dataclasses
 import functools
-import math
 
 import numpy as np
 
 from pedi_drake.control.hqp import EqualityTask, InequalityTask
 from pedi_drake.control.robot_model import RobotSnapshot
 from pedi_drake.friction import friction_pyramid_edges
+from pedi_drake.vector3 import orientation_error_W
 
 GRAVITY = 9.81  # [m/s^2]
 
@@ -212,78 +212,6 @@ class JointLimits:
         return InequalityTask("joint_limits", layout.joint_selector, h, hard=True)
 
 
-def convex_hull_ccw(points_xy: np.ndarray) -> np.ndarray:
-    """Vertices of the convex hull of `points_xy` (k, 2), counter-clockwise (Andrew's monotone chain)."""
-    return np.array(_hull_vertices(points_xy))
-
-
-def _hull_vertices(points_xy: np.ndarray) -> list[tuple[float, float]]:
-    # Python floats: the chain below does scalar arithmetic, slow on numpy scalars.
-    pts = sorted(map(tuple, np.asarray(points_xy, float).tolist()))
-    if len(pts) <= 2:
-        return pts
-
-    def half(sequence):
-        chain: list[tuple[float, float]] = []
-        for p in sequence:
-            while len(chain) >= 2:
-                (ax, ay), (bx, by) = chain[-2], chain[-1]
-                if (bx - ax) * (p[1] - ay) - (by - ay) * (p[0] - ax) > 1e-12:
-                    break
-                chain.pop()
-            chain.append(p)
-        return chain
-
-    lower, upper = half(pts), half(reversed(pts))
-    return lower[:-1] + upper[:-1]
-
-
-def polygon_halfplanes(vertices_xy: np.ndarray, margin: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """(N, d) with N p <= d: the convex hull of `vertices_xy` (k >= 3, [m]) shrunk by `margin` [m]."""
-    hull = _hull_vertices(vertices_xy)
-    normals, offsets = [], []
-    # Scalar maths over the few edges (at most 4 feet and the prongs): a quarter of the numpy cost.
-    for (ax, ay), (bx, by) in zip(hull, hull[1:] + hull[:1], strict=True):
-        nx, ny = by - ay, ax - bx  # outward for a counter-clockwise ring
-        length = math.hypot(nx, ny)
-        if length < 1e-12:
-            continue  # coincident points: no edge
-        nx, ny = nx / length, ny / length
-        normals.append((nx, ny))
-        offsets.append(nx * ax + ny * ay - margin)
-    return np.array(normals).reshape(-1, 2), np.array(offsets)
-
-
-@functools.lru_cache(maxsize=16)
-def _edge_pairs(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Indices (i, j) of every pair i < j of n edges (np.triu_indices costs ~0.1 ms a call)."""
-    i, j = np.triu_indices(n, k=1)
-    i.flags.writeable = j.flags.writeable = False
-    return i, j
-
-
-def shrink_polygon(points_xy: np.ndarray, margin: float) -> np.ndarray:
-    """Vertices (k, 2), counter-clockwise, of the convex hull of `points_xy` [m] shrunk by `margin` [m].
-
-    Every edge moves inwards by `margin`; the result is the intersection of those half-planes
-    (an edge shorter than the shrink drops out). Empty (0, 2) when nothing is left.
-    """
-    N, d = polygon_halfplanes(points_xy, margin)
-    i, j = _edge_pairs(len(d))
-    det = N[i, 0] * N[j, 1] - N[i, 1] * N[j, 0]
-    parallel = np.abs(det) < 1e-12
-    det = np.where(parallel, 1.0, det)
-    # Cramer's rule for every pair of edge lines N_i p = d_i, N_j p = d_j.
-    corners = np.column_stack([(d[i] * N[j, 1] - d[j] * N[i, 1]) / det, (N[i, 0] * d[j] - N[j, 0] * d[i]) / det])[
-        ~parallel
-    ]
-    inside = np.all(corners @ N.T <= d + 1e-9, axis=1)
-    corners = corners[inside]
-    if len(corners) < 3:
-        return np.zeros((0, 2))
-    return convex_hull_ccw(corners)
-
-
 @dataclasses.dataclass
 class CapturePointBalance:
     """Keeps the capture point xi = c + cdot / omega inside a polygon N xi <= d (paper 000, task 2).
@@ -317,18 +245,6 @@ class PdGains:
 
     kp: float
     kd: float
-
-
-def orientation_error_W(R_ref: np.ndarray, R: np.ndarray) -> np.ndarray:
-    """Rotation vector of R_ref R^T (world frame) [rad]: the rotation taking R to R_ref."""
-    E = R_ref @ R.T
-    # Scalar maths: numpy's ufuncs cost microseconds each on a 3x3 and this runs twice a tick.
-    cos_angle = min(max((E[0, 0] + E[1, 1] + E[2, 2] - 1.0) / 2.0, -1.0), 1.0)
-    angle = math.acos(cos_angle)
-    axis_sin = np.array([E[2, 1] - E[1, 2], E[0, 2] - E[2, 0], E[1, 0] - E[0, 1]]) / 2.0
-    if angle < 1e-9:
-        return axis_sin
-    return axis_sin * (angle / math.sin(angle))
 
 
 @dataclasses.dataclass

@@ -43,7 +43,9 @@ from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, PediError, QpInfeasible
 from pedi_drake.go1_command import COMMAND_SIZE, held_command
 from pedi_drake.jit import new_record
+from pedi_drake.polygon import polygon_halfplanes
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.vector3 import orientation_error_W
 
 STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0
 # Solved with sliding contacts' tangential no-motion below the force limits (see StackBuilder.levels).
@@ -273,9 +275,9 @@ class WholeBodyController(LeafSystem):
         else:
             ground = 0.0
         if polygon_W is not None:
-            N, d = tasks.polygon_halfplanes(polygon_W, 0.0)
+            N, d = polygon_halfplanes(polygon_W, 0.0)
         elif num_loaded >= 3:
-            N, d = tasks.polygon_halfplanes(snapshot.p_contacts[loaded, :2], c.safety_margin)
+            N, d = polygon_halfplanes(snapshot.p_contacts[loaded, :2], c.safety_margin)
         else:
             N, d = np.zeros((0, 2)), np.zeros(0)
         inputs = ResolvedInputs(
@@ -321,7 +323,7 @@ class WholeBodyController(LeafSystem):
         xi, _ = self.builder.balance.capture_point(snapshot, ground)
         diag[self.diag["capture_point"]] = xi
         diag[self.diag["trunk_position_error"]] = inputs.body.p - snapshot.p_WB
-        diag[self.diag["trunk_orientation_error"]] = tasks.orientation_error_W(inputs.body.R, snapshot.R_WB)
+        diag[self.diag["trunk_orientation_error"]] = orientation_error_W(inputs.body.R, snapshot.R_WB)
         foot_errors = np.zeros(4)
         for i, leg in enumerate(inputs.legs):
             if leg.mode == references.LEG_MODE_FOOT:

@@ -25,14 +25,13 @@ from pedi_drake.control.compiled_stack import (
     build_levels,
     capture_point,
     new_record,
-    orientation_error_W,
-    polygon_halfplanes,
-    rotation_matrix_wxyz,
     torque_map,
 )
 from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.references import SAFETY_POLYGON_MAX_VERTICES
 from pedi_drake.jit import kernel
+from pedi_drake.polygon import halfplanes_kernel
+from pedi_drake.vector3 import orientation_error_kernel, rotation_matrix_kernel
 
 STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT, STATUS_CONTACTS_RELAXED = 0.0, 1.0, 2.0, 3.0
 # Slices of the diagnostics vector, in this order (whole_body_controller.DIAGNOSTICS_FIELDS).
@@ -317,7 +316,7 @@ def whole_body_tick(
             vx, vy = polygon_x[4 + 2 * k], polygon_x[5 + 2 * k]
             vertices[k, 0] = polygon_x[1] + (vx * c - vy * sn)
             vertices[k, 1] = polygon_x[2] + (vx * sn + vy * c)
-        rows = polygon_halfplanes(vertices, 0.0, polygon_N, polygon_d)
+        rows = halfplanes_kernel(vertices, 0.0, polygon_N, polygon_d)
     elif num_loaded >= 3:
         points = np.empty((num_loaded, 2))
         k = 0
@@ -326,7 +325,7 @@ def whole_body_tick(
                 points[k, 0] = s.p_contacts[i, 0]
                 points[k, 1] = s.p_contacts[i, 1]
                 k += 1
-        rows = polygon_halfplanes(points, tp.safety_margin, polygon_N, polygon_d)
+        rows = halfplanes_kernel(points, tp.safety_margin, polygon_N, polygon_d)
 
     n = nv + 3 * nc
     T = np.empty((12, n))
@@ -386,7 +385,7 @@ def whole_body_tick(
     capture_point(s, ground, diag[d[_CP] : d[_CP] + 2])
     for k in range(3):
         diag[d[_TRUNK_P] + k] = body[k] - s.p_WB[k]
-    orientation_error_W(rotation_matrix_wxyz(body[3:7]), s.R_WB, diag[d[_TRUNK_R] : d[_TRUNK_R] + 3])
+    orientation_error_kernel(rotation_matrix_kernel(body[3:7]), s.R_WB, diag[d[_TRUNK_R] : d[_TRUNK_R] + 3])
     for i in range(4):
         error = 0.0
         if round(leg_x[12 * i]) == _FOOT_MODE:

@@ -40,6 +40,7 @@ from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.estimation.leg_odometry import _foot_kinematics_kernel, _offsets
 from pedi_drake.jit import kernel
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.vector3 import rotation_matrix_kernel
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
 NUM_STATES = 18
@@ -66,7 +67,7 @@ def _imu_kernel(imu):
     """(usable, unit quaternion (w >= 0), R_WB (3, 3)) of a go1.imu vector (10,).
 
     Not usable: a non-finite value, or a quaternion of norm < 0.5 (all zeros before the first
-    message). The rotation is vector3.rotation_matrix_wxyz's formula.
+    message).
     """
     quaternion = np.zeros(4)
     R = np.eye(3)
@@ -79,15 +80,7 @@ def _imu_kernel(imu):
     signed = norm if imu[0] >= 0.0 else -norm
     for i in range(4):
         quaternion[i] = imu[i] / signed
-    w, x, y, z = quaternion[0], quaternion[1], quaternion[2], quaternion[3]
-    s = 2.0 / (w * w + x * x + y * y + z * z)
-    xx, yy, zz = x * x * s, y * y * s, z * z * s
-    xy, xz, yz = x * y * s, x * z * s, y * z * s
-    wx, wy, wz = w * x * s, w * y * s, w * z * s
-    R[0, 0], R[0, 1], R[0, 2] = 1.0 - yy - zz, xy - wz, xz + wy
-    R[1, 0], R[1, 1], R[1, 2] = xy + wz, 1.0 - xx - zz, yz - wx
-    R[2, 0], R[2, 1], R[2, 2] = xz - wy, yz + wx, 1.0 - xx - yy
-    return True, quaternion, R
+    return True, quaternion, rotation_matrix_kernel(quaternion)
 
 
 @dataclasses.dataclass(frozen=True)

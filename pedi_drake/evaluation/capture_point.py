@@ -9,8 +9,8 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.control.references import safety_polygon_vertices_W
-from pedi_drake.control.tasks import polygon_halfplanes
 from pedi_drake.control.whole_body_controller import diagnostics_layout
+from pedi_drake.polygon import polygon_halfplanes
 
 
 def polygon_margin(point_xy: np.ndarray, vertices_W: np.ndarray) -> float:

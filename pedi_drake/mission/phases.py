@@ -14,7 +14,6 @@ from pydrake.math import RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
 from pedi_drake.control.references import safety_polygon_vector
-from pedi_drake.control.tasks import orientation_error_W, shrink_polygon
 from pedi_drake.exceptions import UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
@@ -32,6 +31,7 @@ from pedi_drake.mission.progress import (
 )
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_foot import TeleopFootRunner
+from pedi_drake.polygon import shrink_polygon
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.trajectory import (
     CircularPath,
@@ -40,6 +40,7 @@ from pedi_drake.trajectory import (
     QuinticOrientationSegment,
     QuinticSegment,
 )
+from pedi_drake.vector3 import orientation_error_W
 
 LYING_HEIGHT = 0.13  # [m] trunk height when lying down under control (legs folded, off the limits)
 CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
