@@ -318,6 +318,7 @@ def test_every_progress_field_is_either_shared_or_duplicated_by_copy():
         "operator_mode",
         "teleop_pending",
         "switches",
+        "push",  # a frozen FootPush: shared
     }
 
 

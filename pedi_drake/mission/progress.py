@@ -155,6 +155,23 @@ class ModeSwitch:
         return self  # a value
 
 
+@dataclasses.dataclass(frozen=True)
+class FootPush:
+    """What the phase driving a lifted foot (teleop_foot, press) reports at each update: the
+    direction the live SUF is asked about, and the operator's haptic feedback.
+
+    A value (a new one replaces it): shared by the copies of a progress."""
+
+    leg: str
+    force_W: np.ndarray  # (3,) estimated force of the environment on the foot, bias removed, world [N]
+    direction_W: np.ndarray | None  # (3,) unit direction of that force for the balance bound, world
+    limit: float  # the balance bound's limit along direction_W [N]; nan when it is off or waits
+    bound_active: bool  # the balance bound changed the foot's motion at this update
+
+    def __deepcopy__(self, memo) -> "FootPush":
+        return self
+
+
 def _shallow(obj):
     """A new object of obj's class with the same attributes (copy.copy without its protocol's cost)."""
     clone = object.__new__(type(obj))
@@ -201,6 +218,8 @@ class MissionProgress:
     operator_mode: int = 0
     teleop_pending: bool = False
     switches: list[ModeSwitch] = dataclasses.field(default_factory=list)
+    # The running phase's lifted-foot push (None when no phase drives a foot against anything).
+    push: FootPush | None = None
 
     def copy(self) -> "MissionProgress":
         """A copy that is safe to change (a progress in a Context is never changed): its containers

@@ -193,6 +193,9 @@ class Press(PhaseBase):
     max_displacement: float = 0.06
     # Foot speed along `direction` [m/s].
     speed: float = 0.05
+    # ... or when the force along `direction` reaches this fraction of the live SUF in that
+    # direction (pedi_drake.mission.balance_bound) [-]; 0: no balance bound.
+    balance_margin: float = 0.0
 
 
 @dataclasses.dataclass
@@ -260,9 +263,11 @@ class TeleopFoot(PhaseBase):
     `joint_margin` inside every joint limit, stays `min_height` above the ground and out of the
     trunk; a command leaving it slides along its boundary), the foot speed `max_speed`, and the
     estimated foot contact force `max_force` (beyond it the foot does not move further into what
-    it pushes). Operator silence: after `hold_after` the foot holds; after `return_after` the phase
-    fails and the leg returns to support. Ends (succeeds) when the operator asks for the
-    autonomous mode, or after `duration`."""
+    it pushes), and the balance bound: the estimated force never exceeds `balance_margin` times
+    the live SUF in its direction (pedi_drake.mission.balance_bound; 0 turns it off). Operator
+    silence: after `hold_after` the foot holds; after `return_after` the phase fails and the leg
+    returns to support. Ends (succeeds) when the operator asks for the autonomous mode, or after
+    `duration`."""
 
     leg: str = "FR"
     # Largest foot speed [m/s].
@@ -273,6 +278,9 @@ class TeleopFoot(PhaseBase):
     min_height: float = 0.04
     # Largest estimated contact force on the foot [N] (the mission's force estimate, bias removed).
     max_force: float = 15.0
+    # Balance bound: the estimated force stays below this fraction of the live SUF in its
+    # direction [-]; 0: off.
+    balance_margin: float = 0.5
     # Operator silent this long: the foot holds [s].
     hold_after: float = 0.2
     # Operator silent this long: the phase fails and the leg returns to support [s].
@@ -692,6 +700,9 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
             need(math.isfinite(value) and value > 0, field, f"must be a finite number > 0, got {value}")
         need(phase.return_after > phase.hold_after, "return_after", "must be longer than hold_after")
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+    if isinstance(phase, TeleopFoot | Press):
+        margin = phase.balance_margin
+        need(math.isfinite(margin) and 0.0 <= margin <= 1.0, "balance_margin", f"must be in [0, 1], got {margin}")
     if isinstance(phase, Press):
         norm = math.sqrt(sum(v * v for v in phase.direction)) if len(phase.direction) == 3 else 0.0
         need(norm > 0.5, "direction", f"expected a unit [x, y, z] vector, got {phase.direction}")
