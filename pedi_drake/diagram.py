@@ -2,7 +2,8 @@
 
 Scenario -> station (plant or driver) -> state estimate -> mission manager <-> leg IK ->
 controller -> station command, with the operator's input (when the scenario has one) beside the
-estimate into the mission manager and its E-stop on the command. run_sim.py, the tests, the
+estimate into the mission manager and its E-stop on the command, the live SUF beside the mission
+manager, and the operator's haptic feedback out of it. run_sim.py, the tests, the
 benchmarks and the notebooks all build their diagrams here.
 
 Every logged signal goes through one Multiplexer into one VectorLogSink (`LOG_SINK`):
@@ -35,10 +36,12 @@ from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.spec import MissionSpec, load_mission
 from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE
 from pedi_drake.operator.estop_gate import OperatorEstopGate
+from pedi_drake.operator.feedback import OperatorFeedback
 from pedi_drake.operator.meshcat_panel import MeshcatOperatorPanel
 from pedi_drake.operator.operator_input import OperatorInput
 from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
 from pedi_drake.station_interface import MakeStation
+from pedi_drake.suf.live_suf_system import LiveSufSystem
 from pedi_drake.wall_clock import WallClock
 
 # Signals logged by every run (name -> exported port of the diagram).
@@ -139,6 +142,27 @@ def _add_leg_ik(builder: DiagramBuilder, manager: MissionManager) -> None:
             builder.Connect(ik.GetOutputPort(answer), manager.GetInputPort(f"{port}.{leg}"))
 
 
+def _add_live_suf(builder: DiagramBuilder, scenario: Scenario, manager: MissionManager, base_state, station):
+    """The live SUF ("suf"), asked and read by the manager (pedi_drake.suf.live_suf_system)."""
+    config = scenario.live_suf
+    suf = builder.AddNamedSystem(
+        "suf",
+        LiveSufSystem(
+            scenario.robot.prongs,
+            mu=scenario.ground_friction,
+            period=manager.period,
+            offset=config.offset,
+            max_lps=config.max_lps,
+        ),
+    )
+    builder.Connect(base_state, suf.GetInputPort("base_state"))
+    builder.Connect(station.GetOutputPort("go1.position_measured"), suf.GetInputPort("position_measured"))
+    builder.Connect(manager.GetOutputPort("contact_set"), suf.GetInputPort("contact_set"))
+    builder.Connect(manager.GetOutputPort("suf_request"), suf.GetInputPort("suf_request"))
+    builder.Connect(suf.GetOutputPort("suf"), manager.GetInputPort("suf"))
+    return suf
+
+
 # Where the E-stop flag sits in the operator_command vector (pedi_drake.operator.command).
 _OPERATOR_ESTOP_INDEX = 6
 
@@ -215,7 +239,11 @@ def MakePedipulationDiagram(
     base_state = estimator.GetOutputPort("base_state")
 
     extra_logs = {}
-    operator = _add_operator(builder, scenario, operator_lcm, meshcat) if scenario.operator.source != "none" else None
+    operator = operator_bus = None
+    if scenario.operator.source != "none":
+        if scenario.operator.source != "meshcat":
+            operator_bus = operator_lcm or DrakeLcm(scenario.lcm_buses[scenario.operator.lcm_bus].lcm_url)
+        operator = _add_operator(builder, scenario, operator_bus, meshcat)
     if operator is not None:
         extra_logs["operator.command"] = operator.GetOutputPort("operator_command")
     if scenario.controller == "stand_pd":
@@ -275,6 +303,15 @@ def MakePedipulationDiagram(
                 builder.Connect(manager.GetOutputPort(name), controller.GetInputPort(name))
             if isinstance(estimator, KalmanEstimator):
                 builder.Connect(manager.GetOutputPort("contact_set"), estimator.contact_set_port)
+            if scenario.live_suf.enabled:
+                suf = _add_live_suf(builder, scenario, manager, base_state, station)
+                extra_logs["mission.suf"] = suf.GetOutputPort("suf")
+            if operator_bus is not None and scenario.operator.feedback_channel:
+                feedback = builder.AddNamedSystem(
+                    "operator.feedback",
+                    OperatorFeedback(operator_bus, scenario.operator.feedback_channel, scenario.operator.period),
+                )
+                builder.Connect(manager.GetOutputPort("operator_feedback"), feedback.GetInputPort("operator_feedback"))
             extra_logs["mission.status"] = manager.GetOutputPort("mission_status")
             extra_logs["mission.body_reference"] = body_reference
             extra_logs["mission.leg_reference"] = leg_reference

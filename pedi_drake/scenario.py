@@ -33,6 +33,7 @@ from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.realtime_priority import priority_problem
 from pedi_drake.resources import models_dir, scenarios_dir
+from pedi_drake.suf.live_config import LiveSufConfig
 
 SCENE_OBJECT_KINDS = (
     "door",
@@ -229,6 +230,8 @@ class Scenario:
     # The operator's input: none, an LCM channel of foot commands, or the Go1 remote (see
     # pedi_drake.operator); its E-stop damps the motors, its commands drive teleop_foot phases.
     operator: OperatorConfig = dataclasses.field(default_factory=OperatorConfig)
+    # The live SUF of a mission's lifted-leg stances (pedi_drake.suf.live_suf_system).
+    live_suf: LiveSufConfig = dataclasses.field(default_factory=LiveSufConfig)
     # Meshcat publish period for the live view and the HTML replay [s].
     visualization_period: float = 1.0 / 32.0
 
@@ -342,6 +345,8 @@ class Scenario:
             raise ScenarioError(f"{where}: {problem}")
         for field, problem in self.operator.problems(self.lcm_buses):
             need(False, f"operator.{field}", problem)
+        for field, problem in self.live_suf.problems():
+            need(False, f"live_suf.{field}", problem)
 
 
 def scene_problems(scene: list[SceneObject], base_dir: Path | None, field: str = "scene") -> list[str]:

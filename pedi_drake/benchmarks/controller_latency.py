@@ -5,16 +5,16 @@
 
 1. Records: the mission in simulation (seed 0); the status the robot would have sent at every
    tick (q, qd, tau_est, IMU, foot sensors) is read from the run's logs.
-2. Replays: the `--hardware` diagram (driver, estimator, mission manager, IK, whole-body
-   controller) is built on an in-process bus and advanced as a hardware run advances it (one
+2. Replays: the `--hardware` diagram (driver, estimator, mission manager, live SUF, IK,
+   whole-body controller) is built on an in-process bus and advanced as a hardware run advances it (one
    AdvanceTo, with a monitor); before every tick the recorded status is published, and the tick
    (receive, estimate, mission, IK, control, safety, send) is timed alone, unpaced.
    Two passes: with the garbage collector as Python leaves it, and as a hardware run runs
    (go1_driver.hardware_run: the heap frozen at the start). Each tick is attributed to what ran
    in it: a garbage collection (gc.callbacks), a mission phase transition, or nothing special.
 3. A timed pass gives each stage's CPU time: the event handlers of every system of the
-   controller side (status receivers, estimator, mission manager and its reference outputs, leg
-   IK, whole-body controller, safety filter, command sender) are wrapped, while that pass's
+   controller side (status receivers, estimator, mission manager and its reference outputs, live
+   SUF, leg IK, whole-body controller, safety filter, command sender) are wrapped, while that pass's
    diagram is built, in a timer of the loop thread's CPU time; what the tick costs beyond them is
    Drake's framework (event dispatch, port evaluation, the log sinks).
    With `--callbacks`, one more pass times every Python callback of the diagram (periodic event
@@ -61,6 +61,7 @@ from pedi_drake.ik.leg_ik_system import LegIkSystem
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.run import simulate
 from pedi_drake.scenario import load_scenario
+from pedi_drake.suf.live_suf_system import LiveSufSystem
 
 # The controller side's stages in the order of a tick, each with the event handlers (and the
 # outputs computed every tick) of its systems.
@@ -68,6 +69,7 @@ STAGES = (
     ("receive", Go1LcmReceiver, ("_latch",)),
     ("estimate", KalmanEstimator, ("_update",)),
     ("mission", MissionManager, ("_update", "_calc_references", "_calc_body", "_calc_legs")),
+    ("suf", LiveSufSystem, ("_update",)),
     ("ik", LegIkSystem, ("_update",)),
     ("control", WholeBodyController, ("_update",)),
     ("safety", Go1SafetyFilter, ("_update",)),

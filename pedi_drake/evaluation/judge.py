@@ -14,6 +14,7 @@ from pedi_drake.evaluation import capture_point, mission_results
 from pedi_drake.evaluation.box_lift import box_lift_trace, judge_box_lift
 from pedi_drake.evaluation.button_press import judge_button_press, plunger_travel
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
+from pedi_drake.evaluation.live_suf import live_suf_summary, update_samples
 from pedi_drake.evaluation.off_trunk import judge_off_trunk, off_trunk_trace
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_response
 from pedi_drake.evaluation.result_file import write_result
@@ -25,6 +26,7 @@ from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
 from pedi_drake.run_checks import control_period
 from pedi_drake.viz import plots
+from pedi_drake.viz.suf_plots import plot_live_suf
 
 # The trunk has stood when it is within this of its commanded height [m]: a centimetre-level
 # sag under the PD's own compliance is a stand, an object under the trunk is not.
@@ -137,6 +139,8 @@ def judge_run(record) -> dict:
         status_log, body_log = logs["mission.status"].data, logs["mission.body_reference"].data
         result["max_base_drift_m"] = mission_results.max_base_drift(p_WB, body_log, status_log)
         result["presses"] = mission_results.press_results(progress)
+        if "mission.suf" in logs:
+            result["live_suf"] = live_suf_summary(logs["mission.suf"].times, logs["mission.suf"].data, result["phases"])
         polygon = logs["mission.safety_polygon"]
         result["three_leg_capture_point_margin_m"] = capture_point.three_leg_margin(
             polygon.times,
@@ -365,5 +369,9 @@ def write_run(record, result: dict, out_dir: Path) -> None:
                     result,
                     out_dir / "mission_errors.png",
                 )
+        if "mission.suf" in logs:
+            suf_times, readings = update_samples(logs["mission.suf"].times, logs["mission.suf"].data)
+            if readings:
+                plot_live_suf(suf_times, readings, result["phases"], out_dir / "live_suf.png")
     write_run_logs(out_dir, record.logs)
     write_result(out_dir, result, time_step=control_period(record.scenario))

@@ -28,6 +28,7 @@ OWNED_FILES = (
     "foot_forces.png",
     "leg_tracking.png",
     "mission_errors.png",
+    "live_suf.png",
     "sil.json",
     "bridge_truth.npz",
 )

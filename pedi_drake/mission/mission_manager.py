@@ -24,6 +24,11 @@ plans its motion when the answers are in (a path of waypoints takes one tick a w
 `safety_polygon` is the capture-point polygon of the current stance (see
 `phases.stance_safety_polygon`), recomputed at every update from the estimated support points.
 
+The live SUF (pedi_drake.suf.live_suf_system) is asked about on `suf_request` (the lifted foot:
+the one a teleop_foot or press phase drives, else the first lifted leg; and the direction of
+that phase's push) and read back on `suf`, for the balance bound of those phases; the haptic
+feedback of the driven foot leaves on `operator_feedback` (pedi_drake.operator.feedback).
+
 A failed phase (IK unreachable, timeout, fall) fails the mission with a reason; the manager then
 places any lifted leg back on the ground ("recovering") and holds the robot standing.
 
@@ -82,7 +87,10 @@ from pedi_drake.operator.command import (
     OPERATOR_COMMAND_SIZE,
     OperatorCommand,
 )
+from pedi_drake.operator.feedback import feedback_vector
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.suf.live import SUF_SIZE, LiveSufReading
+from pedi_drake.suf.live_suf_system import suf_request_vector
 
 MISSION_STATUS_SIZE = 4  # [phase index, status code, pedipulation active, number of phases]
 _IDENTITY_POSE = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
@@ -159,6 +167,8 @@ class MissionManager(LeafSystem):
         self._impedance_force = self.DeclareVectorInputPort("foot_force_estimate", 12)
         # The operator's command (pedi_drake.operator.command); unconnected: no operator.
         self._operator = self.DeclareVectorInputPort("operator_command", OPERATOR_COMMAND_SIZE)
+        # The live SUF (pedi_drake.suf.live); unconnected: the balance bound has nothing to act on.
+        self._suf = self.DeclareVectorInputPort("suf", SUF_SIZE)
         self._ik_answer_ports = {
             leg: (
                 self.DeclareVectorInputPort(f"ik_q_goal.{leg}", 3),
@@ -179,6 +189,8 @@ class MissionManager(LeafSystem):
         self._ik_pose = self.DeclareDiscreteState(_IDENTITY_POSE)
         self._ik_seed = self.DeclareDiscreteState(robot.STANDING_Q)
         self._ik_targets = {leg: self.DeclareDiscreteState(np.full(3, np.nan)) for leg in self.ik_legs}
+        self._suf_request = self.DeclareDiscreteState(suf_request_vector(-1, None))
+        self._feedback = self.DeclareDiscreteState(feedback_vector(-1, None, np.nan, np.nan, 0, False))
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
         # Trajectory samples change with time: computed when evaluated, from the packed references.
@@ -202,6 +214,8 @@ class MissionManager(LeafSystem):
             "friction", 1, lambda c, o: o.SetFromVector([self._friction]), prerequisites_of_calc={self.nothing_ticket()}
         )
         self.DeclareStateOutputPort("mission_status", self._status)
+        self.DeclareStateOutputPort("suf_request", self._suf_request)
+        self.DeclareStateOutputPort("operator_feedback", self._feedback)
         warm_up(holding)
 
     @property
@@ -235,6 +249,7 @@ class MissionManager(LeafSystem):
             operator=(
                 OperatorCommand.from_vector(self._operator.Eval(context)) if self._operator.HasValue(context) else None
             ),
+            suf=LiveSufReading.from_vector(self._suf.Eval(context)) if self._suf.HasValue(context) else None,
         )
 
     def _initialize(self, context, state) -> None:
@@ -254,6 +269,7 @@ class MissionManager(LeafSystem):
             state.get_mutable_abstract_state(self._references).set_value(reference_table(refs))
         state.get_mutable_discrete_state(self._contacts).SetFromVector(refs.contacts)
         state.get_mutable_discrete_state(self._status).SetFromVector(self._status_vector(progress))
+        state.get_mutable_discrete_state(self._suf_request).SetFromVector(self._suf_request_vector(progress))
         plan = progress.ik
         if previous is not None and plan is previous.ik:
             return
@@ -263,8 +279,29 @@ class MissionManager(LeafSystem):
             state.get_mutable_discrete_state(index).SetFromVector(self._ik_target_W(plan, leg))
 
     def _set_polygon(self, state, view: RobotView, progress: MissionProgress) -> None:
+        """The safety polygon of the stance, and the operator's feedback (both read the view)."""
         polygon = stance_safety_polygon(view, self._env, progress.references.contacts, self._safety_margin)
         state.get_mutable_discrete_state(self._polygon).SetFromVector(polygon)
+        push, suf = progress.push, view.suf
+        feedback = feedback_vector(
+            -1 if push is None else robot.LEG_NAMES.index(push.leg),
+            None if push is None else push.force_W,
+            np.nan if push is None else push.limit,
+            np.nan if suf is None else suf.value,
+            0 if suf is None else suf.status,
+            push is not None and push.bound_active,
+        )
+        state.get_mutable_discrete_state(self._feedback).SetFromVector(feedback)
+
+    @staticmethod
+    def _suf_request_vector(progress: MissionProgress) -> np.ndarray:
+        """What the live SUF is asked about: the driven foot and its push direction, else the first
+        lifted leg (the last worst direction), else nothing."""
+        if progress.push is not None:
+            return suf_request_vector(robot.LEG_NAMES.index(progress.push.leg), progress.push.direction_W)
+        legs = progress.references.legs if progress.references is not None else {}
+        lifted = [k for k, leg in enumerate(robot.LEG_NAMES) if leg in legs]
+        return suf_request_vector(lifted[0] if lifted else -1, None)
 
     def _ik_answers(self, context) -> dict[str, IkAnswer]:
         answers = {}
@@ -347,7 +384,7 @@ class MissionManager(LeafSystem):
                 progress.records.append(PhaseRecord(later.name, kind_name(later), "skipped", view.time))
         progress.interlude = []
         progress.status, progress.reason, progress.started, progress.ik = FAILED, reason, False, None
-        progress.references.press = None
+        progress.references.press, progress.push = None, None
 
     def _fell(self, view: RobotView, progress: MissionProgress) -> bool:
         standing_started = any(r.kind == "stand_up" and r.status == SUCCEEDED for r in progress.records)
@@ -368,7 +405,7 @@ class MissionManager(LeafSystem):
         record.status, record.t_end = outcome, view.time
         if outcome == FAILED:
             record.reason = progress.reason
-        progress.started, progress.ik = False, None
+        progress.started, progress.ik, progress.push = False, None, None
         if outcome == SUCCEEDED:
             progress.index += 1
             if progress.index < len(phases):
@@ -421,7 +458,7 @@ class MissionManager(LeafSystem):
         if progress.started:  # a held foot: the phase is stopped here and restarts afterwards
             record = progress.records[-1]
             record.status, record.t_end, record.reason = "interrupted", view.time, "the operator took the foot"
-            progress.started, progress.ik, progress.memo = False, None, {}
+            progress.started, progress.ik, progress.memo, progress.push = False, None, {}, None
         number = 1 + sum(switch.to_mode == mode_switch.TELEOP for switch in progress.switches)
         lifted = block.leg in progress.references.legs
         progress.interlude = mode_switch.teleop_sequence(block, lifted, view.foot_W(block.leg), number)

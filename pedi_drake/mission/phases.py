@@ -18,6 +18,7 @@ from pedi_drake.exceptions import UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
 from pedi_drake.mission import spec
+from pedi_drake.mission.balance_bound import balance_limit
 from pedi_drake.mission.posture_planner import PLAN_LATENCY, POSTURE_DURATION, PosturePlanner, PostureRequest
 from pedi_drake.mission.progress import (
     FAILED,
@@ -26,6 +27,7 @@ from pedi_drake.mission.progress import (
     LEG_MODE_JOINTS,
     RUNNING,
     SUCCEEDED,
+    FootPush,
     IkPlan,
     LegTrajectory,
     MissionProgress,
@@ -565,7 +567,9 @@ class PressRunner(PhaseRunner):
     """Drives the foot along `direction` until the estimated force or the displacement is reached.
 
     The force is the mission's estimate (`MissionEnvironment.force_estimate`); every available
-    estimate is recorded beside it, each with its own bias and stiffness."""
+    estimate is recorded beside it, each with its own bias and stiffness. With `balance_margin`,
+    the press also stops when the force reaches that fraction of the live SUF against its
+    direction (pedi_drake.mission.balance_bound)."""
 
     def start(self, phase, progress, view, env):
         if phase.leg not in progress.references.legs:
@@ -612,13 +616,21 @@ class PressRunner(PhaseRunner):
             force_estimate=env.force_estimate,
             forces_n=forces,
         )
-        if force >= phase.force or displacement >= phase.max_displacement:
+        # The environment pushes the foot back against the press direction.
+        limit = None
+        if phase.balance_margin > 0.0:
+            limit = balance_limit(view.suf, robot.LEG_NAMES.index(phase.leg), -direction, phase.balance_margin)
+            metrics["balance_limit_n"] = limit
+        balanced = limit is not None and force >= limit
+        shown = math.nan if limit is None else limit
+        progress.push = FootPush(phase.leg, -force * direction, -direction, shown, balanced)
+        if force >= phase.force or displacement >= phase.max_displacement or balanced:
             press["frozen_at"] = view.time
             metrics["stiffness_n_per_m"] = force / max(displacement, 1e-4)
             metrics["stiffness_by_estimate"] = {
                 source: value / max(displacement, 1e-4) for source, value in forces.items()
             }
-            metrics["stopped_by"] = "force" if force >= phase.force else "displacement"
+            metrics["stopped_by"] = "force" if force >= phase.force else "balance" if balanced else "displacement"
             # Hold the foot where it is, in joint space, for whatever comes next.
             hold = PiecewiseQuintic.through(np.array([view.leg_q(phase.leg)] * 2), view.time, [1e-3])
             progress.references.legs[phase.leg] = LegTrajectory(LEG_MODE_JOINTS, hold)

@@ -155,6 +155,23 @@ class ModeSwitch:
         return self  # a value
 
 
+@dataclasses.dataclass(frozen=True)
+class FootPush:
+    """What the phase driving a lifted foot (teleop_foot, press) reports at each update: the
+    direction the live SUF is asked about, and the operator's haptic feedback.
+
+    A value (a new one replaces it): shared by the copies of a progress."""
+
+    leg: str
+    force_W: np.ndarray  # (3,) estimated force of the environment on the foot, bias removed, world [N]
+    direction_W: np.ndarray | None  # (3,) unit direction of that force for the balance bound, world
+    limit: float  # the balance bound's limit along direction_W [N]; nan when it is off or waits
+    bound_active: bool  # the balance bound changed the foot's motion at this update
+
+    def __deepcopy__(self, memo) -> "FootPush":
+        return self
+
+
 def _shallow(obj):
     """A new object of obj's class with the same attributes (copy.copy without its protocol's cost)."""
     clone = object.__new__(type(obj))
@@ -212,6 +229,8 @@ class MissionProgress:
     # Per lifted leg, the trunk reference (p_WB [m], R_WB) before an optimal posture moved it:
     # leg_to_support puts the trunk back there (re-centred over the feet as always).
     pre_posture: dict = dataclasses.field(default_factory=dict)
+    # The running phase's lifted-foot push (None when no phase drives a foot against anything).
+    push: FootPush | None = None
 
     def copy(self) -> "MissionProgress":
         """A copy that is safe to change (a progress in a Context is never changed): its containers

@@ -1,5 +1,5 @@
-"""What the mission knows about the robot (the state estimate and the `go1.*` measurements) and
-the operator's command.
+"""What the mission knows about the robot (the state estimate and the `go1.*` measurements), the
+operator's command and the live SUF.
 
 Everything here is computed from the base-state estimate and the joint sensors through the
 model, never from simulation ground truth.
@@ -24,6 +24,7 @@ from pedi_drake.estimation.base_state import BaseState
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
 from pedi_drake.leg_kinematics import joint_frames, leg_geometry
 from pedi_drake.operator.command import OperatorCommand
+from pedi_drake.suf.live import LiveSufReading
 
 _workspace = threading.local()
 
@@ -51,6 +52,9 @@ class RobotView:
     impedance_forces: np.ndarray | None = None
     # The operator's command (pedi_drake.operator); None when the run has no operator input.
     operator: OperatorCommand | None = None
+    # The live SUF of the stance (pedi_drake.suf.live), from an update a few ms old; None when
+    # the run computes none.
+    suf: LiveSufReading | None = None
 
     @functools.cached_property
     def X_WB(self) -> RigidTransform:

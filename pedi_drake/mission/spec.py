@@ -223,6 +223,9 @@ class Press(PhaseBase):
     max_displacement: float = 0.06
     # Foot speed along `direction` [m/s].
     speed: float = 0.05
+    # ... or when the force along `direction` reaches this fraction of the live SUF in that
+    # direction (pedi_drake.mission.balance_bound) [-]; 0: no balance bound.
+    balance_margin: float = 0.0
 
 
 @dataclasses.dataclass
@@ -290,9 +293,11 @@ class TeleopFoot(PhaseBase):
     `joint_margin` inside every joint limit, stays `min_height` above the ground and out of the
     trunk; a command leaving it slides along its boundary), the foot speed `max_speed`, and the
     estimated foot contact force `max_force` (beyond it the foot does not move further into what
-    it pushes). Operator silence: after `hold_after` the foot holds; after `return_after` the phase
-    fails and the leg returns to support. Ends (succeeds) when the operator asks for the
-    autonomous mode, or after `duration`."""
+    it pushes), and the balance bound: the estimated force never exceeds `balance_margin` times
+    the live SUF in its direction (pedi_drake.mission.balance_bound; 0 turns it off). Operator
+    silence: after `hold_after` the foot holds; after `return_after` the phase fails and the leg
+    returns to support. Ends (succeeds) when the operator asks for the autonomous mode, or after
+    `duration`."""
 
     leg: str = "FR"
     # Largest foot speed [m/s].
@@ -303,6 +308,9 @@ class TeleopFoot(PhaseBase):
     min_height: float = 0.04
     # Largest estimated contact force on the foot [N] (the mission's force estimate, bias removed).
     max_force: float = 15.0
+    # Balance bound: the estimated force stays below this fraction of the live SUF in its
+    # direction [-]; 0: off.
+    balance_margin: float = 0.5
     # Operator silent this long: the foot holds [s].
     hold_after: float = 0.2
     # Operator silent this long: the phase fails and the leg returns to support [s].
@@ -812,6 +820,9 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
                 f"posture: optimal plans for {PLAN_LATENCY} s and moves the trunk for {POSTURE_DURATION} s before "
                 f"the {phase.duration} s lift: must exceed {least} s, got {phase.timeout}",
             )
+    if isinstance(phase, TeleopFoot | Press):
+        margin = phase.balance_margin
+        need(math.isfinite(margin) and 0.0 <= margin <= 1.0, "balance_margin", f"must be in [0, 1], got {margin}")
     if isinstance(phase, Press):
         norm = math.sqrt(sum(v * v for v in phase.direction)) if len(phase.direction) == 3 else 0.0
         need(norm > 0.5, "direction", f"expected a unit [x, y, z] vector, got {phase.direction}")

@@ -9,25 +9,42 @@ a position command as the velocity that would reach it in one tick. Then, in thi
   2. speed: at most `max_speed`;
   3. force: with the estimated contact force (the mission's estimate, its bias at the phase start
      removed) above `max_force`, no motion further into the contact;
-  4. workspace: the step is kept in the leg's workspace, sliding along its boundary
+  4. balance: the estimated force along its own direction stays below `balance_margin` times the
+     live SUF in that direction (pedi_drake.mission.balance_bound: slowed near the limit,
+     stopped at it, retreating beyond it), so the operator cannot push the robot over;
+  5. workspace: the step is kept in the leg's workspace, sliding along its boundary
      (pedi_drake.mission.teleop_bounds).
 
 The reference is a RampSegment from where the previous one ended, so it never jumps. Each bound
-counts the ticks it acted in the phase's metrics (`bound_activations`). The phase succeeds when
+counts the ticks it acted in the phase's metrics (`bound_activations`); the balance bound also
+records its limits and the largest force it saw (`balance`). Each update leaves a FootPush in the
+progress: the direction the live SUF is asked about next and the operator's haptic feedback. The phase succeeds when
 the operator asks for the autonomous mode (after having asked for anything else during the
 phase), or after `duration`; the foot then holds where its reference ended.
 """
 
+import math
+
 import numpy as np
 
+from pedi_drake import robot
 from pedi_drake.exceptions import UnreachableTarget
-from pedi_drake.mission.progress import FAILED, LEG_MODE_FOOT, RUNNING, SUCCEEDED, LegTrajectory, MissionProgress
+from pedi_drake.mission.balance_bound import balance_limit, bound_balance, disturbance_direction
+from pedi_drake.mission.progress import (
+    FAILED,
+    LEG_MODE_FOOT,
+    RUNNING,
+    SUCCEEDED,
+    FootPush,
+    LegTrajectory,
+    MissionProgress,
+)
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_bounds import bound_force, bound_speed, slide_in_workspace, workspace_margin
 from pedi_drake.operator.command import FRAME_TRUNK, KIND_POSITION, MODE_AUTONOMOUS
 from pedi_drake.trajectory import RampSegment
 
-BOUNDS = ("workspace", "speed", "force", "silence_hold")
+BOUNDS = ("workspace", "speed", "force", "balance", "silence_hold")
 # Length of the first reference segment, before a tick length is known [s].
 _FIRST_TICK = 0.01
 
@@ -71,6 +88,8 @@ class TeleopFootRunner:
             holding=False,
             other_mode_seen=view.operator.mode_request != MODE_AUTONOMOUS,
             max_force_n=0.0,
+            push_direction=None,
+            balance=dict(margin=phase.balance_margin, min_limit_n=math.inf, last_limit_n=None, max_force_along_n=0.0),
         )
         progress.records[-1].metrics.update(leg=phase.leg, bound_activations=dict.fromkeys(BOUNDS, 0))
 
@@ -110,6 +129,8 @@ class TeleopFootRunner:
         memo["max_force_n"] = max(memo["max_force_n"], float(np.linalg.norm(force)))
         velocity, limited = bound_force(velocity, force, phase.max_force)
         counts["force"] += limited
+        velocity, acted = self._balance(phase, progress, view, force, velocity)
+        counts["balance"] += acted
 
         X_WB = view.X_WB
         X_BW = X_WB.inverse()
@@ -134,8 +155,31 @@ class TeleopFootRunner:
             max_force_n=memo["max_force_n"],
             target_W=p_next.tolist(),
             foot_error_m=float(np.linalg.norm(view.foot_W(phase.leg) - p_ref)),
+            balance=dict(memo["balance"]),
         )
         if t - progress.phase_start >= phase.duration:
             metrics["ended_by"] = "duration"
             return SUCCEEDED
         return RUNNING
+
+    @staticmethod
+    def _balance(phase, progress: MissionProgress, view: RobotView, force: np.ndarray, velocity: np.ndarray):
+        """(velocity, whether the balance bound acted), and the update's FootPush."""
+        memo = progress.memo
+        direction = disturbance_direction(force, velocity, memo["push_direction"])
+        memo["push_direction"] = direction
+        limit, acted = None, False
+        if phase.balance_margin > 0.0 and direction is not None:
+            limit = balance_limit(view.suf, robot.LEG_NAMES.index(phase.leg), direction, phase.balance_margin)
+            if limit is not None:
+                velocity, acted = bound_balance(velocity, force, direction, limit, phase.max_speed)
+                # The retreat adds to the command: the speed bound holds for the sum.
+                velocity, _ = bound_speed(velocity, phase.max_speed)
+                balance = memo["balance"]
+                balance["last_limit_n"] = limit
+                balance["min_limit_n"] = min(balance["min_limit_n"], limit)
+                balance["max_force_along_n"] = max(balance["max_force_along_n"], float(force @ direction))
+        progress.push = FootPush(
+            phase.leg, force.copy(), direction, math.nan if limit is None else float(limit), bool(acted)
+        )
+        return velocity, acted

@@ -12,8 +12,10 @@ LCM_SOURCES = ("lcm", "remote")
 REMOTE_FRAMES = ("trunk", "world")
 # The remote's switches (rc_command_lcmt fields, int16 on the wire: non-zero while pressed).
 REMOTE_BUTTONS = tuple(name for name in rc_command_lcmt.__slots__ if name.endswith("_switch"))
-# The project's foot command channel (type foot_command_lcmt).
+# The project's foot command channel (type foot_command_lcmt) and its feedback channel
+# (foot_feedback_lcmt, pedi_drake.operator.feedback).
 DEFAULT_FOOT_COMMAND_CHANNEL = "operator_foot_command"
+DEFAULT_FOOT_FEEDBACK_CHANNEL = "operator_foot_feedback"
 
 
 @dataclasses.dataclass
@@ -66,8 +68,11 @@ class OperatorConfig:
     lcm_bus: str = GO1_BUS_NAME
     # Channel of the foot commands (source: lcm).
     channel: str = DEFAULT_FOOT_COMMAND_CHANNEL
-    # How often the input is read [s].
+    # How often the input is read and the feedback published [s].
     period: float = 0.01
+    # Channel of the haptic feedback (foot_feedback_lcmt: the estimated foot force, the balance
+    # bound and the live SUF) on the same bus; empty: none published.
+    feedback_channel: str = DEFAULT_FOOT_FEEDBACK_CHANNEL
     # The remote's mapping (source: remote).
     remote: RemoteMapping = dataclasses.field(default_factory=RemoteMapping)
     # The Meshcat panel (source: meshcat).

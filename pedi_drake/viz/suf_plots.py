@@ -96,3 +96,31 @@ def show_rfp_in_meshcat(meshcat, result: SufResult, p_WE: np.ndarray, metres_per
     meshcat.SetTriangleMesh(f"{name}/rfp", (vertices + p_WE).T, faces.T, Rgba(0.2, 0.4, 0.9, 0.35))
     meshcat.SetObject(f"{name}/sphere", Sphere(result.value * metres_per_newton), Rgba(0.9, 0.2, 0.2, 0.5))
     meshcat.SetTransform(f"{name}/sphere", RigidTransform(p_WE))
+
+
+def plot_live_suf(times: np.ndarray, readings: list, phases: list[dict], path: Path) -> Path:
+    """The live SUF along a run (one point per update with a lifted foot): the SUF [N] (exact:
+    a line; the single-direction fallback: crosses) and the rejectable force along the direction
+    the mission asked about (its push), over the mission's phases."""
+    from pedi_drake.suf.warm_projection import EXACT, INCOMPLETE
+    from pedi_drake.viz.plots import _shade_phases
+
+    fig, ax = plt.subplots(figsize=(9, 3.8))
+    _shade_phases(ax, phases)
+    values = np.array([r.value for r in readings], float)
+    reaches = np.array([r.reach for r in readings], float)
+    exact = np.array([r.status == EXACT for r in readings])
+    fallback = np.array([r.status == INCOMPLETE for r in readings])
+    ax.plot(times, np.where(exact, values, np.nan), color="tab:blue", label="SUF (exact)")
+    if fallback.any():
+        ax.plot(times[fallback], values[fallback], "x", color="tab:red", label="single-direction SUF (fallback)")
+    ax.plot(times, reaches, color="tab:green", linewidth=0.8, label="rejectable force along the push")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("force [N]")
+    ax.set_title("live SUF of the lifted-leg stance")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return Path(path)

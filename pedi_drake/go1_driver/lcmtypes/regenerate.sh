@@ -4,4 +4,4 @@
 # becomes a top-level module <type>.py here; __init__.py (hand-written) re-exports them.
 set -euo pipefail
 cd "$(dirname "$0")"
-lcm-gen -p --ppath . pd_tau_targets_lcmt.lcm leg_control_data_lcmt.lcm state_estimator_lcmt.lcm rc_command_lcmt.lcm foot_command_lcmt.lcm
+lcm-gen -p --ppath . pd_tau_targets_lcmt.lcm leg_control_data_lcmt.lcm state_estimator_lcmt.lcm rc_command_lcmt.lcm foot_command_lcmt.lcm foot_feedback_lcmt.lcm
