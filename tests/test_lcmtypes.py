@@ -98,7 +98,7 @@ def test_generated_types_are_up_to_date(tmp_path):
             pytest.skip("lcm-gen (from the lcm wheel) is not on PATH")
         lcm_gen = pathlib.Path(found)
     sources = sorted(str(p) for p in folder.glob("*.lcm"))
-    assert len(sources) == 5
+    assert len(sources) == 6  # the four Go1 types and the operator's foot command and feedback
     subprocess.run([str(lcm_gen), "-p", "--ppath", str(tmp_path), *sources], check=True)
     for source in sources:
         name = pathlib.Path(source).stem + ".py"
