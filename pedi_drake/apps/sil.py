@@ -3,6 +3,7 @@ bridge in a second process, judged against the bridge's ground truth.
 
     python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_name NAME]
                                   [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
+                                  [--operator_log FILE]
 
 Starts `python -m pedi_drake.apps.sim_bridge --mission M --truth_log ...` (the robot side,
 real time, 500 Hz), then runs the mission here exactly as `run_sim.py --hardware` does (driver,
@@ -10,6 +11,10 @@ state estimator, controller, mission manager; no ground truth on this side), sto
 and compares: each reach phase's target with where the bridge's simulated foot really was at the
 end of the phase (the two processes' logs are aligned by the host's wall clock). Prints a table
 and writes `sil.json` beside the run's result.json.
+
+`--operator_log FILE` adds an operator in a third process, as a person would run one:
+`python -m pedi_drake.apps.teleop_lcm --lcm_log FILE --start_on_feedback` on the same bus, which
+plays the log's messages on the controller's clock (the scenario needs `operator: {source: lcm}`).
 """
 
 import argparse
@@ -33,6 +38,8 @@ from pedi_drake.scenario import apply_scenario_text, lcm_url_is_valid, load_scen
 
 GROUP = "239.255.76.67"
 BRIDGE_START_TIMEOUT = 60.0  # [s] for the bridge to build its diagram and start publishing
+# [s] for the operator to finish its log after the controller side ended (then it is stopped).
+OPERATOR_END_TIMEOUT = 30.0
 
 
 def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[dict]:
@@ -77,11 +84,13 @@ def run_sil(
     lcm_url: str | None = None,
     realtime_rate: float = 1.0,
     scenario_name: str = "default",
+    operator_log: Path | None = None,
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
     `realtime_rate` < 1 runs both processes in slow motion (the watchdogs keep their wall-clock
     limits, so they are stricter in simulated time), for machines that cannot run both in real time.
+    `operator_log`: an LCM log of operator messages, played by an operator process (module docstring).
     """
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
     text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
@@ -96,6 +105,7 @@ def run_sil(
     check_out_dir(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     truth_path = out_dir / "bridge_truth.npz"
+    operator = None
     bridge = subprocess.Popen(
         [sys.executable, "-m", "pedi_drake.apps.sim_bridge", "--mission", mission, "--lcm_url", url]
         + ["--scenario_name", scenario_name, "--scenario_text", text]
@@ -117,6 +127,14 @@ def run_sil(
                 raise RuntimeError("the simulator bridge did not start within 60 s")
         # "go1_sim_bridge: running on URL (its scheduling)"
         bridge_scheduling = line.strip().rpartition("(")[2].rstrip(")")
+        if operator_log is not None:
+            operator = subprocess.Popen(
+                [sys.executable, "-m", "pedi_drake.apps.teleop_lcm", "--lcm_log", str(operator_log)]
+                + ["--lcm_url", url, "--start_on_feedback", "--scenario_name", scenario_name, "--scenario_text", text],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+            )
         result = run(
             scenario=scenario, name=mission, out_dir=out_dir, quiet=True, hardware=True, realtime_rate=realtime_rate
         )
@@ -124,6 +142,12 @@ def run_sil(
         if bridge.poll() is None:
             bridge.send_signal(signal.SIGTERM)
         bridge.communicate(timeout=120)
+        if operator is not None:
+            try:
+                operator_output, _ = operator.communicate(timeout=OPERATOR_END_TIMEOUT)
+            except subprocess.TimeoutExpired:
+                operator.send_signal(signal.SIGTERM)
+                operator_output, _ = operator.communicate(timeout=30)
     with np.load(truth_path) as archive:
         truth = {key: archive[key] for key in archive.files}
     logs = read_run_logs(out_dir)
@@ -134,6 +158,8 @@ def run_sil(
         "realtime_rate": realtime_rate,
         "bridge_scheduling": bridge_scheduling,
     }
+    if operator is not None:
+        result["sil"]["operator"] = {"returncode": operator.returncode, "output": operator_output.strip()}
     (out_dir / "sil.json").write_text(json.dumps(result["sil"], indent=2))
     return result
 
@@ -146,10 +172,11 @@ def main() -> int:
     parser.add_argument("--lcm_url", default=None, help="default: the Go1 group on a port of this process's own")
     parser.add_argument("--out", default=None)
     parser.add_argument("--realtime_rate", type=float, default=1.0, help="< 1: both processes in slow motion")
+    parser.add_argument("--operator_log", default=None, help="LCM log of operator messages, played by an operator")
     args = parser.parse_args()
     out_dir = Path(args.out or f"out/sil_{Path(args.mission).stem}")
     try:
-        options = {"scenario_name": args.scenario_name}
+        options = {"scenario_name": args.scenario_name, "operator_log": args.operator_log}
         result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate, **options)
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)
