@@ -25,6 +25,7 @@ from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.interrupt import StopRequest
 from pedi_drake.mission.progress import FAILED, RUNNING, SUCCEEDED, MissionProgress
+from pedi_drake.operator.message_stream import TimedMessage
 from pedi_drake.scenario import Scenario
 from pedi_drake.viz.meshcat_camera import frame_scene
 
@@ -74,6 +75,7 @@ def simulate(
     replay: bool = True,
     realtime_rate: float = 1.0,
     stop: StopRequest | None = None,
+    operator_messages: list[TimedMessage] | None = None,
 ) -> RunRecord:
     """Builds the diagram of `scenario` and advances it until its duration or the mission's end.
 
@@ -85,16 +87,18 @@ def simulate(
     simulation with an operator.
     `stop`: once its reason is set (by a signal, see `pedi_drake.interrupt`) the simulation ends at
     the current time and the record says why (`interrupted`).
+    `operator_messages`: a scripted operator's stream (pedi_drake.operator.message_stream), played
+    in lock step on an in-process bus; the simulation then runs as fast as it can.
     """
     stop = stop or StopRequest()
     if not hardware and replay:
         # A Meshcat is made even when nobody watches live: it records the replay.
         meshcat = meshcat or Meshcat()
-    built = MakePedipulationDiagram(scenario, meshcat, hardware=hardware)
+    built = MakePedipulationDiagram(scenario, meshcat, hardware=hardware, operator_messages=operator_messages)
     diagram = built.diagram
     simulator = Simulator(diagram)
     built.reserve_logs(simulator.get_mutable_context(), scenario.simulation_duration)
-    if hardware or scenario.operator.source != "none":
+    if hardware or (scenario.operator.source != "none" and operator_messages is None):
         # An operator (a person, a program on LCM) acts on the wall clock: a simulation runs at its pace.
         simulator.set_target_realtime_rate(realtime_rate)
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None

@@ -4,6 +4,7 @@ bridge in a second process, judged against the bridge's ground truth.
     python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_name NAME]
                                   [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
                                   [--separate]
+                                  [--operator_log FILE]
 
 Starts `python -m pedi_drake.apps.sim_bridge --mission M --truth_log ...` (the robot side,
 real time, 500 Hz), then runs the mission here exactly as `run_sim.py --hardware` does (driver,
@@ -16,6 +17,10 @@ With `--separate` the controller side is not run here but started as its own pro
 README's second terminal: `python run_sim.py --hardware --mission M ...` (the run_sim.py beside
 the package, so a source checkout), while the bridge keeps running as the first terminal's does.
 This process then only starts, waits and judges.
+
+`--operator_log FILE` adds an operator in a third process, as a person would run one:
+`python -m pedi_drake.apps.teleop_lcm --lcm_log FILE --start_on_feedback` on the same bus, which
+plays the log's messages on the controller's clock (the scenario needs `operator: {source: lcm}`).
 """
 
 import argparse
@@ -42,6 +47,8 @@ GROUP = "239.255.76.67"
 # The README's controller program, beside the package in a source checkout.
 RUN_SIM = Path(__file__).resolve().parents[2] / "run_sim.py"
 BRIDGE_START_TIMEOUT = 60.0  # [s] for the bridge to build its diagram and start publishing
+# [s] for the operator to finish its log after the controller side ended (then it is stopped).
+OPERATOR_END_TIMEOUT = 30.0
 
 
 def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[dict]:
@@ -87,6 +94,7 @@ def run_sil(
     realtime_rate: float = 1.0,
     scenario_name: str = "default",
     separate: bool = False,
+    operator_log: Path | None = None,
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
@@ -94,6 +102,7 @@ def run_sil(
     limits, so they are stricter in simulated time), for machines that cannot run both in real time.
     `separate`: the controller side runs as `run_sim.py --hardware` in a process of its own (see
     the module docstring) instead of in this one.
+    `operator_log`: an LCM log of operator messages, played by an operator process (module docstring).
     """
     if separate and not RUN_SIM.is_file():
         raise ConfigError(f"--separate: needs run_sim.py beside the package (a source checkout); no {RUN_SIM}")
@@ -112,6 +121,7 @@ def run_sil(
     check_out_dir(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     truth_path = out_dir / "bridge_truth.npz"
+    operator = None
     bridge = subprocess.Popen(
         [sys.executable, "-m", "pedi_drake.apps.sim_bridge", "--mission", mission, "--lcm_url", url]
         + ["--scenario_name", scenario_name, "--scenario_text", text]
@@ -133,6 +143,14 @@ def run_sil(
                 raise RuntimeError("the simulator bridge did not start within 60 s")
         # "go1_sim_bridge: running on URL (its scheduling)"
         bridge_scheduling = line.strip().rpartition("(")[2].rstrip(")")
+        if operator_log is not None:
+            operator = subprocess.Popen(
+                [sys.executable, "-m", "pedi_drake.apps.teleop_lcm", "--lcm_log", str(operator_log)]
+                + ["--lcm_url", url, "--start_on_feedback", "--scenario_name", scenario_name, "--scenario_text", text],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+            )
         if separate:
             result = _run_controller_program(mission, scenario_name, text, url, out_dir)
         else:
@@ -143,6 +161,12 @@ def run_sil(
         if bridge.poll() is None:
             bridge.send_signal(signal.SIGTERM)
         bridge.communicate(timeout=120)
+        if operator is not None:
+            try:
+                operator_output, _ = operator.communicate(timeout=OPERATOR_END_TIMEOUT)
+            except subprocess.TimeoutExpired:
+                operator.send_signal(signal.SIGTERM)
+                operator_output, _ = operator.communicate(timeout=30)
     with np.load(truth_path) as archive:
         truth = {key: archive[key] for key in archive.files}
     logs = read_run_logs(out_dir)
@@ -154,6 +178,8 @@ def run_sil(
         "bridge_scheduling": bridge_scheduling,
         "controller": "run_sim.py --hardware (own process)" if separate else "in the sil process",
     }
+    if operator is not None:
+        result["sil"]["operator"] = {"returncode": operator.returncode, "output": operator_output.strip()}
     (out_dir / "sil.json").write_text(json.dumps(result["sil"], indent=2))
     return result
 
@@ -190,10 +216,11 @@ def main() -> int:
     parser.add_argument(
         "--separate", action="store_true", help="the controller as its own program, run_sim.py --hardware (README)"
     )
+    parser.add_argument("--operator_log", default=None, help="LCM log of operator messages, played by an operator")
     args = parser.parse_args()
     out_dir = Path(args.out or f"out/sil_{Path(args.mission).stem}")
     try:
-        options = {"scenario_name": args.scenario_name, "separate": args.separate}
+        options = {"scenario_name": args.scenario_name, "separate": args.separate, "operator_log": args.operator_log}
         result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate, **options)
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)
