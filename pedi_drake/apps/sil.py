@@ -85,12 +85,14 @@ def run_sil(
     realtime_rate: float = 1.0,
     scenario_name: str = "default",
     operator_log: Path | None = None,
+    records: list | None = None,
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
     `realtime_rate` < 1 runs both processes in slow motion (the watchdogs keep their wall-clock
     limits, so they are stricter in simulated time), for machines that cannot run both in real time.
     `operator_log`: an LCM log of operator messages, played by an operator process (module docstring).
+    `records`: the controller side's RunRecord is appended to it (pedi_drake.run.run).
     """
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
     text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
@@ -136,7 +138,13 @@ def run_sil(
                 text=True,
             )
         result = run(
-            scenario=scenario, name=mission, out_dir=out_dir, quiet=True, hardware=True, realtime_rate=realtime_rate
+            scenario=scenario,
+            name=mission,
+            out_dir=out_dir,
+            quiet=True,
+            hardware=True,
+            realtime_rate=realtime_rate,
+            records=records,
         )
     finally:
         if bridge.poll() is None:
