@@ -219,14 +219,23 @@ def phase_label(progress, mission) -> str:
     return f"phase {number} {record.name} ({record.status})"
 
 
-def run(*, scenario: Scenario, name: str, out_dir: Path, stop: StopRequest | None = None, **simulate_options) -> dict:
+def run(
+    *,
+    scenario: Scenario,
+    name: str,
+    out_dir: Path,
+    stop: StopRequest | None = None,
+    records: list[RunRecord] | None = None,
+    **simulate_options,
+) -> dict:
     """`simulate`, then judge the run and write result.json, replay.html, plots and logs.npz to `out_dir`.
 
     `out_dir` is claimed first (`claim_out_dir`: a lock against a second run, and the files a
     previous run left there removed). Ctrl-C or SIGTERM during the run stop the simulation at the
     current time and what ran is judged and written with `interrupted: true`; pass `stop` to
     install the handlers earlier (run_sim.py does, before pydrake loads). Returns the result (the
-    content of result.json). `simulate_options`: see `simulate`.
+    content of result.json). `records`: the RunRecord is appended to it, for a caller that judges
+    the logs at their full precision (logs.npz keeps 7 digits). `simulate_options`: see `simulate`.
     """
     own_stop = stop is None
     stop = (stop or StopRequest()).install()
@@ -235,6 +244,8 @@ def run(*, scenario: Scenario, name: str, out_dir: Path, stop: StopRequest | Non
             record = simulate(scenario=scenario, name=name, stop=stop, **simulate_options)
             result = judge_run(record)
             write_run(record, result, out_dir)
+            if records is not None:
+                records.append(record)
     finally:
         if own_stop:
             stop.restore()

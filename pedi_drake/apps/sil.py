@@ -95,6 +95,7 @@ def run_sil(
     scenario_name: str = "default",
     separate: bool = False,
     operator_log: Path | None = None,
+    records: list | None = None,
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
@@ -103,6 +104,7 @@ def run_sil(
     `separate`: the controller side runs as `run_sim.py --hardware` in a process of its own (see
     the module docstring) instead of in this one.
     `operator_log`: an LCM log of operator messages, played by an operator process (module docstring).
+    `records`: the controller side's RunRecord is appended to it (pedi_drake.run.run).
     """
     if separate and not RUN_SIM.is_file():
         raise ConfigError(f"--separate: needs run_sim.py beside the package (a source checkout); no {RUN_SIM}")
@@ -155,7 +157,13 @@ def run_sil(
             result = _run_controller_program(mission, scenario_name, text, url, out_dir)
         else:
             result = run(
-                scenario=scenario, name=mission, out_dir=out_dir, quiet=True, hardware=True, realtime_rate=realtime_rate
+                scenario=scenario,
+                name=mission,
+                out_dir=out_dir,
+                quiet=True,
+                hardware=True,
+                realtime_rate=realtime_rate,
+                records=records,
             )
     finally:
         if bridge.poll() is None:
