@@ -31,7 +31,7 @@ last good command is held with zero velocity target and `failure_kd` damping, an
 import time
 
 import numpy as np
-from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
+from pydrake.systems.framework import Context, DiscreteValues
 
 from pedi_drake import robot
 from pedi_drake.control import compiled_stack, dense_qp, references, tasks, whole_body_tick
@@ -43,6 +43,7 @@ from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, PediError, QpInfeasible
 from pedi_drake.go1_command import COMMAND_SIZE, held_command
 from pedi_drake.jit import new_record
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.polygon import polygon_halfplanes
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.vector3 import orientation_error_W
@@ -88,7 +89,7 @@ def _clip(x: np.ndarray, lower, upper) -> np.ndarray:
     return np.minimum(np.maximum(x, lower), upper)
 
 
-class WholeBodyController(LeafSystem):
+class WholeBodyController(LeafSystemWithoutWitnesses):
     """Hierarchical whole-body QP controller for the Go1 (and its prongs)."""
 
     def __init__(self, config: WholeBodyControllerConfig, prongs: ProngDesign | None = None) -> None:

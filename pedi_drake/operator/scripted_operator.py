@@ -10,9 +10,10 @@ import dataclasses
 
 import numpy as np
 from pydrake.lcm import DrakeLcmInterface
-from pydrake.systems.framework import EventStatus, LeafSystem
+from pydrake.systems.framework import EventStatus
 
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import FRAME_TRUNK, KIND_VELOCITY, MODE_NONE
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
 
@@ -48,7 +49,7 @@ def foot_command_message(step: ScriptStep, t: float, sequence: int) -> foot_comm
     return message
 
 
-class ScriptedOperator(LeafSystem):
+class ScriptedOperator(LeafSystemWithoutWitnesses):
     """Publishes `steps` on `channel` every `period` [s] until `until` [s] (diagram time)."""
 
     def __init__(
