@@ -389,7 +389,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
 
     def _fell(self, view: RobotView, progress: MissionProgress) -> bool:
         standing_started = any(r.kind == "stand_up" and r.status == SUCCEEDED for r in progress.records)
-        on_prongs = bool(np.any(progress.references.contacts[4:] > 0.5))
+        on_prongs = any(loaded > 0.5 for loaded in progress.references.contacts[4:].tolist())
         return bool(
             trunk_has_fallen(
                 view.base.quaternion_wxyz,
