@@ -42,13 +42,14 @@ import dataclasses
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RotationMatrix
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import BasicVector
 
 from pedi_drake import robot
 from pedi_drake.control import references as controller_refs
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE, BaseState
 from pedi_drake.exceptions import ConfigError, PediError
 from pedi_drake.fall import trunk_has_fallen
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.mission import mode_switch, semi_autonomous, spec
 from pedi_drake.mission.phases import (
     RUNNERS,
@@ -118,7 +119,7 @@ def ik_legs_of(mission: spec.MissionSpec) -> tuple[str, ...]:
     return tuple(leg for leg in robot.LEG_NAMES if leg in legs)
 
 
-class MissionManager(LeafSystem):
+class MissionManager(LeafSystemWithoutWitnesses):
     """Mission phases -> controller references. Ports: see the module docstring."""
 
     def __init__(
@@ -389,7 +390,7 @@ class MissionManager(LeafSystem):
 
     def _fell(self, view: RobotView, progress: MissionProgress) -> bool:
         standing_started = any(r.kind == "stand_up" and r.status == SUCCEEDED for r in progress.records)
-        on_prongs = bool(np.any(progress.references.contacts[4:] > 0.5))
+        on_prongs = any(loaded > 0.5 for loaded in progress.references.contacts[4:].tolist())
         return bool(
             trunk_has_fallen(
                 view.base.quaternion_wxyz,

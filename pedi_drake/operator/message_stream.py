@@ -20,7 +20,9 @@ from pathlib import Path
 import lcm as lcm_module
 import numpy as np
 from pydrake.lcm import DrakeLcmInterface
-from pydrake.systems.framework import DiscreteValues, EventStatus, LeafSystem
+from pydrake.systems.framework import DiscreteValues, EventStatus
+
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 
 @dataclasses.dataclass(frozen=True)
@@ -70,7 +72,7 @@ def play_messages(
     return len(messages)
 
 
-class MessagePlayer(LeafSystem):
+class MessagePlayer(LeafSystemWithoutWitnesses):
     """Publishes `messages` on `lcm` at their diagram times, checked every `period` [s].
 
     Discrete state: the index of the next message to send (the stream itself is fixed data).

@@ -22,11 +22,12 @@ import time
 
 import numpy as np
 from pydrake.lcm import DrakeLcmInterface
-from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
+from pydrake.systems.framework import BasicVector, DiscreteValues
 
 from pedi_drake.go1_driver.constants import RC_COMMAND_CHANNEL
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt, rc_command_lcmt
 from pedi_drake.go1_driver.link import QUEUE_CAPACITY, Inbox
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import MODE_NONE, OPERATOR_COMMAND_SIZE
 from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.operator.messages import (
@@ -74,7 +75,7 @@ def operator_inbox(config: OperatorConfig, clock=time.monotonic) -> Inbox:
     raise ValueError(f"operator source {config.source!r} has no inbox")
 
 
-class OperatorInput(LeafSystem):
+class OperatorInput(LeafSystemWithoutWitnesses):
     """The operator's command (port `operator_command`, layout in pedi_drake.operator.command)."""
 
     def __init__(self, config: OperatorConfig, lcm: DrakeLcmInterface):

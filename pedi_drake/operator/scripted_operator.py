@@ -11,9 +11,10 @@ import dataclasses
 
 import numpy as np
 from pydrake.lcm import DrakeLcmInterface
-from pydrake.systems.framework import EventStatus, LeafSystem
+from pydrake.systems.framework import EventStatus
 
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import FRAME_TRUNK, KIND_VELOCITY, MODE_NONE
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
 from pedi_drake.operator.message_stream import TimedMessage
@@ -60,7 +61,7 @@ def script_stream(steps: list[ScriptStep], rate: float, end: float, channel: str
     ]
 
 
-class ScriptedOperator(LeafSystem):
+class ScriptedOperator(LeafSystemWithoutWitnesses):
     """Publishes `steps` on `channel` every `period` [s] until `until` [s] (diagram time)."""
 
     def __init__(
