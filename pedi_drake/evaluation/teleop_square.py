@@ -89,6 +89,10 @@ def square_errors(times: np.ndarray, p_true_W: np.ndarray) -> dict:
     corner = np.array([np.interp(SQUARE_START, times, p_true_W[:, k]) for k in range(3)])
     corners = corner + SIDE * np.cumsum(np.vstack([np.zeros(3), EDGES[:-1]]), axis=0)
     during = (times >= SQUARE_START) & (times <= SQUARE_END)
+    if not np.any(during):  # the run ended before the square began
+        nan = float("nan")
+        keys = ("path_max_m", "path_rms_m", "timed_max_m", "timed_rms_m", "corner_max_m")
+        return {**dict.fromkeys(keys, nan), "samples": 0, "corner_W": corner.tolist()}
     t, p = times[during], p_true_W[during]
     path = _distance_to_path(p, corners)
     timed = np.linalg.norm(p - commanded_point(t, corner), axis=1)

@@ -89,6 +89,7 @@ from pedi_drake.operator.command import (
     OperatorCommand,
 )
 from pedi_drake.operator.feedback import feedback_vector
+from pedi_drake.polygon import shrink_polygon
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.suf.live import SUF_SIZE, LiveSufReading
 from pedi_drake.suf.live_suf_system import suf_request_vector
@@ -219,6 +220,9 @@ class MissionManager(LeafSystemWithoutWitnesses):
         self.DeclareStateOutputPort("suf_request", self._suf_request)
         self.DeclareStateOutputPort("operator_feedback", self._feedback)
         warm_up(holding)
+        # The stance's safety polygon is shrunk at every update: its kernel is compiled here, not
+        # in the first update (on hardware, a first tick late by the compile latches the driver).
+        shrink_polygon(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), self._safety_margin)
 
     @property
     def mission(self) -> spec.MissionSpec:

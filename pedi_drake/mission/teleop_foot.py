@@ -60,13 +60,15 @@ _FIRST_TICK = 0.01
 
 
 def _desired_velocity_W(view: RobotView, p_ref_W: np.ndarray, dt: float) -> np.ndarray:
-    """The operator's command as a world-frame foot velocity [m/s]."""
+    """The operator's command as a world-frame foot velocity [m/s]; a command so large that it
+    overflows gives an infinite one (which the speed bound turns into no motion), silently."""
     command = view.operator
     R_WB = view.X_WB.rotation().matrix()
-    if command.kind == KIND_POSITION:
-        goal_W = view.X_WB @ command.value if command.frame == FRAME_TRUNK else command.value
-        return (goal_W - p_ref_W) / dt
-    return R_WB @ command.value if command.frame == FRAME_TRUNK else command.value
+    with np.errstate(over="ignore", invalid="ignore"):
+        if command.kind == KIND_POSITION:
+            goal_W = view.X_WB @ command.value if command.frame == FRAME_TRUNK else command.value
+            return (goal_W - p_ref_W) / dt
+        return R_WB @ command.value if command.frame == FRAME_TRUNK else command.value
 
 
 class TeleopFootRunner:

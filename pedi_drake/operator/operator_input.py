@@ -11,7 +11,7 @@ receiver's clock allows, is dropped too ("out_of_order", "stamp_ahead"); after
 SENDER_TAKEOVER_SILENCE without a valid message a restarted or new sender is taken, whatever its
 stamps.
 
-A periodic update takes in what arrived (polling the DrakeLcm: the diagram's time is the only
+A periodic update takes in what arrived (polling the bus: the diagram's time is the only
 clock, so a lock-step simulation and a real-time run see the same ages) and keeps in the discrete
 state: the newest command, the last mode the operator asked for, the latched E-stop and the
 diagram time of the last valid message. `age` on the output is the time since then [s].
@@ -20,13 +20,14 @@ diagram time of the last valid message. `age` on the output is the time since th
 import math
 import time
 
+import lcm as lcm_module
 import numpy as np
 from pydrake.lcm import DrakeLcmInterface
 from pydrake.systems.framework import BasicVector, DiscreteValues
 
 from pedi_drake.go1_driver.constants import RC_COMMAND_CHANNEL
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt, rc_command_lcmt
-from pedi_drake.go1_driver.link import QUEUE_CAPACITY, Inbox
+from pedi_drake.go1_driver.link import QUEUE_CAPACITY, DrakeLcmTransport, Inbox
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import MODE_NONE, OPERATOR_COMMAND_SIZE
 from pedi_drake.operator.config import OperatorConfig
@@ -81,13 +82,22 @@ class OperatorInput(LeafSystemWithoutWitnesses):
     def __init__(self, config: OperatorConfig, lcm: DrakeLcmInterface):
         """`lcm`: the bus the commands arrive on (polled by this system's update)."""
         super().__init__()
-        self._lcm = lcm
         # The diagram time of the poll under way: messages are handled only inside `_take_in`'s
         # poll, so this is their receipt time, on the one clock of a lock-step or real-time run.
         self._poll_time = -math.inf
         self._inbox = operator_inbox(config, clock=lambda: self._poll_time)
-        subscription = lcm.Subscribe(self._inbox.channel, self._inbox.handle)
-        if hasattr(subscription, "set_queue_capacity"):
+        url = lcm.get_lcm_url()
+        if url.startswith("memq://"):
+            # An in-process bus hands over every message published since the last poll.
+            self._receiver = DrakeLcmTransport(lcm)
+        else:
+            # On a UDP bus a DrakeLcm subscription keeps one message between two polls, and
+            # pydrake gives no handle to raise that: at 1 kHz nine operator messages in ten would
+            # be lost (E-stops among them) and never counted. An lcm.LCM on the same URL keeps
+            # QUEUE_CAPACITY, as the Go1 driver's link does.
+            self._receiver = lcm_module.LCM(url)
+        subscription = self._receiver.subscribe(self._inbox.channel, lambda _channel, data: self._inbox.handle(data))
+        if subscription is not None:
             subscription.set_queue_capacity(QUEUE_CAPACITY)
         initial = np.zeros(OPERATOR_COMMAND_SIZE)
         initial[_T_LAST] = -math.inf
@@ -110,7 +120,8 @@ class OperatorInput(LeafSystemWithoutWitnesses):
 
     def _take_in(self, context, discrete_state: DiscreteValues) -> None:
         self._poll_time = context.get_time()
-        self._lcm.HandleSubscriptions(0)
+        while self._receiver.handle_timeout(0) > 0:
+            pass
         values, received, dropped, _ = self._inbox.snapshot()
         x = context.get_discrete_state(self._state).get_value().copy()
         if values is not None and received > x[_RECEIVED]:
