@@ -12,6 +12,8 @@
    Two passes: with the garbage collector as Python leaves it, and as a hardware run runs
    (go1_driver.hardware_run: the heap frozen at the start). Each tick is attributed to what ran
    in it: a garbage collection (gc.callbacks), a mission phase transition, or nothing special.
+   Beside the loop's ticks, the CPU time of the link's receive thread per tick (it decodes the
+   status messages; here it also takes in the replay's own copy of every command sent).
 3. A timed pass gives each stage's CPU time: the event handlers of every system of the
    controller side (status receivers, estimator, mission manager and its reference outputs, live
    SUF, leg IK, whole-body controller, safety filter, command sender) are wrapped, while that pass's
@@ -225,16 +227,24 @@ class Replay:
 
         gc.callbacks.append(on_gc)
         self.simulator.set_monitor(end_of_step)
+        receive_start = self.link.receive_cpu_time()
         try:
             start_tick(0)
             self.simulator.AdvanceTo(ticks * self.period)
         finally:
+            receive_cpu_s = self.link.receive_cpu_time() - receive_start
             self.simulator.clear_monitor()
             gc.callbacks.remove(on_gc)
             self.link.close()
         transition = np.zeros(ticks, dtype=bool)
         transition[1:] = phase_index[1:] != phase_index[:-1]
-        return {"tick_ms": tick_ms, "cpu_ms": cpu_ms, "gc_generation": gc_generation, "transition": transition}
+        return {
+            "tick_ms": tick_ms,
+            "cpu_ms": cpu_ms,
+            "gc_generation": gc_generation,
+            "transition": transition,
+            "receive_thread_cpu_ms_per_tick": 1e3 * receive_cpu_s / ticks,
+        }
 
 
 def _max_or_none(x: np.ndarray) -> float | None:
@@ -250,6 +260,7 @@ def _summary(run: dict, period_ms: float) -> dict:
         "ticks": int(tick.size),
         "tick_ms": _distribution(tick),
         "tick_cpu_ms": _distribution(run["cpu_ms"]),
+        "receive_thread_cpu_ms_per_tick": run["receive_thread_cpu_ms_per_tick"],
         "deadline_misses_per_10000": float(1e4 * np.count_nonzero(late) / tick.size),
         "ticks_with_gc": {f"gen{g}": int(np.count_nonzero(run["gc_generation"] == g)) for g in range(3)},
         "max_tick_with_full_gc_ms": float(tick[run["gc_generation"] == 2].max())
@@ -476,7 +487,10 @@ def main() -> None:
             f"{row['deadline_misses_per_10000']:10.1f}{t['median'] / baseline_ms:14.2f}  {cause}"
         )
         cpu = row["tick_cpu_ms"]
-        print(f"{'  CPU time':<18}{cpu['median']:8.3f}{cpu['p99']:8.3f}{cpu['p99_9']:8.3f}{cpu['max']:9.2f}")
+        print(
+            f"{'  CPU time':<18}{cpu['median']:8.3f}{cpu['p99']:8.3f}{cpu['p99_9']:8.3f}{cpu['max']:9.2f}"
+            f"  (and the link's receive thread: {row['receive_thread_cpu_ms_per_tick']:.3f} ms a tick)"
+        )
     total = sum(stage["mean_ms"] for stage in stages.values())
     print("CPU time per tick by stage (timed pass) [ms]:")
     print(f"  {'stage':<12}{'mean':>8}{'median':>8}{'p99':>8}{'max':>8}{'share':>8}")

@@ -323,6 +323,13 @@ class Go1Link:
         )
         self._thread.start()
 
+    def receive_cpu_time(self) -> float:
+        """The CPU time the running receive thread has used so far [s]; 0 without one."""
+        thread = self._thread
+        if thread is None or thread.ident is None:
+            return 0.0
+        return time.clock_gettime(time.pthread_getcpuclockid(thread.ident))
+
     def close(self) -> None:
         """Stops the receive thread (the counts and timings stay readable)."""
         self._stop.set()
