@@ -94,6 +94,7 @@ from pedi_drake.suf.live import SUF_SIZE, LiveSufReading
 from pedi_drake.suf.live_suf_system import suf_request_vector
 
 MISSION_STATUS_SIZE = 4  # [phase index, status code, pedipulation active, number of phases]
+MISSION_PERIOD = 0.01  # [s] the manager's update period, unless given
 _IDENTITY_POSE = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
 
 
@@ -128,7 +129,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
         prongs: ProngDesign | None = None,
         friction: float = 0.8,
         safety_margin: float = 0.03,
-        period: float = 0.01,
+        period: float = MISSION_PERIOD,
         force_estimate: str = "joint_torque",
         wait_for_plans: bool = True,
     ):

@@ -3,7 +3,8 @@
 For tests, benchmarks and the example app: the script is a list of steps, each holding from its
 start time until the next one's; after the last step's `until` nothing more is published (the
 operator falls silent). Messages go out every `period` [s] of diagram time, with a sequence
-number, on a DrakeLcm (memq:// in one process, udpm:// to another).
+number, on a DrakeLcm (memq:// in one process, udpm:// to another). `script_stream` makes the
+same messages as data, for a MessagePlayer or a file.
 """
 
 import dataclasses
@@ -16,6 +17,7 @@ from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import FRAME_TRUNK, KIND_VELOCITY, MODE_NONE
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
+from pedi_drake.operator.message_stream import TimedMessage
 
 
 @dataclasses.dataclass(frozen=True)
@@ -47,6 +49,16 @@ def foot_command_message(step: ScriptStep, t: float, sequence: int) -> foot_comm
     message.value = [float(v) for v in step.value]
     message.estop = 1 if step.estop else 0
     return message
+
+
+def script_stream(steps: list[ScriptStep], rate: float, end: float, channel: str) -> list[TimedMessage]:
+    """The messages of `steps` sent at `rate` [Hz] from 0 to `end` [s] (both ends) on `channel`,
+    sequence numbers from 1: the script as a stream (pedi_drake.operator.message_stream)."""
+    times = np.arange(int(np.floor(end * rate + 1e-9)) + 1) / rate
+    return [
+        TimedMessage(float(t), channel, foot_command_message(script_command(steps, t), float(t), k + 1).encode())
+        for k, t in enumerate(times)
+    ]
 
 
 class ScriptedOperator(LeafSystemWithoutWitnesses):
