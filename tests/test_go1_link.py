@@ -23,7 +23,7 @@ from pedi_drake.go1_driver.config import Go1DriverConfig, Go1SafetyConfig
 from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.go1_driver.hardware_station import MakeHardwareStation
 from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt
-from pedi_drake.go1_driver.link import Go1Link, Inbox
+from pedi_drake.go1_driver.link import LEG_CONTROL_FIELDS, STATE_ESTIMATOR_FIELDS, FloatFields, Go1Link, Inbox
 from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.scenario import load_scenario
 
@@ -258,6 +258,27 @@ def test_a_malformed_message_costs_microseconds():
         per_message = (time.perf_counter() - start) / 2000
         assert per_message < 20e-6, (reason, per_message)
     assert inbox.counts()["rejected"] == {"wrong_size": 2000, "wrong_fingerprint": 2000}
+
+
+@pytest.mark.parametrize(
+    ("channel", "fields"),
+    [(c.LEG_CONTROL_CHANNEL, LEG_CONTROL_FIELDS), (c.STATE_ESTIMATOR_CHANNEL, STATE_ESTIMATOR_FIELDS)],
+)
+def test_status_values_read_from_the_bytes_are_the_decoded_fields(channel, fields):
+    lcm_type = c.CHANNEL_TYPES[channel]
+    read = FloatFields(lcm_type, fields)
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        message = lcm_type()
+        for name, dims in zip(lcm_type.__slots__, lcm_type.__dimensions__, strict=True):
+            if dims:
+                setattr(message, name, list(rng.normal(size=dims[0]) * 10.0 ** rng.integers(-8, 8)))
+            else:
+                setattr(message, name, int(rng.integers(0, 2**40)))
+        data = message.encode()
+        decoded = lcm_type.decode(data)
+        expected = np.concatenate([np.asarray(getattr(decoded, name), float) for name in fields])
+        assert np.array_equal(read(data), expected)
 
 
 HARDWARE_RUN = [

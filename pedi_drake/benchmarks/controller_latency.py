@@ -12,6 +12,8 @@
    Two passes: with the garbage collector as Python leaves it, and as a hardware run runs
    (go1_driver.hardware_run: the heap frozen at the start). Each tick is attributed to what ran
    in it: a garbage collection (gc.callbacks), a mission phase transition, or nothing special.
+   Beside the loop's ticks, the CPU time of the link's receive thread per tick (it decodes the
+   status messages; here it also takes in the replay's own copy of every command sent).
 3. A timed pass gives each stage's CPU time: the event handlers of every system of the
    controller side (status receivers, estimator, mission manager and its reference outputs, live
    SUF, leg IK, whole-body controller, safety filter, command sender) are wrapped, while that pass's
@@ -20,6 +22,10 @@
    With `--callbacks`, one more pass times every Python callback of the diagram (periodic event
    handlers and output calculations, whatever their system): what the framework share is made
    of, and what Drake and pybind cost outside all Python code.
+   With `--parts`, one more pass times the parts of the mission manager's update and the
+   whole-body controller's compiled call (PARTS: CPU time per call, each part's own and its
+   callees'). With `--framework-floor`, one more pass with every handler of the controller side
+   a no-op (NO_OPS): what Drake, pybind and the log cost a tick by themselves.
 4. The same mission in simulation: the whole-body controller's own tick (its diagnostics).
 5. The bare plant's cost in the same run (`station_fixed_cmd` of the station benchmark: the
    simulated Go1 with a constant command), the baseline for machines of different speed.
@@ -48,6 +54,7 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 
 from pedi_drake.apps.sim_bridge import status_messages
 from pedi_drake.benchmarks.station import real_time_factor
+from pedi_drake.control import whole_body_tick
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.estimation.kalman_estimator import KalmanEstimator
@@ -58,10 +65,14 @@ from pedi_drake.go1_driver.hardware_station import hardware_link
 from pedi_drake.go1_driver.safety import Go1SafetyFilter
 from pedi_drake.go1_driver.status_receiver import Go1LcmReceiver
 from pedi_drake.ik.leg_ik_system import LegIkSystem
+from pedi_drake.mission import mission_manager
 from pedi_drake.mission.mission_manager import MissionManager
+from pedi_drake.mission.phases import RUNNERS
+from pedi_drake.mission.progress import MissionProgress
 from pedi_drake.run import simulate
 from pedi_drake.scenario import load_scenario
 from pedi_drake.suf.live_suf_system import LiveSufSystem
+from pedi_drake.wall_clock import WallClock
 
 # The controller side's stages in the order of a tick, each with the event handlers (and the
 # outputs computed every tick) of its systems.
@@ -74,6 +85,38 @@ STAGES = (
     ("control", WholeBodyController, ("_update",)),
     ("safety", Go1SafetyFilter, ("_update",)),
     ("send", Go1CommandSender, ("_publish",)),
+)
+
+
+# `--parts`: (label, owner, attribute) of what is timed, a part's callees included; the phase
+# runners' steps are added by kind (`_parts`).
+PARTS = (
+    ("mission update (all of it)", MissionManager, "_update"),
+    ("  read the inputs (the RobotView)", MissionManager, "_view"),
+    ("  copy the progress", MissionProgress, "copy"),
+    ("  the fall check", MissionManager, "_fell"),
+    ("  store the outputs", MissionManager, "_store"),
+    ("  pack new trajectories (reference table)", mission_manager, "reference_table"),
+    ("  safety polygon and haptic feedback", MissionManager, "_set_polygon"),
+    ("    the stance's safety polygon", mission_manager, "stance_safety_polygon"),
+    ("mission references (every tick)", MissionManager, "_calc_references"),
+    ("whole-body update (all of it)", WholeBodyController, "_update"),
+    ("  the compiled tick", whole_body_tick, "whole_body_tick"),
+)
+
+_SUCCEEDED = EventStatus.Succeeded()
+# `--framework-floor`: every handler of the controller side, a no-op.
+NO_OPS = (
+    (Go1LcmReceiver, "_latch", lambda self, context, state: None),
+    (KalmanEstimator, "_update", lambda self, context, state: None),
+    (MissionManager, "_update", lambda self, context, state: None),
+    (MissionManager, "_calc_references", lambda self, context, output: None),
+    (LiveSufSystem, "_update", lambda self, context, state: None),
+    (LegIkSystem, "_update", lambda self, context, state: _SUCCEEDED),
+    (WholeBodyController, "_update", lambda self, context, state: None),
+    (Go1SafetyFilter, "_update", lambda self, context, state: None),
+    (Go1CommandSender, "_publish", lambda self, context: _SUCCEEDED),
+    (WallClock, "_calc", lambda self, context, output: None),
 )
 
 
@@ -225,16 +268,24 @@ class Replay:
 
         gc.callbacks.append(on_gc)
         self.simulator.set_monitor(end_of_step)
+        receive_start = self.link.receive_cpu_time()
         try:
             start_tick(0)
             self.simulator.AdvanceTo(ticks * self.period)
         finally:
+            receive_cpu_s = self.link.receive_cpu_time() - receive_start
             self.simulator.clear_monitor()
             gc.callbacks.remove(on_gc)
             self.link.close()
         transition = np.zeros(ticks, dtype=bool)
         transition[1:] = phase_index[1:] != phase_index[:-1]
-        return {"tick_ms": tick_ms, "cpu_ms": cpu_ms, "gc_generation": gc_generation, "transition": transition}
+        return {
+            "tick_ms": tick_ms,
+            "cpu_ms": cpu_ms,
+            "gc_generation": gc_generation,
+            "transition": transition,
+            "receive_thread_cpu_ms_per_tick": 1e3 * receive_cpu_s / ticks,
+        }
 
 
 def _max_or_none(x: np.ndarray) -> float | None:
@@ -250,6 +301,7 @@ def _summary(run: dict, period_ms: float) -> dict:
         "ticks": int(tick.size),
         "tick_ms": _distribution(tick),
         "tick_cpu_ms": _distribution(run["cpu_ms"]),
+        "receive_thread_cpu_ms_per_tick": run["receive_thread_cpu_ms_per_tick"],
         "deadline_misses_per_10000": float(1e4 * np.count_nonzero(late) / tick.size),
         "ticks_with_gc": {f"gen{g}": int(np.count_nonzero(run["gc_generation"] == g)) for g in range(3)},
         "max_tick_with_full_gc_ms": float(tick[run["gc_generation"] == 2].max())
@@ -397,6 +449,68 @@ def _callback_table(times: dict, calls: dict, cpu_ms: np.ndarray) -> dict:
     return rows
 
 
+def _parts() -> list[tuple[str, object, str]]:
+    steps = [(f"  phase step: {kind.__name__}", runner, "step") for kind, runner in RUNNERS.items()]
+    return [*PARTS[:4], *steps, *PARTS[4:]]
+
+
+@contextlib.contextmanager
+def part_timers():
+    """While active, every part of `_parts()` is timed: yields {label: [CPU ms of each call]}."""
+    times: dict[str, list[float]] = {}
+    originals = []
+
+    def timed(label: str, method):
+        calls = times.setdefault(label, [])
+
+        def wrapper(*args, **kwargs):
+            start = time.thread_time()
+            try:
+                return method(*args, **kwargs)
+            finally:
+                calls.append(1e3 * (time.thread_time() - start))
+
+        return wrapper
+
+    for label, owner, name in _parts():
+        originals.append((owner, name, owner.__dict__.get(name), getattr(owner, name)))
+        setattr(owner, name, timed(label, getattr(owner, name)))
+    try:
+        yield times
+    finally:
+        for owner, name, own, _ in reversed(originals):
+            if own is None:
+                delattr(owner, name)  # an instance's: the class's method shows again
+            else:
+                setattr(owner, name, own)
+
+
+def _parts_table(times: dict[str, list[float]], ticks: int) -> dict:
+    return {
+        label: {
+            "calls_per_tick": len(calls) / ticks,
+            "per_call_mean_ms": float(np.mean(calls)),
+            "per_call_p99_ms": float(np.percentile(calls, 99)),
+            "per_tick_mean_ms": float(np.sum(calls)) / ticks,
+        }
+        for label, calls in times.items()
+        if calls
+    }
+
+
+@contextlib.contextmanager
+def no_op_handlers():
+    """While active, systems built get NO_OPS for their handlers (the diagram must be built inside)."""
+    originals = [(cls, name, getattr(cls, name)) for cls, name, _ in NO_OPS]
+    for cls, name, no_op in NO_OPS:
+        setattr(cls, name, no_op)
+    try:
+        yield
+    finally:
+        for cls, name, method in originals:
+            setattr(cls, name, method)
+
+
 def record_reference(mission: str, period: float, ticks: int, path: Path) -> None:
     """Writes the status of the first `ticks` replayed ticks and the commands sent for them."""
     samples, _ = record_status(mission, period)
@@ -423,6 +537,8 @@ def main() -> None:
         help="the whole-body controller's tick: compiled (the default) or the reference with daqp or dense_qp",
     )
     parser.add_argument("--callbacks", action="store_true", help="one more pass: every Python callback timed")
+    parser.add_argument("--parts", action="store_true", help="one more pass: the parts of PARTS timed")
+    parser.add_argument("--framework-floor", action="store_true", help="one more pass: every handler a no-op")
     args = parser.parse_args()
     if args.record_reference:
         record_reference(args.mission, args.period, args.reference_ticks, args.record_reference)
@@ -454,6 +570,16 @@ def main() -> None:
         with callback_timers(ticks) as (callback_times, callback_calls):
             timed = Replay(args.mission, args.period, samples)
         callbacks = _callback_table(callback_times, callback_calls, timed.run(ticks, callback_times)["cpu_ms"])
+    parts = None
+    if args.parts:
+        with part_timers() as part_times:
+            Replay(args.mission, args.period, samples).run(ticks)
+        parts = _parts_table(part_times, ticks)
+    floor = None
+    if args.framework_floor:
+        with no_op_handlers():
+            idle = Replay(args.mission, args.period, samples)
+        floor = _distribution(idle.run(ticks)["cpu_ms"])
 
     rows = {"python_gc": _summary(default_gc, period_ms), "hardware_run_gc": _summary(frozen_gc, period_ms)}
     load_end = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
@@ -476,7 +602,10 @@ def main() -> None:
             f"{row['deadline_misses_per_10000']:10.1f}{t['median'] / baseline_ms:14.2f}  {cause}"
         )
         cpu = row["tick_cpu_ms"]
-        print(f"{'  CPU time':<18}{cpu['median']:8.3f}{cpu['p99']:8.3f}{cpu['p99_9']:8.3f}{cpu['max']:9.2f}")
+        print(
+            f"{'  CPU time':<18}{cpu['median']:8.3f}{cpu['p99']:8.3f}{cpu['p99_9']:8.3f}{cpu['max']:9.2f}"
+            f"  (and the link's receive thread: {row['receive_thread_cpu_ms_per_tick']:.3f} ms a tick)"
+        )
     total = sum(stage["mean_ms"] for stage in stages.values())
     print("CPU time per tick by stage (timed pass) [ms]:")
     print(f"  {'stage':<12}{'mean':>8}{'median':>8}{'p99':>8}{'max':>8}{'share':>8}")
@@ -493,6 +622,19 @@ def main() -> None:
                 f"  {name:<58}{row['calls_per_tick']:7.2f}{1e3 * row['mean_ms']:8.1f}"
                 f"{1e3 * row['median']:8.1f}{1e3 * row['p99']:8.1f}"
             )
+    if parts is not None:
+        print("CPU time by part (parts pass; a part's callees included) [us]:")
+        print(f"  {'part':<46}{'calls/tick':>11}{'per call':>10}{'p99':>8}{'per tick':>10}")
+        for label, row in parts.items():
+            print(
+                f"  {label:<46}{row['calls_per_tick']:11.3f}{1e3 * row['per_call_mean_ms']:10.1f}"
+                f"{1e3 * row['per_call_p99_ms']:8.1f}{1e3 * row['per_tick_mean_ms']:10.1f}"
+            )
+    if floor is not None:
+        print(
+            f"framework floor (every handler of the controller side a no-op): tick CPU median "
+            f"{floor['median']:.3f} ms, p99 {floor['p99']:.3f}, max {floor['max']:.2f}"
+        )
     sim_tick = sim["controller_tick_ms"]
     print(
         f"simulation: real-time factor {sim['real_time_factor']:.2f}; whole-body controller tick median "
@@ -515,6 +657,8 @@ def main() -> None:
                 "replay": rows,
                 "stage_cpu_ms_per_tick": stages,
                 "callback_cpu_ms_per_tick": callbacks,
+                "part_cpu_ms": parts,
+                "framework_floor_cpu_ms": floor,
                 "simulation": sim,
             },
             indent=2,

@@ -77,17 +77,52 @@ QUEUE_CAPACITY = 4096
 RECEIVE_POLL_PERIOD = 0.002
 
 
+class FloatFields:
+    """Reads float fields of a message straight from its encoded bytes: the named fields,
+    concatenated in the given order, as float64 values (n,).
+
+    For a type whose fields up to the last one read are fixed-size float arrays (the bridge's
+    status types), the same values as decoding the message and concatenating the fields, at a
+    fraction of the cost: the generated decoder builds the message object and a tuple per field
+    (about 12 us for leg_control_data and 40 us for state_estimator_data, at 500 Hz each on the
+    receive thread). The bytes must have passed the size and fingerprint checks (Inbox.handle).
+    """
+
+    def __init__(self, lcm_type, names: tuple[str, ...]):
+        blocks, count = {}, 0
+        for name, typename, dims in zip(
+            lcm_type.__slots__, lcm_type.__typenames__, lcm_type.__dimensions__, strict=True
+        ):
+            if typename != "float" or not all(isinstance(d, int) for d in dims or []):
+                break  # later fields are not at a fixed place in float32 units
+            size = math.prod(dims) if dims else 1
+            blocks[name] = (count, size)
+            count += size
+        missing = [name for name in names if name not in blocks]
+        if missing:
+            raise ValueError(f"FloatFields: {lcm_type.__name__} has no fixed float field(s) {missing} before others")
+        self.names = tuple(names)
+        self._index = np.concatenate([np.arange(start, start + size) for start, size in map(blocks.get, names)])
+        self._count = count
+
+    def __call__(self, data: bytes) -> np.ndarray:
+        # The fingerprint's 8 bytes first, then the fields, big-endian.
+        return np.frombuffer(data, dtype=">f4", count=self._count, offset=8)[self._index].astype(np.float64)
+
+
 class Inbox:
     """The newest valid message of one channel, its receipt stamp and the counts of what arrived.
 
     `handle` runs on the receive thread (or the polling loop); `snapshot` on the control loop.
+    `to_vector`: the channel's values from the decoded message, or a FloatFields, which reads them
+    from the bytes without decoding.
     """
 
     def __init__(
         self,
         channel: str,
         lcm_type,
-        to_vector: Callable[[object], np.ndarray],
+        to_vector: Callable[[object], np.ndarray] | FloatFields,
         *,
         sticky_max: bool = False,
         clock: Callable[[], float] = time.monotonic,
@@ -146,8 +181,10 @@ class Inbox:
             self._reject("wrong_fingerprint")
             return
         try:
-            message = self._type.decode(data)
-            values = np.asarray(self._to_vector(message), dtype=float)
+            reads_bytes = isinstance(self._to_vector, FloatFields)
+            # Decoded only when something reads the message (a FloatFields reads the bytes).
+            message = None if reads_bytes and self._stamp is None else self._type.decode(data)
+            values = self._to_vector(data) if reads_bytes else np.asarray(self._to_vector(message), dtype=float)
             stamp = self._stamp(message) if self._stamp is not None else None
         except Exception as error:  # the type's own decoder: whatever it raises, the driver carries on
             self._reject("undecodable", str(error))
@@ -206,12 +243,9 @@ class Inbox:
             }
 
 
-def _leg_control_vector(message) -> np.ndarray:
-    return np.concatenate([message.q, message.qd, message.tau_est])
-
-
-def _state_estimator_vector(message) -> np.ndarray:
-    return np.concatenate([message.quat, message.omegaBody, message.aBody, message.contact_estimate])
+# The status channels' values: [q, qd, tau_est] (36) and [quat, omegaBody, aBody, contact_estimate] (14).
+LEG_CONTROL_FIELDS = ("q", "qd", "tau_est")
+STATE_ESTIMATOR_FIELDS = ("quat", "omegaBody", "aBody", "contact_estimate")
 
 
 def _estop_vector(fields: tuple[str, ...]) -> Callable[[object], np.ndarray]:
@@ -279,8 +313,12 @@ class Go1Link:
         self.realtime_rate = 1.0
         # The loop's scheduling while it ran (see pedi_drake.realtime_priority), for the report.
         self.scheduling = "normal scheduling"
-        self.leg_control = self._add(c.LEG_CONTROL_CHANNEL, _leg_control_vector)
-        self.state_estimator = self._add(c.STATE_ESTIMATOR_CHANNEL, _state_estimator_vector)
+        self.leg_control = self._add(
+            c.LEG_CONTROL_CHANNEL, FloatFields(c.CHANNEL_TYPES[c.LEG_CONTROL_CHANNEL], LEG_CONTROL_FIELDS)
+        )
+        self.state_estimator = self._add(
+            c.STATE_ESTIMATOR_CHANNEL, FloatFields(c.CHANNEL_TYPES[c.STATE_ESTIMATOR_CHANNEL], STATE_ESTIMATOR_FIELDS)
+        )
         self.rc_command = self._add(
             c.RC_COMMAND_CHANNEL, _estop_vector(tuple(config.safety.rc_estop_fields)), sticky_max=True
         )
@@ -331,6 +369,13 @@ class Go1Link:
             target=_receive_loop, args=(weakref.ref(self), self._stop), name="go1_link_receive", daemon=True
         )
         self._thread.start()
+
+    def receive_cpu_time(self) -> float:
+        """The CPU time the running receive thread has used so far [s]; 0 without one."""
+        thread = self._thread
+        if thread is None or thread.ident is None:
+            return 0.0
+        return time.clock_gettime(time.pthread_getcpuclockid(thread.ident))
 
     def close(self) -> None:
         """Stops the receive thread (the counts and timings stay readable)."""
