@@ -16,6 +16,12 @@ one vector (layout below) and the warm start for the next update:
 Everything after the Python call is compiled and releases the GIL. A change of the contact set
 (a different number of contacts) makes the next projection cold.
 
+The same update can be done in pieces: `LiveSuf.start` puts its inputs into a `LiveSufWorkspace`
+(allocated once, reused by every update), and each `LiveSuf.advance` goes on with it for a budget
+of work counted in LPs (step 1 first, then step 2 step by step, then step 3;
+warm_projection.project_within), so a control loop can spread it over its ticks. Any sequence of
+budgets gives the vector and warm start of `update`, bit for bit.
+
 The vector (SUF_SIZE):
 
     status           NONE (no lifted foot asked for), or a warm_projection status: EXACT,

@@ -27,16 +27,18 @@ The updates are discrete updates, and the update under way lives in a workspace
 (pedi_drake.suf.live.LiveSufWorkspace) that is abstract state of the Context, allocated once and
 changed in place by them: nothing else reads it, and copying a Context copies it. An unrestricted
 update would copy the workspace twice per event (pydrake deep-copies abstract state for it) and
-makes the simulator look up every system's witness functions again; measured, that framework
-cost alone was about a third of a whole update's.
+makes the simulator look up every system's witness functions again, a cost of its own on top of
+the update's (pedi_drake.benchmarks.suf_offload --replay, `unrestricted` against `one_tick`).
 
 Why slices and not a worker thread: the work is counted, not timed, so a simulation gives the
 same SUF sequence at any machine speed, and the tick's share is bounded whatever the operating
-system does. A thread (the kernels release the GIL) would cost the tick only the hand-over, but on
-this project's 2-core machines it shares the loop's core (the simulator bridge has the other),
-its Python holds the GIL, under SCHED_FIFO (`go1_driver.realtime_priority`) it would run at the
-loop's priority, and its result is collected a period later. docs/real_time.md has the
-measurements of both (pedi_drake.benchmarks.suf_offload).
+system does (measured: at most 0.18 ms of a tick, against 0.85 ms for the whole update in one).
+A thread (the kernels release the GIL) costs the tick less on average, only the hand-over, but
+not a bounded amount: the tick that collects the result waits for the worker, or for the GIL its
+Python holds (once 2.4 ms in two replays, with a core to spare); on this project's 2-core machines
+it shares the loop's core (the simulator bridge has the other), under SCHED_FIFO
+(`go1_driver.realtime_priority`) it would run at the loop's priority, and its result is a period
+older. docs/real_time.md has the measurements (pedi_drake.benchmarks.suf_offload).
 """
 
 import functools
