@@ -38,6 +38,7 @@ from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE
 from pedi_drake.operator.estop_gate import OperatorEstopGate
 from pedi_drake.operator.feedback import OperatorFeedback
 from pedi_drake.operator.meshcat_panel import MeshcatOperatorPanel
+from pedi_drake.operator.message_stream import MessagePlayer, TimedMessage
 from pedi_drake.operator.operator_input import OperatorInput
 from pedi_drake.run_checks import control_period
 from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
@@ -212,13 +213,17 @@ def MakePedipulationDiagram(
     hardware: bool = False,
     log_period: float = 0.002,
     operator_lcm: DrakeLcmInterface | None = None,
+    operator_messages: list[TimedMessage] | None = None,
 ) -> PedipulationDiagram:
     """Wires station, estimator, mission manager, leg IK and controller for `scenario`, with a log
     of LOGGED_SIGNALS (and of the controller's diagnostics and the mission's outputs).
 
     `operator_lcm`: the bus of the operator's input (scenario `operator:`); None opens the URL of
     its `lcm_bus`. In-process tests pass one DrakeLcm("memq://") shared with their publisher. The
-    Meshcat panel (`operator: {source: meshcat}`) goes on `meshcat`."""
+    Meshcat panel (`operator: {source: meshcat}`) goes on `meshcat`.
+    `operator_messages`: an operator's stream (pedi_drake.operator.message_stream) played on the
+    operator's bus in lock step by a MessagePlayer ("operator.player"); without `operator_lcm`
+    the bus is then an in-process one (memq://), so nothing leaves the process."""
     mission = load_mission(scenario.mission) if scenario.mission else None
     if mission is not None:
         if scenario.controller not in MISSION_CONTROLLERS:
@@ -243,10 +248,15 @@ def MakePedipulationDiagram(
 
     extra_logs = {}
     operator = operator_bus = None
+    if operator_messages is not None and scenario.operator.source != "lcm":
+        raise ScenarioError(f"operator.source: an operator's stream is played on LCM, got {scenario.operator.source!r}")
     if scenario.operator.source != "none":
         if scenario.operator.source != "meshcat":
-            operator_bus = operator_lcm or DrakeLcm(scenario.lcm_buses[scenario.operator.lcm_bus].lcm_url)
+            url = "memq://" if operator_messages is not None else scenario.lcm_buses[scenario.operator.lcm_bus].lcm_url
+            operator_bus = operator_lcm or DrakeLcm(url)
         operator = _add_operator(builder, scenario, operator_bus, meshcat)
+    if operator_messages is not None:
+        builder.AddNamedSystem("operator.player", MessagePlayer(operator_bus, operator_messages))
     if operator is not None:
         extra_logs["operator.command"] = operator.GetOutputPort("operator_command")
     if scenario.controller == "stand_pd":
@@ -316,6 +326,8 @@ def MakePedipulationDiagram(
                 )
                 builder.Connect(manager.GetOutputPort("operator_feedback"), feedback.GetInputPort("operator_feedback"))
             extra_logs["mission.status"] = manager.GetOutputPort("mission_status")
+            # The driven foot's estimated force, which the teleoperated foot's force bound acts on.
+            extra_logs["mission.operator_feedback"] = manager.GetOutputPort("operator_feedback")
             extra_logs["mission.body_reference"] = body_reference
             extra_logs["mission.leg_reference"] = leg_reference
             extra_logs["mission.contact_set"] = manager.GetOutputPort("contact_set")

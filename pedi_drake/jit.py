@@ -81,13 +81,23 @@ if ENABLED:
     event.register("numba:compile", _CompileNotice())
 
 
+# One dtype object per distinct structured dtype of the records (see `new_record`).
+_RECORD_DTYPES: dict[np.dtype, np.dtype] = {}
+
+
 def new_record(dtype: np.dtype) -> np.ndarray:
     """A one-element array of the structured `dtype`, zeroed: how records cross into compiled
     code (a kernel takes the array and reads `a[0].field`).
 
     numba resolves a plain record array's type from its dtype at the cost of an array, where a
-    tuple of arrays (a NamedTuple) costs tens of microseconds per call. Interpreted kernels (jit
-    disabled) read fields as attributes too, which needs numpy's recarray view."""
+    tuple of arrays (a NamedTuple) costs tens of microseconds per call. It looks structured dtypes
+    up in a table of its own, quickly when the dtype is the very object it saw first, by comparing
+    every field otherwise (microseconds a record, at every call): so all records of equal dtypes
+    share one dtype object, whichever system built them first (a process often builds several
+    controllers: a simulation, then a replay). Interpreted kernels (jit disabled) read fields as
+    attributes too, which needs numpy's recarray view."""
+    dtype = np.dtype(dtype)
+    dtype = _RECORD_DTYPES.setdefault(dtype, dtype)
     record = np.zeros(1, dtype=dtype)
     return record if ENABLED else python_records(record)
 

@@ -8,10 +8,12 @@ latches its input at initialisation, so the t = 0 sample is the initial value, n
 """
 
 import numpy as np
-from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
+from pydrake.systems.framework import Context, DiscreteValues
+
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 
-class LogHold(LeafSystem):
+class LogHold(LeafSystemWithoutWitnesses):
     """input `u` (size) -> output `y` (size): u sampled every `period` [s] and at initialisation."""
 
     def __init__(self, size: int, period: float):

@@ -25,6 +25,7 @@ from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.interrupt import StopRequest
 from pedi_drake.mission.progress import FAILED, RUNNING, SUCCEEDED, MissionProgress
+from pedi_drake.operator.message_stream import TimedMessage
 from pedi_drake.scenario import Scenario
 from pedi_drake.viz.meshcat_camera import frame_scene
 
@@ -74,6 +75,7 @@ def simulate(
     replay: bool = True,
     realtime_rate: float = 1.0,
     stop: StopRequest | None = None,
+    operator_messages: list[TimedMessage] | None = None,
 ) -> RunRecord:
     """Builds the diagram of `scenario` and advances it until its duration or the mission's end.
 
@@ -85,16 +87,18 @@ def simulate(
     simulation with an operator.
     `stop`: once its reason is set (by a signal, see `pedi_drake.interrupt`) the simulation ends at
     the current time and the record says why (`interrupted`).
+    `operator_messages`: a scripted operator's stream (pedi_drake.operator.message_stream), played
+    in lock step on an in-process bus; the simulation then runs as fast as it can.
     """
     stop = stop or StopRequest()
     if not hardware and replay:
         # A Meshcat is made even when nobody watches live: it records the replay.
         meshcat = meshcat or Meshcat()
-    built = MakePedipulationDiagram(scenario, meshcat, hardware=hardware)
+    built = MakePedipulationDiagram(scenario, meshcat, hardware=hardware, operator_messages=operator_messages)
     diagram = built.diagram
     simulator = Simulator(diagram)
     built.reserve_logs(simulator.get_mutable_context(), scenario.simulation_duration)
-    if hardware or scenario.operator.source != "none":
+    if hardware or (scenario.operator.source != "none" and operator_messages is None):
         # An operator (a person, a program on LCM) acts on the wall clock: a simulation runs at its pace.
         simulator.set_target_realtime_rate(realtime_rate)
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
@@ -215,14 +219,23 @@ def phase_label(progress, mission) -> str:
     return f"phase {number} {record.name} ({record.status})"
 
 
-def run(*, scenario: Scenario, name: str, out_dir: Path, stop: StopRequest | None = None, **simulate_options) -> dict:
+def run(
+    *,
+    scenario: Scenario,
+    name: str,
+    out_dir: Path,
+    stop: StopRequest | None = None,
+    records: list[RunRecord] | None = None,
+    **simulate_options,
+) -> dict:
     """`simulate`, then judge the run and write result.json, replay.html, plots and logs.npz to `out_dir`.
 
     `out_dir` is claimed first (`claim_out_dir`: a lock against a second run, and the files a
     previous run left there removed). Ctrl-C or SIGTERM during the run stop the simulation at the
     current time and what ran is judged and written with `interrupted: true`; pass `stop` to
     install the handlers earlier (run_sim.py does, before pydrake loads). Returns the result (the
-    content of result.json). `simulate_options`: see `simulate`.
+    content of result.json). `records`: the RunRecord is appended to it, for a caller that judges
+    the logs at their full precision (logs.npz keeps 7 digits). `simulate_options`: see `simulate`.
     """
     own_stop = stop is None
     stop = (stop or StopRequest()).install()
@@ -231,6 +244,8 @@ def run(*, scenario: Scenario, name: str, out_dir: Path, stop: StopRequest | Non
             record = simulate(scenario=scenario, name=name, stop=stop, **simulate_options)
             result = judge_run(record)
             write_run(record, result, out_dir)
+            if records is not None:
+                records.append(record)
     finally:
         if own_stop:
             stop.restore()

@@ -2,10 +2,12 @@
 
 import time
 
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import BasicVector
+
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 
-class WallClock(LeafSystem):
+class WallClock(LeafSystemWithoutWitnesses):
     """Output `wall_clock` (1): time.time() [s since the epoch] when evaluated.
 
     Deliberately not a function of the Context: it is for logging only (a VectorLogSink samples it

@@ -11,7 +11,9 @@ commands is intended:
 Speed work on the estimator, mission manager, IK, whole-body controller or driver must leave
 every command within the solver's tolerance of the reference.
 
-The fixture was recorded with the compiled whole-body tick, whose level QPs are solved exactly
+It was last recorded when reaches began to plan their joint targets from the trunk's reference
+pose instead of its estimate (an intended change of the commands from the reach on, about 0.1 rad
+at most in q_des during the replayed reach), on the compiled whole-body tick, whose level QPs are solved exactly
 (`pedi_drake.control.dense_qp`; tests/test_compiled_controller.py and tests/test_dense_qp.py
 tie it to the Python reference and to DAQP at tight tolerances). The reference it replaced had
 been recorded with DAQP at the controller's settings, which stops within its tolerance: the

@@ -326,6 +326,7 @@ def test_every_progress_field_is_either_shared_or_duplicated_by_copy():
         "target_pending",
         "interlude_mode",
         "pre_posture",
+        "target_anchors",
         "push",  # a frozen FootPush: shared
     }
 

@@ -10,16 +10,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from pydrake.common.eigen_geometry import Quaternion
 from pydrake.lcm import DrakeLcm
-from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
-from pedi_drake import robot
-from pedi_drake.control.references import LEG_BLOCK
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.leg_kinematics import foot_position_B
+from pedi_drake.evaluation.reference_steps import (
+    MAX_BODY_STEP,
+    MAX_FOOT_STEP_AT_MODE_CHANGE,
+    MAX_FOOT_STEP_SAME_MODE,
+    reference_steps,
+)
 from pedi_drake.operator.command import MODE_AUTONOMOUS, MODE_TELEOP
 from pedi_drake.operator.scripted_operator import ScriptedOperator, ScriptStep
 from pedi_drake.scenario import load_scenario
@@ -29,12 +30,6 @@ SPEED = 0.05  # [m/s]
 # The teleop request comes during the first trunk move (it waits for the phase boundary); the
 # lift is done by about 2.5 s; the foot moves 2 cm forward, then the operator gives it back.
 ASK_TELEOP, MOVE_START, MOVE_END, ASK_AUTONOMOUS, END = 0.1, 3.0, 3.4, 3.6, 6.8  # [s] diagram time
-# Largest step of a reference between two controller ticks (2 ms): every motion is a smooth
-# segment of at most 0.1 m/s here (0.2 mm a tick); a mode change of a leg's reference (joint
-# angles <-> foot position) may step by the controller's tracking error, under 1 cm.
-MAX_BODY_STEP = 0.001  # [m]
-MAX_FOOT_STEP_SAME_MODE = 0.001  # [m]
-MAX_FOOT_STEP_AT_MODE_CHANGE = 0.01  # [m]
 # The mission manager's first update after the start [s] (its period).
 FIRST_MISSION_UPDATE = 0.01
 TRUNK_MIN_HEIGHT = 0.2  # [m] the true trunk stays at least this high (standing at 0.28 m)
@@ -68,36 +63,10 @@ def run_with_operator(script: list[ScriptStep], end: float):
     return progress, logs, plant
 
 
-def reference_steps(logs) -> dict:
-    """Largest tick-to-tick steps of the references [m]: the trunk position, and every lifted
-    foot's reference in the world (a joint reference through the leg's forward kinematics at the
-    body reference), within one leg mode and where the mode changes. From the mission's first
-    update on: before it, the references are those made at initialisation (see MissionManager)."""
+def steps_of(logs) -> dict:
+    """Largest tick-to-tick steps of the references (pedi_drake.evaluation.reference_steps)."""
     times, body = logs["mission.body_reference"]
-    _, legs = logs["mission.leg_reference"]
-    first = int(np.searchsorted(times, FIRST_MISSION_UPDATE, side="right"))
-    body, legs = body[:, first:], legs[:, first:]
-    steps = {"body": float(np.max(np.linalg.norm(np.diff(body[0:3], axis=1), axis=0))), "same": 0.0, "change": 0.0}
-    for k, leg in enumerate(robot.LEG_NAMES):
-        block = legs[k * LEG_BLOCK : (k + 1) * LEG_BLOCK]
-        modes = np.round(block[0]).astype(int)
-        feet = np.full((3, block.shape[1]), np.nan)
-        for i in np.flatnonzero(modes != 0):
-            if modes[i] == 2:
-                X_WB = RigidTransform(
-                    RotationMatrix(Quaternion(body[3:7, i] / np.linalg.norm(body[3:7, i]))), body[0:3, i]
-                )
-                feet[:, i] = X_WB @ foot_position_B(leg, block[1:4, i])
-            else:
-                feet[:, i] = block[1:4, i]
-        both = (modes[1:] != 0) & (modes[:-1] != 0)
-        jumps = np.linalg.norm(np.diff(feet, axis=1), axis=0)
-        same = both & (modes[1:] == modes[:-1])
-        if np.any(same):
-            steps["same"] = max(steps["same"], float(np.max(jumps[same])))
-        if np.any(both & ~same):
-            steps["change"] = max(steps["change"], float(np.max(jumps[both & ~same])))
-    return steps
+    return reference_steps(times, body, logs["mission.leg_reference"][1], FIRST_MISSION_UPDATE)
 
 
 def true_foot_at(logs, plant, t: float, leg: str) -> np.ndarray:
@@ -137,7 +106,7 @@ def test_the_operator_takes_the_foot_and_the_mission_then_succeeds(switched_run)
     moved = true_foot_at(logs, plant, teleop.t_end, "FR") - true_foot_at(logs, plant, teleop.t_start, "FR")
     heights = true_trunk_heights(logs, plant)
     print(f"\nphases {rows}\nswitches {switches}\ntrue FR foot moved in teleop {np.round(1000 * moved, 1)} mm")
-    print(f"reference steps {reference_steps(logs)}; lowest true trunk {heights.min():.3f} m")
+    print(f"reference steps {steps_of(logs)}; lowest true trunk {heights.min():.3f} m")
     assert progress.status == "succeeded"
     assert rows == [
         ("lower", "succeeded"),
@@ -157,7 +126,7 @@ def test_the_operator_takes_the_foot_and_the_mission_then_succeeds(switched_run)
 
 def test_the_switches_never_step_the_references(switched_run):
     _, logs, _ = switched_run
-    steps = reference_steps(logs)
+    steps = steps_of(logs)
     assert steps["body"] < MAX_BODY_STEP
     assert steps["same"] < MAX_FOOT_STEP_SAME_MODE
     assert steps["change"] < MAX_FOOT_STEP_AT_MODE_CHANGE
@@ -182,7 +151,7 @@ def randomly_switched_run():
 
 def test_a_switch_at_a_random_time_never_steps_the_references(randomly_switched_run):
     times, progress, logs, plant = randomly_switched_run
-    steps = reference_steps(logs)
+    steps = steps_of(logs)
     print(
         f"\nteleop asked at {times[0]:.3f} s, autonomous at {times[1]:.3f} s: switches "
         f"{[(round(s.time, 3), s.from_mode, s.to_mode, s.reason) for s in progress.switches]}; "

@@ -11,7 +11,7 @@ from pydrake.systems.analysis import Simulator
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt, rc_command_lcmt
 from pedi_drake.operator.command import FRAME_WORLD, KIND_POSITION, MODE_AUTONOMOUS, MODE_TELEOP, OperatorCommand
 from pedi_drake.operator.config import OperatorConfig
-from pedi_drake.operator.operator_input import OperatorInput
+from pedi_drake.operator.operator_input import SENDER_TAKEOVER_SILENCE, OperatorInput
 from pedi_drake.operator.scripted_operator import ScriptStep, foot_command_message
 
 CHANNEL = "operator_foot_command"
@@ -81,6 +81,47 @@ def test_a_malformed_foot_command_is_dropped_and_counted_by_reason(data, reason)
     assert after.dropped == 1 and after.received == 1
     np.testing.assert_array_equal(after.value, before.value)
     assert after.age == pytest.approx(before.age + 0.1, abs=1e-9)  # a dropped message is no heartbeat
+
+
+def _stamped(t: float, sequence: int, value=(0.01, 0.0, 0.0)) -> bytes:
+    return foot_command_message(ScriptStep(0.0, value, mode_request=MODE_TELEOP), t, sequence).encode()
+
+
+@pytest.mark.parametrize(
+    ("t", "sequence", "reason"),
+    [
+        (0.1, 2, "out_of_order"),  # the newest one again
+        (0.1, 1, "out_of_order"),  # numbered before it
+        (0.05, 3, "out_of_order"),  # stamped before it
+        (1.2, 3, "stamp_ahead"),  # a second ahead of what the receiver saw pass
+        (0.15, 2 + 10**7, "stamp_ahead"),  # numbered ten million ahead
+    ],
+)
+def test_a_late_replayed_or_future_foot_command_is_dropped_while_the_sender_is_live(t, sequence, reason):
+    lcm, system, context = _make("lcm")
+    lcm.Publish(CHANNEL, _stamped(0.0, 1))
+    lcm.Publish(CHANNEL, _stamped(0.1, 2, (0.02, 0.0, 0.0)))
+    _tick(system, context, 0.1)
+    lcm.Publish(CHANNEL, _stamped(t, sequence, (0.05, 0.0, 0.0)))
+    command = _tick(system, context, 0.2)
+    assert system.counts()["rejected"] == {reason: 1}
+    assert command.received == 2 and command.value[0] == pytest.approx(0.02)
+    lcm.Publish(CHANNEL, _stamped(0.2, 3, (0.03, 0.0, 0.0)))  # the next one in order comes through
+    assert _tick(system, context, 0.3).value[0] == pytest.approx(0.03)
+
+
+def test_a_restarted_sender_is_taken_after_a_silence():
+    lcm, system, context = _make("lcm")
+    lcm.Publish(CHANNEL, _stamped(5.0, 500))
+    _tick(system, context, 0.1)
+    restarted = _stamped(0.0, 1, (0.03, 0.0, 0.0))  # its clock and its numbers start again
+    lcm.Publish(CHANNEL, restarted)
+    _tick(system, context, 0.2)
+    assert system.counts()["rejected"] == {"out_of_order": 1}  # the first sender may still be live
+    _tick(system, context, SENDER_TAKEOVER_SILENCE + 0.1)
+    lcm.Publish(CHANNEL, restarted)
+    command = _tick(system, context, SENDER_TAKEOVER_SILENCE + 0.2)
+    assert command.received == 2 and command.value[0] == pytest.approx(0.03)
 
 
 def test_the_estop_latches_and_a_mode_request_stands():

@@ -30,6 +30,9 @@ from pedi_drake.suf.posture import (
 # finds the grid's best region ends within rounding of it or above it.
 GRID_TOLERANCE = 0.01
 TARGET_FRONT = (0.447, -0.13, 0.20)  # hit_target_front's target, world [m]
+# remove_object_from_back's targets, on the trunk's back (trunk frame) [m], and its roll [rad].
+BACK_TARGETS_B = ((0.16, 0.065, 0.10), (-0.14, 0.065, 0.10))
+BACK_ROLL = 0.25
 ATTITUDE_AND_HEIGHT = ("z", "roll", "pitch", "yaw")
 
 
@@ -106,6 +109,31 @@ def test_the_lift_keeps_its_working_position_off_the_floor():
     print(f"\nworking position {1000 * height:.1f} mm up at {result.best.posture}, {result.best.suf:.3f} N")
     assert result.best.feasible and result.best.suf > result.start.suf
     assert height >= limits.lift_height
+
+
+def test_a_trunk_frame_target_near_a_joint_limit_leaves_the_postures_to_their_own_margins():
+    """remove_object_from_back's first target folds FL's calf to within a milliradian of its stop
+    whatever the posture (the target rides with the trunk): the rolled fixed posture is feasible,
+    and the optimiser finds a better one. The same point as a world target, whose joint angles
+    the posture sets, keeps the joint margin: the fixed posture breaks it."""
+    limits = PostureLimits()
+    first = np.array(BACK_TARGETS_B[0])
+    q = leg_angles("FL", first, 0.0)
+    fold = q[2] - robot.Q_LOWER[2]  # the calf's distance from its folded stop [rad]
+    print(f"\nFL at {first.tolist()} (trunk frame): calf {1000 * fold:.2f} mrad from its stop")
+    assert 0.0 <= fold < 1e-3 and leg_angles("FL", first, limits.joint_margin) is None
+    case, start = standing_case(targets=BACK_TARGETS_B, leg="FL")
+    case = dataclasses.replace(case, frame="trunk", lift_B=tuple(working_position_B("FL", 0.15)))
+    rolled = Posture(start.p_WB, (BACK_ROLL, 0.0, 0.0))
+    result = optimise_posture(case, rolled, limits, fixed=("roll", "pitch", "yaw"))
+    print(f"\nfixed {result.start.suf:.2f} N, optimal {result.best.suf:.2f} N at {result.best.posture}")
+    assert result.start.feasible
+    assert result.best.feasible and result.best.suf > result.start.suf
+    assert result.best.com_margin >= limits.com_margin
+    world = dataclasses.replace(
+        case, frame="world", targets=tuple(tuple(rolled.pose() @ np.array(p)) for p in BACK_TARGETS_B)
+    )
+    assert "point 0 out of reach" in evaluate_posture(world, rolled, limits).reason
 
 
 def test_a_target_out_of_reach_has_no_feasible_posture():

@@ -57,6 +57,11 @@ def test_the_shipped_missions_keep_the_fixed_posture():
     [
         (("{kind: leg_to_pedipulation, leg: FR, posture: best}", REACH, BACK), "posture", "must be one of"),
         (("{kind: leg_to_pedipulation, leg: FR, posture: optimal, timeout: 4.0}", REACH, BACK), "timeout", "exceed"),
+        (
+            ("{kind: leg_to_pedipulation, leg: FR, posture: optimal, trunk_targets: hand, timeout: 8.0}", REACH, BACK),
+            "trunk_targets",
+            "must be one of",
+        ),
         ((LIFT, BACK), "posture", "no reach"),
         (
             (LIFT, "{kind: reach, leg: FR, target: [0.4, -0.1, 0.2], frame: trunk}", REACH, BACK),

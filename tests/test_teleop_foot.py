@@ -25,7 +25,13 @@ from pedi_drake.mission.progress import (
     References,
 )
 from pedi_drake.mission.robot_view import RobotView
-from pedi_drake.mission.teleop_bounds import bound_force, bound_speed, slide_in_workspace, workspace_margin
+from pedi_drake.mission.teleop_bounds import (
+    bound_force,
+    bound_speed,
+    slide_in_workspace,
+    step_into_workspace,
+    workspace_margin,
+)
 from pedi_drake.mission.teleop_foot import TeleopFootRunner
 from pedi_drake.operator.command import MODE_TELEOP, OperatorCommand
 from pedi_drake.operator.estop_gate import OperatorEstopGate
@@ -70,11 +76,32 @@ def test_the_workspace_keeps_the_foot_above_the_ground():
     assert (X_WB @ p)[2] == pytest.approx(MIN_HEIGHT, abs=1e-4)
 
 
+def test_a_target_the_workspace_moved_away_from_steps_back_in_by_a_hair():
+    at_floor = _working_position_B()
+    at_floor[2] = MIN_HEIGHT - X_WB.translation()[2]  # the lowest the foot may go
+    assert _margin(at_floor) == pytest.approx(0.0, abs=1e-9)
+    outside = at_floor - [0.0, 0.0, 0.0003]  # the trunk sank 0.3 mm with it
+    inside = step_into_workspace(_margin, outside, max_step=0.001)
+    assert _margin(inside) >= 0.0
+    assert 0.0003 <= np.linalg.norm(inside - outside) < 0.0003 + 0.001 / 2**7  # straight up, no farther
+    np.testing.assert_allclose((inside - outside)[0:2], 0.0, atol=1e-6)
+    assert step_into_workspace(_margin, outside - [0.0, 0.0, 0.002], max_step=0.001) is None  # too far
+
+
 def test_the_speed_bound_scales_the_velocity_to_the_limit():
     velocity, clipped = bound_speed(np.array([0.3, 0.4, 0.0]), 0.1)
     assert clipped and np.linalg.norm(velocity) == pytest.approx(0.1)
     np.testing.assert_allclose(velocity / 0.1, [0.6, 0.8, 0.0])
     assert bound_speed(np.array([0.05, 0.0, 0.0]), 0.1) == (pytest.approx([0.05, 0.0, 0.0]), False)
+
+
+def test_a_huge_or_overflowed_velocity_is_bounded_and_never_nan():
+    # Finite, but its square overflows: still a direction, scaled to the bound.
+    velocity, clipped = bound_speed(np.array([1e300, -1e300, 0.0]), 0.1)
+    assert clipped and np.linalg.norm(velocity) == pytest.approx(0.1)
+    # A position 1e308 away, divided by a tick, is inf: no motion.
+    velocity, clipped = bound_speed(np.array([np.inf, 0.0, -np.inf]), 0.1)
+    assert clipped and np.array_equal(velocity, np.zeros(3))
 
 
 def test_the_force_bound_stops_motion_into_the_contact_but_not_away():

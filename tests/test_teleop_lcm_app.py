@@ -11,6 +11,7 @@ from pydrake.lcm import DrakeLcm
 from pedi_drake.apps.teleop_lcm import KeyboardOperator, ScriptError, parse_script, play_script
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt
 from pedi_drake.operator.command import FRAME_TRUNK, MODE_AUTONOMOUS, MODE_NONE, MODE_TELEOP
+from pedi_drake.operator.message_stream import write_lcm_log
 from pedi_drake.operator.messages import foot_command_in_range, foot_command_vector
 
 SCRIPT = """# t_s mode vx vy vz
@@ -82,3 +83,15 @@ def test_the_app_exits_2_on_a_bad_script(tmp_path):
         timeout=60,
     )
     assert result.returncode == 2 and f"{script}:2" in result.stderr
+
+
+def test_the_app_exits_2_on_a_missing_or_empty_message_log(tmp_path):
+    empty = write_lcm_log([], tmp_path / "empty.lcmlog")
+    for path in (tmp_path / "missing.lcmlog", empty):
+        result = subprocess.run(
+            [sys.executable, "-m", "pedi_drake.apps.teleop_lcm", "--lcm_log", str(path), "--lcm_url", "memq://"],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert result.returncode == 2 and result.stderr.strip(), (path, result.stderr)

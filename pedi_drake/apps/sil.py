@@ -3,6 +3,8 @@ bridge in a second process, judged against the bridge's ground truth.
 
     python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_name NAME]
                                   [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
+                                  [--separate]
+                                  [--operator_log FILE]
 
 Starts `python -m pedi_drake.apps.sim_bridge --mission M --truth_log ...` (the robot side,
 real time, 500 Hz), then runs the mission here exactly as `run_sim.py --hardware` does (driver,
@@ -10,6 +12,15 @@ state estimator, controller, mission manager; no ground truth on this side), sto
 and compares: each reach phase's target with where the bridge's simulated foot really was at the
 end of the phase (the two processes' logs are aligned by the host's wall clock). Prints a table
 and writes `sil.json` beside the run's result.json.
+
+With `--separate` the controller side is not run here but started as its own program, the
+README's second terminal: `python run_sim.py --hardware --mission M ...` (the run_sim.py beside
+the package, so a source checkout), while the bridge keeps running as the first terminal's does.
+This process then only starts, waits and judges.
+
+`--operator_log FILE` adds an operator in a third process, as a person would run one:
+`python -m pedi_drake.apps.teleop_lcm --lcm_log FILE --start_on_feedback` on the same bus, which
+plays the log's messages on the controller's clock (the scenario needs `operator: {source: lcm}`).
 """
 
 import argparse
@@ -22,6 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from pydrake.common.yaml import yaml_load
 
 from pedi_drake import robot
 from pedi_drake.evaluation.run_logs import read_run_logs
@@ -32,7 +44,11 @@ from pedi_drake.run_checks import check_out_dir
 from pedi_drake.scenario import apply_scenario_text, lcm_url_is_valid, load_scenario
 
 GROUP = "239.255.76.67"
+# The README's controller program, beside the package in a source checkout.
+RUN_SIM = Path(__file__).resolve().parents[2] / "run_sim.py"
 BRIDGE_START_TIMEOUT = 60.0  # [s] for the bridge to build its diagram and start publishing
+# [s] for the operator to finish its log after the controller side ended (then it is stopped).
+OPERATOR_END_TIMEOUT = 30.0
 
 
 def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[dict]:
@@ -77,12 +93,23 @@ def run_sil(
     lcm_url: str | None = None,
     realtime_rate: float = 1.0,
     scenario_name: str = "default",
+    separate: bool = False,
+    operator_log: Path | None = None,
+    records: list | None = None,
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
     `realtime_rate` < 1 runs both processes in slow motion (the watchdogs keep their wall-clock
     limits, so they are stricter in simulated time), for machines that cannot run both in real time.
+    `separate`: the controller side runs as `run_sim.py --hardware` in a process of its own (see
+    the module docstring) instead of in this one.
+    `operator_log`: an LCM log of operator messages, played by an operator process (module docstring).
+    `records`: the controller side's RunRecord is appended to it (pedi_drake.run.run).
     """
+    if separate and not RUN_SIM.is_file():
+        raise ConfigError(f"--separate: needs run_sim.py beside the package (a source checkout); no {RUN_SIM}")
+    if separate and realtime_rate != 1.0:
+        raise ConfigError("--separate: run_sim.py --hardware runs at real time only; drop --realtime_rate")
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
     text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
     # Everything both sides will read is checked here first: bad input is a ConfigError naming
@@ -96,6 +123,7 @@ def run_sil(
     check_out_dir(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     truth_path = out_dir / "bridge_truth.npz"
+    operator = None
     bridge = subprocess.Popen(
         [sys.executable, "-m", "pedi_drake.apps.sim_bridge", "--mission", mission, "--lcm_url", url]
         + ["--scenario_name", scenario_name, "--scenario_text", text]
@@ -117,13 +145,36 @@ def run_sil(
                 raise RuntimeError("the simulator bridge did not start within 60 s")
         # "go1_sim_bridge: running on URL (its scheduling)"
         bridge_scheduling = line.strip().rpartition("(")[2].rstrip(")")
-        result = run(
-            scenario=scenario, name=mission, out_dir=out_dir, quiet=True, hardware=True, realtime_rate=realtime_rate
-        )
+        if operator_log is not None:
+            operator = subprocess.Popen(
+                [sys.executable, "-m", "pedi_drake.apps.teleop_lcm", "--lcm_log", str(operator_log)]
+                + ["--lcm_url", url, "--start_on_feedback", "--scenario_name", scenario_name, "--scenario_text", text],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+            )
+        if separate:
+            result = _run_controller_program(mission, scenario_name, text, url, out_dir)
+        else:
+            result = run(
+                scenario=scenario,
+                name=mission,
+                out_dir=out_dir,
+                quiet=True,
+                hardware=True,
+                realtime_rate=realtime_rate,
+                records=records,
+            )
     finally:
         if bridge.poll() is None:
             bridge.send_signal(signal.SIGTERM)
         bridge.communicate(timeout=120)
+        if operator is not None:
+            try:
+                operator_output, _ = operator.communicate(timeout=OPERATOR_END_TIMEOUT)
+            except subprocess.TimeoutExpired:
+                operator.send_signal(signal.SIGTERM)
+                operator_output, _ = operator.communicate(timeout=30)
     with np.load(truth_path) as archive:
         truth = {key: archive[key] for key in archive.files}
     logs = read_run_logs(out_dir)
@@ -133,9 +184,33 @@ def run_sil(
         "lcm_url": url,
         "realtime_rate": realtime_rate,
         "bridge_scheduling": bridge_scheduling,
+        "controller": "run_sim.py --hardware (own process)" if separate else "in the sil process",
     }
+    if operator is not None:
+        result["sil"]["operator"] = {"returncode": operator.returncode, "output": operator_output.strip()}
     (out_dir / "sil.json").write_text(json.dumps(result["sil"], indent=2))
     return result
+
+
+def _run_controller_program(mission: str, scenario_name: str, text: str, url: str, out_dir: Path) -> dict:
+    """`python run_sim.py --hardware` on the bridge's bus, as the README's second terminal; its result.json.
+
+    `text` is the user's scenario text; the bus (`url`) is merged into it, as the bridge got it."""
+    settings = yaml_load(data=text) or {}
+    buses = dict(settings.get("lcm_buses") or {})
+    buses["go1"] = {"lcm_url": url}
+    settings.update({"lcm_buses": buses, "controller": "whole_body", "estimator": "kalman"})
+    command = [sys.executable, str(RUN_SIM), "--hardware", "--mission", mission, "--scenario_name", scenario_name]
+    # JSON is YAML: the merged settings as run_sim.py's one --scenario_text.
+    command += ["--scenario_text", json.dumps(settings), "--out", str(out_dir)]
+    completed = subprocess.run(command, capture_output=True, text=True)
+    result_file = out_dir / "result.json"
+    if not result_file.is_file():
+        raise RuntimeError(
+            f"run_sim.py --hardware exited with {completed.returncode} without a result.json:\n"
+            f"{(completed.stdout + completed.stderr).strip()[-2000:]}"
+        )
+    return json.loads(result_file.read_text())
 
 
 def main() -> int:
@@ -146,10 +221,14 @@ def main() -> int:
     parser.add_argument("--lcm_url", default=None, help="default: the Go1 group on a port of this process's own")
     parser.add_argument("--out", default=None)
     parser.add_argument("--realtime_rate", type=float, default=1.0, help="< 1: both processes in slow motion")
+    parser.add_argument(
+        "--separate", action="store_true", help="the controller as its own program, run_sim.py --hardware (README)"
+    )
+    parser.add_argument("--operator_log", default=None, help="LCM log of operator messages, played by an operator")
     args = parser.parse_args()
     out_dir = Path(args.out or f"out/sil_{Path(args.mission).stem}")
     try:
-        options = {"scenario_name": args.scenario_name}
+        options = {"scenario_name": args.scenario_name, "separate": args.separate, "operator_log": args.operator_log}
         result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate, **options)
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)

@@ -30,7 +30,7 @@ from pydrake.common.eigen_geometry import Quaternion
 from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 from pydrake.math import RollPitchYaw
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import BasicVector, DiagramBuilder, DiscreteValues, LeafSystem
+from pydrake.systems.framework import BasicVector, DiagramBuilder, DiscreteValues
 from pydrake.systems.lcm import LcmInterfaceSystem
 from pydrake.systems.primitives import VectorLogSink
 
@@ -44,6 +44,7 @@ from pedi_drake.go1_driver.hardware_station import go1_lcm_url
 from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimator_lcmt
 from pedi_drake.go1_driver.link import Inbox
 from pedi_drake.go1_driver.status_receiver import MakeLcmReceiver, ReceiverChannel
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.realtime_priority import realtime_priority
 from pedi_drake.scenario import Scenario, load_scenario
@@ -61,7 +62,7 @@ HOLD_KD = 2.0
 _SAMPLE_SIZE = 50
 
 
-class Go1BridgeCommandHold(LeafSystem):
+class Go1BridgeCommandHold(LeafSystemWithoutWitnesses):
     """received command + its message count + measured pose -> the command applied to the motors.
 
     Before the first command arrives the bridge holds the pose measured at its first tick (as the
@@ -95,7 +96,7 @@ class Go1BridgeCommandHold(LeafSystem):
         output.SetFromVector(pack_command(q_start, 0.0, HOLD_KP, HOLD_KD, 0.0))
 
 
-class Go1BridgeStatusPublisher(LeafSystem):
+class Go1BridgeStatusPublisher(LeafSystemWithoutWitnesses):
     """Station outputs -> leg_control_data and state_estimator_data at 500 Hz, optionally late or dropped.
 
     Latency is modelled in the Context: a ring of the last ceil(latency / period) + 1 samples,

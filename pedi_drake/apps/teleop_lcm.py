@@ -20,6 +20,17 @@ one step per line, `t_s mode vx vy vz` (time from the start [s], increasing; mod
 holds until the next one's time; the app ends at the last step's time. A malformed script exits
 with status 2 and names the file and line.
 
+With `--lcm_log FILE` it plays a recorded or generated stream of messages instead (an LCM event
+log, as lcm-logger writes: each event on its own channel at its time from the log's first event,
+whatever its bytes; pedi_drake.operator.message_stream), e.g. the fuzzed operator of
+`python -m pedi_drake.benchmarks.teleop`.
+
+`--start_on_feedback` waits (up to `--start_timeout` s) for the controller's first haptic
+feedback message (the scenario's `operator.feedback_channel`) and plays the script or the log
+on the controller's clock: the step or message of time t goes out when the controller's
+diagram time is t (the feedback carries it), so an operator started before the controller still
+acts at the moments it was written for.
+
 The bus and channel are the scenario's (`operator.lcm_bus` in `lcm_buses`, `operator.channel`),
 the ones `run_sim.py` with `operator: {source: lcm}` listens on.
 """
@@ -30,15 +41,17 @@ import math
 import select
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 
 from pedi_drake.exceptions import PediError
+from pedi_drake.go1_driver.lcmtypes import foot_feedback_lcmt
 from pedi_drake.operator.command import FRAME_TRUNK, FRAME_WORLD, MODE_AUTONOMOUS, MODE_NONE, MODE_TELEOP
-from pedi_drake.operator.scripted_operator import ScriptStep, foot_command_message, script_command
+from pedi_drake.operator.message_stream import play_messages, read_lcm_log
+from pedi_drake.operator.scripted_operator import ScriptStep, foot_command_message, script_stream
 from pedi_drake.scenario import load_scenario
 
 SCRIPT_MODES = {"none": MODE_NONE, "teleop": MODE_TELEOP, "autonomous": MODE_AUTONOMOUS, "estop": MODE_NONE}
@@ -88,13 +101,6 @@ def parse_script(text: str, source: str = "<script>", frame: int = FRAME_TRUNK) 
     return steps
 
 
-def script_messages(steps: list[ScriptStep], rate: float) -> Iterator[tuple[float, bytes]]:
-    """(time from the start [s], encoded foot_command_lcmt) at `rate` [Hz], to the last step's time."""
-    for k in range(int(math.floor(steps[-1].start * rate + 1e-9)) + 1):
-        t = k / rate
-        yield t, foot_command_message(script_command(steps, t), t, k + 1).encode()
-
-
 def play_script(
     steps: list[ScriptStep],
     lcm: DrakeLcmInterface,
@@ -102,14 +108,31 @@ def play_script(
     rate: float,
     sleep: Callable[[float], None] = time.sleep,
     clock: Callable[[], float] = time.monotonic,
+    start: float | None = None,
 ) -> int:
-    """Publishes the script on `channel` at its times (wall clock); the number of messages."""
-    start, count = clock(), 0
-    for t, data in script_messages(steps, rate):
-        sleep(max(0.0, start + t - clock()))
-        lcm.Publish(channel, data)
-        count += 1
-    return count
+    """Publishes the script on `channel` at `rate` [Hz], each message at `start` (default: now) +
+    its time on `clock` [s], to the last step's time; the number of messages."""
+    messages = script_stream(steps, rate, steps[-1].start, channel)
+    return play_messages(messages, lcm.Publish, clock() if start is None else start, sleep, clock)
+
+
+def controller_clock_start(lcm: DrakeLcmInterface, channel: str, timeout: float) -> float | None:
+    """The wall-clock time (time.monotonic) [s] at which the controller's diagram time was 0,
+    from its first foot_feedback_lcmt on `channel`; None when none came within `timeout` [s]."""
+    arrived = []
+
+    def take(data: bytes) -> None:
+        if not arrived:
+            arrived.append((time.monotonic(), foot_feedback_lcmt.decode(data).timestamp_us * 1e-6))
+
+    lcm.Subscribe(channel, take)
+    deadline = time.monotonic() + timeout
+    while not arrived and time.monotonic() < deadline:
+        lcm.HandleSubscriptions(50)
+    if not arrived:
+        return None
+    wall, diagram_time = arrived[0]
+    return wall - diagram_time
 
 
 class KeyboardOperator:
@@ -179,6 +202,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--rate", type=float, default=DEFAULT_RATE, help="messages a second [Hz]")
     parser.add_argument("--frame", choices=("trunk", "world"), default="trunk")
     parser.add_argument("--script", default="", help="script file (t_s mode vx vy vz per line)")
+    parser.add_argument("--lcm_log", default="", help="an LCM event log of messages to play instead")
+    parser.add_argument(
+        "--start_on_feedback", action="store_true", help="play on the controller's clock, from its first feedback"
+    )
+    parser.add_argument("--start_timeout", type=float, default=120.0, help="longest wait for that feedback [s]")
     args = parser.parse_args(argv)
     if not (math.isfinite(args.rate) and args.rate > 0 and math.isfinite(args.speed) and args.speed > 0):
         print("--rate and --speed must be finite numbers > 0", file=sys.stderr)
@@ -190,17 +218,33 @@ def main(argv: list[str] | None = None) -> int:
         )
         config = scenario.operator
         url = args.lcm_url or scenario.lcm_buses[config.lcm_bus].lcm_url
-        steps = None
-        if args.script or not sys.stdin.isatty():
+        steps = messages = None
+        if args.lcm_log:
+            messages = read_lcm_log(Path(args.lcm_log))
+            if not messages:
+                raise ScriptError(f"{args.lcm_log}: no messages")
+        elif args.script or not sys.stdin.isatty():
             source = args.script or "<stdin>"
             text = Path(args.script).read_text() if args.script else sys.stdin.read()
             steps = parse_script(text, source, frame)
-    except (PediError, OSError) as error:
+    except (PediError, OSError, ValueError) as error:
         print(error, file=sys.stderr)
         return 2
     lcm = DrakeLcm(url)
+    start = None
+    if args.start_on_feedback:
+        # A bus of its own, closed once the clock is known: this one, with no subscription, never
+        # reads (and never queues) what the robot and the controller publish.
+        start = controller_clock_start(DrakeLcm(url), config.feedback_channel, args.start_timeout)
+        if start is None:
+            print(f"no feedback on {config.feedback_channel} within {args.start_timeout} s", file=sys.stderr)
+            return 1
+    if messages is not None:
+        count = play_messages(messages, lcm.Publish, time.monotonic() if start is None else start)
+        print(f"sent {count} messages of {args.lcm_log} ({url})")
+        return 0
     if steps is not None:
-        count = play_script(steps, lcm, config.channel, args.rate)
+        count = play_script(steps, lcm, config.channel, args.rate, start=start)
     else:
         count = run_keyboard(lcm, config.channel, args.rate, args.speed, frame)
     print(f"\nsent {count} foot commands on {config.channel} ({url})")

@@ -9,7 +9,14 @@
    before the clock).
 2. Speed-up: the mission benchmark's study (every listed mission, seed 0 without noise and the
    noise seeds with it) on Ray and then serially, in one sitting, and whether the two give the
-   same rows (every column but the timing ones).
+   same rows (every column but the timing ones). Where a speed-up below the number of workers
+   comes from, from each task's own wall time in both engines:
+   - `two_at_once_slowdown`: the median over tasks of (its wall time on Ray / in the serial run),
+     what running beside another simulation costs each one (shared caches, memory bandwidth and
+     whatever the host shares between this machine's cores), not Ray;
+   - `packing`: the tasks' wall times on Ray summed, over workers x the study's wall time on Ray:
+     1.0 when no worker ever waits (start-up, the last tasks' tail, Ray's own work).
+   speed-up = workers x packing / slowdown, give or take the serial run's own overhead.
 """
 
 import argparse
@@ -20,6 +27,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 import ray
 
 from pedi_drake.batch.engines import RayEngine, SerialEngine
@@ -80,6 +88,10 @@ def speed_up(missions: list[str], seeds: list[int]) -> dict:
     ray_time, ray_rows = timed_study(study, RayEngine())
     serial_time, serial_rows = timed_study(study, SerialEngine())
     same = {r["task_id"]: deterministic(r) for r in ray_rows} == {r["task_id"]: deterministic(r) for r in serial_rows}
+    ray_task_s = {r["task_id"]: r["wall_time_s"] for r in ray_rows if "wall_time_s" in r}
+    serial_task_s = {r["task_id"]: r["wall_time_s"] for r in serial_rows if "wall_time_s" in r}
+    both = sorted(set(ray_task_s) & set(serial_task_s))
+    workers = os.cpu_count()
     return {
         "tasks": len(study.tasks),
         "ray_s": ray_time,
@@ -88,6 +100,10 @@ def speed_up(missions: list[str], seeds: list[int]) -> dict:
         "identical_rows": same,
         "succeeded_ray": sum(bool(r.get("success")) for r in ray_rows),
         "succeeded_serial": sum(bool(r.get("success")) for r in serial_rows),
+        "workers": workers,
+        "two_at_once_slowdown": float(np.median([ray_task_s[k] / serial_task_s[k] for k in both])),
+        "packing": sum(ray_task_s.values()) / (workers * ray_time),
+        "task_wall_s": {"ray": ray_task_s, "serial": serial_task_s},
     }
 
 
@@ -113,6 +129,10 @@ def main() -> None:
         print(
             f"{'mission study':<28}{s['tasks']:>6}{s['ray_s']:>9.1f}{s['serial_s']:>10.1f}"
             f"{s['speed_up']:>14.2f}x, rows {'identical' if s['identical_rows'] else 'DIFFER'}"
+        )
+        print(
+            f"  each task beside another: {s['two_at_once_slowdown']:.2f}x its serial wall time (median); "
+            f"Ray's workers busy {100 * s['packing']:.1f} % of the study's wall time"
         )
     report["load_at_end"] = os.getloadavg()
     print(f"load average at start {load[0]:.2f}, at end {report['load_at_end'][0]:.2f} ({os.cpu_count()} cores)")

@@ -1,6 +1,6 @@
 """The SUF the optimal posture gains on the shipped missions' reach targets, and its reach errors.
 
-    python -m pedi_drake.benchmarks.posture [--missions a,b] [--method-samples 10]
+    python -m pedi_drake.benchmarks.posture [--missions a,b] [--method-samples 10] [--skip-fixed]
         [--out benchmarks/results/posture.json]
 
 For every shipped mission (missions/*.yaml) with reach phases, a variant with `posture: optimal`
@@ -11,8 +11,10 @@ a lift it cannot serve keeps the fixed posture and the table says why) runs in s
   * the SUF at the target with today's fixed posture (the CoM shifted over the centroid of the
     other feet, height and attitude kept) and with the optimal one: the optimiser's model
     (pedi_drake.suf.posture) at the stance the run measured when it planned;
-  * the gain, and the true foot error at the end of the reach with the optimal posture (the
-    issue's floor: within 5 mm).
+  * the gain (none where the lift found no feasible posture and took the fixed one), and the true
+    foot error at the end of the reach with the optimal posture (the floor: within 5 mm) and,
+    unless `--skip-fixed`, with the shipped mission's fixed posture (the same run without the
+    optimiser).
 
 Then the SUF methods on those cases (`--method-samples` random postures of each case's search
 box, plus its fixed and optimal postures): CPU time per SUF (median) and the value against the
@@ -103,9 +105,11 @@ def target_rows(name: str, mission: spec.MissionSpec, result: dict) -> list[dict
     errors = {row["phase"]: row for row in result.get("foot_errors_m", [])}
     rows = []
     for posture in result.get("postures", []):
+        # A lift that found no feasible posture took the fixed one: no gain.
+        taken = posture.get("taken", "optimal")
         for k, reach in enumerate(reaches.get(posture["phase"], [])):
             fixed = posture["fixed"]["suf_per_target_n"][k]
-            optimal = posture["optimal"]["suf_per_target_n"][k]
+            optimal = posture["optimal" if taken == "optimal" else "fixed"]["suf_per_target_n"][k]
             error = errors.get(reach, {}).get("error", math.nan)
             rows.append(
                 {
@@ -119,6 +123,8 @@ def target_rows(name: str, mission: spec.MissionSpec, result: dict) -> list[dict
                     "gain_percent": 100.0 * (optimal / fixed - 1.0) if fixed > 0 else math.inf,
                     "reach_error_m": error,
                     "within_floor": bool(error <= REACH_FLOOR),
+                    "posture_taken": taken,
+                    "fallback": posture.get("fallback", ""),
                     "fixed_posture": {key: posture["fixed"][key] for key in ("p_WB", "rpy", "feasible", "reason")},
                     "optimal_posture": {key: posture["optimal"][key] for key in ("p_WB", "rpy")},
                     "mission_success": result.get("success", False),
@@ -178,6 +184,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--missions", default="", help="comma-separated mission names (default: every shipped one)")
     parser.add_argument("--method-samples", type=int, default=10, help="random postures per case for the methods")
+    parser.add_argument(
+        "--skip-fixed", action="store_true", help="do not run the shipped (fixed-posture) missions for comparison"
+    )
     parser.add_argument("--out", default="benchmarks/results/posture.json")
     args = parser.parse_args()
     names = [n for n in args.missions.split(",") if n] or spec.shipped_missions()
@@ -193,17 +202,30 @@ def main() -> None:
                 continue
             started = time.perf_counter()
             results[name] = run_variant(path, folder / f"out_{name}")
-            rows += target_rows(name, spec.load_mission(str(path)), results[name])
+            found = target_rows(name, spec.load_mission(str(path)), results[name])
             took = time.perf_counter() - started
             print(f"{name}: ran in {took:.0f} s, success {results[name]['success']}", flush=True)
+            if not args.skip_fixed:
+                shipped = run_variant(missions_dir() / f"{name}.yaml", folder / f"out_{name}_fixed")
+                fixed_errors = {row["phase"]: row["error"] for row in shipped.get("foot_errors_m", [])}
+                for row in found:
+                    row["reach_error_fixed_posture_m"] = fixed_errors.get(row["reach"], math.nan)
+                print(f"{name} (fixed posture): success {shipped['success']}", flush=True)
+            rows += found
     print()
-    header = f"{'mission':<26}{'reach':<14}{'leg':<5}{'SUF fixed':>10}{'optimal':>10}{'gain %':>8}{'error mm':>10}"
+    header = (
+        f"{'mission':<26}{'reach':<14}{'leg':<5}{'SUF fixed':>10}{'optimal':>10}{'gain %':>8}{'error mm':>10}"
+        f"{'fixed mm':>10}  posture taken: height [m], roll/pitch/yaw [rad]"
+    )
     print(header)
     print("-" * len(header))
     for row in rows:
+        p_WB, rpy = row["optimal_posture"]["p_WB"], row["optimal_posture"]["rpy"]
+        taken = "fixed (none feasible)" if row["posture_taken"] == "fixed" else f"{p_WB[2]:.3f}, {np.round(rpy, 2)}"
         print(
             f"{row['mission']:<26}{row['reach']:<14}{row['leg']:<5}{row['suf_fixed_n']:>10.2f}"
             f"{row['suf_optimal_n']:>10.2f}{row['gain_percent']:>8.1f}{1000 * row['reach_error_m']:>10.2f}"
+            f"{1000 * row.get('reach_error_fixed_posture_m', math.nan):>10.2f}  {taken}"
         )
     for name, rows_of_lifts in lifts.items():
         for row in rows_of_lifts:

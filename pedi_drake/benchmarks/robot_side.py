@@ -45,11 +45,11 @@ from pydrake.systems.framework import EventStatus
 from pedi_drake import robot
 from pedi_drake.apps.sim_bridge import MakeSimBridgeDiagram, bridge_scenario
 from pedi_drake.benchmarks.controller_latency import _callback_table, callback_timers
+from pedi_drake.benchmarks.station import bare_plant_simulator
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.go1_command import pack_command
 from pedi_drake.go1_driver import constants as c
 from pedi_drake.scenario import load_scenario
-from pedi_drake.station_interface import MakeStation
 
 STEP = 0.002  # [s] the control period the costs are given per
 CASES = ("bare_plant", "closed_loop", "bridge")
@@ -58,14 +58,6 @@ CASES = ("bare_plant", "closed_loop", "bridge")
 def _loadavg() -> list[str] | None:
     path = Path("/proc/loadavg")
     return path.read_text().split()[:3] if path.exists() else None
-
-
-def _bare_plant() -> Simulator:
-    scenario = load_scenario(scenario_name="stand", scenario_text="{stand: {period: 0.001}}")
-    station = MakeStation(scenario)
-    context = station.CreateDefaultContext()
-    station.GetInputPort("go1.command").FixValue(context, pack_command(robot.LYING_Q, 0, 60, 2, 0))
-    return Simulator(station, context)
 
 
 def _closed_loop(mission: str, duration: float) -> Simulator:
@@ -88,7 +80,7 @@ def _bridge(mission: str) -> Simulator:
 
 def _build(case: str, mission: str, duration: float) -> Simulator:
     if case == "bare_plant":
-        return _bare_plant()
+        return bare_plant_simulator()
     if case == "closed_loop":
         return _closed_loop(mission, duration)
     return _bridge(mission)

@@ -1,10 +1,11 @@
 """Software in the loop at real time, repeated: how often each mission succeeds over the wire.
 
     python -m pedi_drake.benchmarks.sil_floors [--missions hit_target_front open_door prong_push_box]
-        [--runs 5] [--scenario_name default] [--out benchmarks/results/sil_floors.json]
+        [--runs 5] [--scenario_name default] [--separate] [--out benchmarks/results/sil_floors.json]
 
 Each run is `python -m pedi_drake.apps.sil --mission M` (the simulator bridge in its own process,
-the controller here, both at real time), judged by the bridge's ground truth. Per run: success,
+the controller here, both at real time), judged by the bridge's ground truth. With `--separate`
+the controller is its own program too, `run_sim.py --hardware`, as the README's two terminals run it. Per run: success,
 the driver's latch, the largest true foot error, the loop's deadline misses per 1000 ticks and
 the longest, its lateness, and the load average before and after (this machine may be shared).
 """
@@ -34,10 +35,10 @@ def _live_suf_figures(summary: dict | None) -> dict | None:
     return {key: summary.get(key) for key in keys}
 
 
-def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str = "{}") -> dict:
+def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str = "{}", separate: bool = False) -> dict:
     load_before = _load()
     start = time.monotonic()
-    result = run_sil(mission, out_dir, scenario_text=scenario_text, scenario_name=scenario_name)
+    result = run_sil(mission, out_dir, scenario_text=scenario_text, scenario_name=scenario_name, separate=separate)
     driver, sil = result["driver"], result["sil"]
     errors = [row["true_error_m"] for row in sil["foot_errors"]]
     loop = driver["loop"]
@@ -53,6 +54,7 @@ def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str 
         "longest_miss_ms": loop["longest_miss_ms"],
         "lateness_ms": loop["lateness_ms"],
         "scheduling": {"controller": loop["scheduling"], "bridge": sil["bridge_scheduling"]},
+        "controller_process": sil["controller"],
         "command_interdeparture_ms": loop["command_interdeparture_ms"],
         "controller_tick_ms": result["controller_tick_ms"],
         "real_time_factor": result["real_time_factor"],
@@ -71,13 +73,17 @@ def main() -> None:
     parser.add_argument(
         "--scenario_text", default="{}", help="YAML onto the scenario, e.g. '{go1_driver: {realtime_priority: 0}}'"
     )
+    parser.add_argument(
+        "--separate", action="store_true", help="the controller as its own program, run_sim.py --hardware (README)"
+    )
     parser.add_argument("--work", default="out/sil_floors", help="folder of the runs' outputs")
     parser.add_argument("--out", default="benchmarks/results/sil_floors.json")
     args = parser.parse_args()
     rows = []
     for run in range(args.runs):  # interleaved, so machine load affects every mission alike
         for mission in args.missions:
-            row = one_run(mission, args.scenario_name, Path(args.work) / f"{mission}_{run}", args.scenario_text)
+            work = Path(args.work) / f"{mission}_{run}"
+            row = one_run(mission, args.scenario_name, work, args.scenario_text, args.separate)
             rows.append(row)
             error = row["max_true_foot_error_mm"]
             print(
@@ -115,6 +121,7 @@ def main() -> None:
             {
                 "scenario_name": args.scenario_name,
                 "scenario_text": args.scenario_text,
+                "separate": args.separate,
                 "machine": machine,
                 "summary": summary,
                 "runs": rows,

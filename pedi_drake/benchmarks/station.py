@@ -31,15 +31,25 @@ def _time(simulator: Simulator, duration: float) -> float:
     return duration / (time.perf_counter() - start)
 
 
+def _stand_scenario(prongs: bool):
+    prong_text = "robot: {prongs: {}}, " if prongs else ""
+    return load_scenario(scenario_name="stand", scenario_text=f"{{{prong_text}stand: {{period: 0.001}}}}")
+
+
+def bare_plant_simulator() -> Simulator:
+    """`station_fixed_cmd`, the baseline of every speed figure: the simulated Go1 station alone, its
+    command fixed (the lying pose, kp 60, kd 2), not yet initialised."""
+    station = MakeStation(_stand_scenario(prongs=False))
+    context = station.CreateDefaultContext()
+    station.GetInputPort("go1.command").FixValue(context, pack_command(robot.LYING_Q, 0, 60, 2, 0))
+    return Simulator(station, context)
+
+
 def real_time_factor(case: str, duration: float) -> float:
     """One run of `case`; returns sim time / wall time."""
-    prongs = "robot: {prongs: {}}, " if case.endswith("prongs") else ""
-    scenario = load_scenario(scenario_name="stand", scenario_text=f"{{{prongs}stand: {{period: 0.001}}}}")
     if case == "station_fixed_cmd":
-        station = MakeStation(scenario)
-        context = station.CreateDefaultContext()
-        station.GetInputPort("go1.command").FixValue(context, pack_command(robot.LYING_Q, 0, 60, 2, 0))
-        return _time(Simulator(station, context), duration)
+        return _time(bare_plant_simulator(), duration)
+    scenario = _stand_scenario(prongs=case.endswith("prongs"))
     return _time(Simulator(MakePedipulationDiagram(scenario).diagram), duration)
 
 

@@ -108,6 +108,7 @@ import math
 
 import numpy as np
 
+from pedi_drake.control.small_linalg import cholesky_in_place
 from pedi_drake.jit import kernel
 
 # Status codes returned by `solve_dense_qp_kernel`.
@@ -496,7 +497,7 @@ def _solve(
         for j in range(n):
             L[i, j] = H[i, j]
         L[i, i] += eps
-    if not _cholesky_in_place(L, n):
+    if not cholesky_in_place(L, n):
         return NUMERICAL_FAILURE, 0, 0
     _inverse_lower(L, Jt, n)
 
@@ -776,28 +777,6 @@ def _finish(status, y, multipliers, active, lam, q, n):
             y[i] = 0.0
         for i in range(multipliers.shape[0]):
             multipliers[i] = 0.0
-
-
-@kernel
-def _cholesky_in_place(A, n):
-    """A (its leading n x n block) <- L, lower triangular with L L' = A; False unless A is
-    numerically positive definite (the strict upper triangle is zeroed)."""
-    for j in range(n):
-        pivot = A[j, j]
-        for k in range(j):
-            pivot -= A[j, k] * A[j, k]
-        if not pivot > 0.0:
-            return False
-        diagonal = math.sqrt(pivot)
-        A[j, j] = diagonal
-        for i in range(j + 1, n):
-            value = A[i, j]
-            for k in range(j):
-                value -= A[i, k] * A[j, k]
-            A[i, j] = value / diagonal
-        for i in range(j):
-            A[i, j] = 0.0
-    return True
 
 
 @kernel

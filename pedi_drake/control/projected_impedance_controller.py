@@ -45,7 +45,7 @@ a foot impedance) and `constraint_rank` (rank of the held contacts' Jacobian).
 import time
 
 import numpy as np
-from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
+from pydrake.systems.framework import Context, DiscreteValues
 
 from pedi_drake import robot
 from pedi_drake.control import projected_dynamics as pd
@@ -62,6 +62,7 @@ from pedi_drake.control.whole_body_controller import (
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, QpInfeasible
 from pedi_drake.go1_command import held_command
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.vector3 import axis_angle_matrix, cross3, orientation_error_W
@@ -112,7 +113,7 @@ def joint_reference_in_world(
     return p, velocity, a
 
 
-class ProjectedImpedanceController(LeafSystem):
+class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
     """Paper 002's projected-inverse-dynamics impedance controller for the Go1 (and its prongs)."""
 
     def __init__(self, config: ProjectedImpedanceConfig, prongs: ProngDesign | None = None) -> None:

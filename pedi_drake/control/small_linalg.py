@@ -11,6 +11,8 @@ unblocked routines (so results agree to rounding):
   columns of Q span the row space of A, the last n - m its null space (LAPACK's dgeqr2 followed
   by dorg2r on the complete Q: reflectors H_k = I - tau_k v_k v_k^T, v_k[k] = 1).
 * `forward_substitute_transposed(R, r, w)`: R^T w = r for upper-triangular R.
+* `cholesky_in_place(A, n)`: the Cholesky factor of A's leading n x n block, in place (the dense
+  QP solver factors its Hessian with it).
 * `cholesky_solve(S, r, z)`: S z = r for symmetric positive definite S, by the Cholesky factor
   L (S = L L^T), which is returned in S's lower triangle for callers that judge its conditioning.
 """
@@ -95,23 +97,32 @@ def forward_substitute_transposed(R: np.ndarray, r: np.ndarray, w: np.ndarray) -
 
 
 @kernel
+def cholesky_in_place(A: np.ndarray, n: int) -> bool:
+    """A's leading (n, n) block <- its Cholesky factor L in the lower triangle (A = L L^T; the
+    strict upper triangle is left as it was); False when A is not numerically positive definite."""
+    for j in range(n):
+        d = A[j, j]
+        for p in range(j):
+            d -= A[j, p] * A[j, p]
+        if not d > 0.0:
+            return False
+        d = math.sqrt(d)
+        A[j, j] = d
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for p in range(j):
+                s -= A[i, p] * A[j, p]
+            A[i, j] = s / d
+    return True
+
+
+@kernel
 def cholesky_solve(S: np.ndarray, r: np.ndarray, z: np.ndarray) -> bool:
     """Solves S z = r for symmetric positive definite S (k, k), overwriting S's lower triangle
     with the Cholesky factor L (S = L L^T); False when S is not numerically positive definite."""
     k = S.shape[0]
-    for j in range(k):
-        d = S[j, j]
-        for p in range(j):
-            d -= S[j, p] * S[j, p]
-        if not d > 0.0:
-            return False
-        d = math.sqrt(d)
-        S[j, j] = d
-        for i in range(j + 1, k):
-            s = S[i, j]
-            for p in range(j):
-                s -= S[i, p] * S[j, p]
-            S[i, j] = s / d
+    if not cholesky_in_place(S, k):
+        return False
     for i in range(k):  # L y = r
         s = r[i]
         for p in range(i):

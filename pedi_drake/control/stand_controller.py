@@ -5,15 +5,16 @@ station: it reads only `go1.position_measured` and writes `go1.command`.
 """
 
 import numpy as np
-from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
+from pydrake.systems.framework import BasicVector, DiscreteValues
 
 from pedi_drake.control.config import StandControllerConfig
 from pedi_drake.control.static_feedforward import standing_feedforward_torque
 from pedi_drake.go1_command import COMMAND_SIZE, pack_command
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.trajectory import min_jerk
 
 
-class StandController(LeafSystem):
+class StandController(LeafSystemWithoutWitnesses):
     """go1.position_measured -> go1.command: quintic joint blend to `config.target_leg_pose`, then hold.
 
     State (discrete, in the Context): the measured pose at the first update and a flag saying

@@ -31,7 +31,7 @@ last good command is held with zero velocity target and `failure_kd` damping, an
 import time
 
 import numpy as np
-from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
+from pydrake.systems.framework import Context, DiscreteValues
 
 from pedi_drake import robot
 from pedi_drake.control import compiled_stack, dense_qp, references, tasks, whole_body_tick
@@ -43,6 +43,7 @@ from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, PediError, QpInfeasible
 from pedi_drake.go1_command import COMMAND_SIZE, held_command
 from pedi_drake.jit import new_record
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.polygon import polygon_halfplanes
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.vector3 import orientation_error_W
@@ -88,7 +89,7 @@ def _clip(x: np.ndarray, lower, upper) -> np.ndarray:
     return np.minimum(np.maximum(x, lower), upper)
 
 
-class WholeBodyController(LeafSystem):
+class WholeBodyController(LeafSystemWithoutWitnesses):
     """Hierarchical whole-body QP controller for the Go1 (and its prongs)."""
 
     def __init__(self, config: WholeBodyControllerConfig, prongs: ProngDesign | None = None) -> None:
@@ -122,6 +123,12 @@ class WholeBodyController(LeafSystem):
         self.compiled = config.qp_backend == "compiled"
         if self.compiled:
             self._compiled_records()
+        # What an unconnected optional input reads as in the compiled tick, which only reads them
+        # (writable all the same: a read-only array is another argument type, another compilation).
+        self._no_body = np.zeros(references.BODY_REFERENCE_SIZE)
+        self._no_leg_reference = np.zeros(references.LEG_REFERENCE_SIZE)
+        self._no_safety_polygon = np.zeros(references.SAFETY_POLYGON_SIZE)
+        self._default_friction = np.array([config.friction])
 
         self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
         self.position_port = self.DeclareVectorInputPort("position_measured", 12)
@@ -177,21 +184,19 @@ class WholeBodyController(LeafSystem):
 
     def _update_compiled(self, context: Context, discrete_state: DiscreteValues) -> None:
         start = time.perf_counter()
-        base = np.asarray(self.base_state_port.Eval(context), float)
-        q = np.asarray(self.position_port.Eval(context), float)
-        qd = np.asarray(self.velocity_port.Eval(context), float)
+        # A vector port's Eval is already a contiguous float64 array (no np.asarray a tick).
+        base = self.base_state_port.Eval(context)
+        q = self.position_port.Eval(context)
+        qd = self.velocity_port.Eval(context)
         has_body = self.body_reference_port.HasValue(context)
-        body = (
-            np.asarray(self.body_reference_port.Eval(context), float)
-            if has_body
-            else np.zeros(references.BODY_REFERENCE_SIZE)
-        )
-        contact_set = self._optional(self.contact_set_port, context, self.default_contact_set)
-        leg_x = self._optional(self.leg_reference_port, context, np.zeros(references.LEG_REFERENCE_SIZE))
-        polygon_x = self._optional(self.safety_polygon_port, context, np.zeros(references.SAFETY_POLYGON_SIZE))
-        mu_x = self._optional(self.friction_port, context, np.array([self.config.friction]))
+        body = self.body_reference_port.Eval(context) if has_body else self._no_body
+        contact_set = self._evaluated(self.contact_set_port, context, self.default_contact_set)
+        leg_x = self._evaluated(self.leg_reference_port, context, self._no_leg_reference)
+        polygon_x = self._evaluated(self.safety_polygon_port, context, self._no_safety_polygon)
+        mu_x = self._evaluated(self.friction_port, context, self._default_friction)
         # The framework hands the update the current state: the tick updates it in place.
-        state = [discrete_state.get_mutable_vector(index).get_mutable_value() for index in self._state_indices]
+        get = discrete_state.get_mutable_value
+        state = [get(index) for index in self._state_indices]
         solve_start = time.perf_counter()
         whole_body_tick.whole_body_tick(
             self._tick_params,
@@ -218,6 +223,11 @@ class WholeBodyController(LeafSystem):
     # ---------------------------------------------------------------------------------------------
     def _optional(self, port, context: Context, default: np.ndarray) -> np.ndarray:
         return np.asarray(port.Eval(context), float) if port.HasValue(context) else default
+
+    @staticmethod
+    def _evaluated(port, context: Context, default: np.ndarray) -> np.ndarray:
+        """The port's value, or `default`."""
+        return port.Eval(context) if port.HasValue(context) else default
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
         if self.compiled:

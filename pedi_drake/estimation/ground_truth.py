@@ -1,13 +1,14 @@
 """Ground-truth floating-base 'estimate' from the simulated plant state (debugging only)."""
 
 import numpy as np
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import BasicVector
 
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 
-class GroundTruthEstimator(LeafSystem):
+class GroundTruthEstimator(LeafSystemWithoutWitnesses):
     """sim.plant_state -> base_state (13): selected by a scenario's `estimator: ground_truth`."""
 
     def __init__(self, plant):

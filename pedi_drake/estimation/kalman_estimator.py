@@ -32,13 +32,14 @@ import math
 
 import numpy as np
 from pydrake.math import RotationMatrix
-from pydrake.systems.framework import Context, DiscreteValues, LeafSystem
+from pydrake.systems.framework import Context, DiscreteValues
 
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.estimation.leg_odometry import _foot_kinematics_kernel, _offsets
 from pedi_drake.jit import kernel
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.vector3 import rotation_matrix_kernel
 
@@ -647,7 +648,7 @@ class FloatingBaseKalmanFilter:
         )
 
 
-class KalmanEstimator(LeafSystem):
+class KalmanEstimator(LeafSystemWithoutWitnesses):
     """go1.imu, go1.position_measured, go1.velocity_measured, go1.foot_contact (+ optional
     contact_set) -> base_state (13: quaternion, p_WB, w_WB, v_WB; see base_state.py).
 

@@ -24,6 +24,7 @@ from pedi_drake.fall import fell_during, first_fallen_sample
 from pedi_drake.go1_driver.hardware_station import hardware_link
 from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
+from pedi_drake.operator.meshcat_panel import MeshcatOperatorPanel
 from pedi_drake.run_checks import control_period
 from pedi_drake.viz import plots
 from pedi_drake.viz.suf_plots import plot_live_suf
@@ -76,6 +77,8 @@ def judge_run(record) -> dict:
         "mode_switches": [],
         "postures": [],
         "operator_targets": {"requests": [], "refused": 0},
+        "teleop": [],
+        "operator_messages": _operator_messages(record),
         "foot_errors_m": [],
         "max_base_drift_m": 0.0,
         "fell": fell,
@@ -127,6 +130,7 @@ def judge_run(record) -> dict:
         result["mode_switches"] = mission_results.mode_switch_table(progress)
         result["postures"] = mission_results.posture_table(progress)
         result["operator_targets"] = mission_results.target_table(progress)
+        result["teleop"] = mission_results.teleop_table(progress)
         if not hardware:
             _check_stand_up_phases(result["phases"], record.built.mission, p_WB, t_WB)
         failed = [row for row in result["phases"] if row["status"] == FAILED]
@@ -235,6 +239,16 @@ def judge_run(record) -> dict:
     result["reason"] = reason
     result["success"] = not reason
     return result
+
+
+def _operator_messages(record) -> dict | None:
+    """What the operator input took and dropped ({received, dropped, rejected: {reason: count}}),
+    None without an operator."""
+    diagram = record.built.diagram
+    if not diagram.HasSubsystemNamed("operator"):
+        return None
+    operator, context = record.subsystem("operator")
+    return operator.counts(context) if isinstance(operator, MeshcatOperatorPanel) else operator.counts()
 
 
 def scene_graph_inspector(record):

@@ -57,6 +57,22 @@ def posture_table(progress: MissionProgress) -> list[dict]:
     ]
 
 
+def teleop_table(progress: MissionProgress) -> list[dict]:
+    """The `teleop` list of result.json: per teleop_foot phase, how often each of its bounds acted
+    (pedi_drake.mission.teleop_foot.BOUNDS), its largest estimated foot force [N] and what ended it."""
+    return [
+        {
+            "phase": r.name,
+            "leg": r.metrics.get("leg", ""),
+            "bound_activations": dict(r.metrics.get("bound_activations", {})),
+            "max_force_n": r.metrics.get("max_force_n"),
+            "ended_by": r.metrics.get("ended_by", ""),
+        }
+        for r in progress.records
+        if r.kind == "teleop_foot"
+    ]
+
+
 def target_table(progress: MissionProgress) -> dict:
     """The `operator_targets` of result.json: every target the operator sent in the
     semi-autonomous mode ({time [s], target_W [m], accepted, reason}) and how many were refused."""

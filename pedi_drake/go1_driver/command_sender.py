@@ -8,14 +8,15 @@ it refuses to publish a non-finite command (the encoder gives no bytes for one; 
 then damps when the loop stays silent).
 """
 
-from pydrake.systems.framework import EventStatus, LeafSystem
+from pydrake.systems.framework import EventStatus
 
 from pedi_drake.go1_command import COMMAND_SIZE
 from pedi_drake.go1_driver import constants as c
 from pedi_drake.go1_driver.link import Go1Link
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 
-class Go1CommandSender(LeafSystem):
+class Go1CommandSender(LeafSystemWithoutWitnesses):
     """command (60) -> pd_plustau_targets, published every `period` [s] (and not at initialisation).
 
     timestamp_us is the diagram time [us]; id counts the messages, so a log shows gaps.

@@ -24,6 +24,15 @@ late loop stops reading, so the link receives on a thread of its own:
 Every rejected message is counted by channel and reason (REJECT_REASONS) at a cost of
 microseconds: the size and fingerprint are checked before any decoding.
 
+A channel whose messages carry the sender's stamp (its clock and a sequence number, `stamp`) is
+also kept in order: while its sender is live (an accepted message within `takeover_silence`), a
+message that is not newer than the newest accepted one in both sequence and time is late,
+repeated or replayed ("out_of_order"), and one stamped further ahead of the newest accepted one
+than the receiver's own clock allows (its time by more than the time since plus
+`max_clock_lead`, its sequence number by more than `max_sequence_rate` times that) comes from a
+broken sender ("stamp_ahead"). After that silence any valid message is taken: a restarted or new
+sender.
+
 `threaded=False` keeps the same path without the thread: the loop polls the transport at every
 tick (lock-step runs on an in-process bus, `DrakeLcmTransport`, use it).
 """
@@ -54,6 +63,8 @@ REJECT_REASONS = (
     "undecodable",  # the type's decoder raised
     "nonfinite",  # NaN or Inf in a value the driver uses
     "out_of_range",  # finite, but outside the values the channel's reader accepts (an unknown code)
+    "out_of_order",  # stamped (sequence, time) no later than the newest accepted one: late, repeated, replayed
+    "stamp_ahead",  # stamped further ahead of the newest accepted one than the receiver's clock allows
 )
 _REASON_INDEX = {name: i for i, name in enumerate(REJECT_REASONS)}
 
@@ -82,7 +93,14 @@ class Inbox:
         clock: Callable[[], float] = time.monotonic,
         encoded_size: int | None = None,
         in_range: Callable[[np.ndarray], bool] | None = None,
+        stamp: Callable[[object], tuple[float, int]] | None = None,
+        takeover_silence: float = math.inf,
+        max_clock_lead: float = math.inf,
+        max_sequence_rate: float = math.inf,
     ):
+        """`stamp`: the decoded message -> (sender's time [s], sequence number), for the order
+        check (module docstring) with `takeover_silence` and `max_clock_lead` [s] on `clock` and
+        `max_sequence_rate` [1/s]."""
         self.channel = channel
         self._type = lcm_type
         # A type of fixed size: the bridge's reference size, or the given one for a type of our own.
@@ -91,6 +109,11 @@ class Inbox:
         self._in_range = in_range
         self._fingerprint = lcm_type._get_packed_fingerprint()
         self._to_vector = to_vector
+        self._stamp = stamp
+        self._takeover_silence = takeover_silence
+        self._max_clock_lead = max_clock_lead
+        self._max_sequence_rate = max_sequence_rate
+        self._newest_stamp: tuple[float, int] | None = None  # of the newest accepted message
         # sticky_max: keep the element-wise maximum of the values that arrived since the last
         # snapshot, so a button pressed between two control ticks is never missed.
         self._sticky_max = sticky_max
@@ -123,7 +146,9 @@ class Inbox:
             self._reject("wrong_fingerprint")
             return
         try:
-            values = np.asarray(self._to_vector(self._type.decode(data)), dtype=float)
+            message = self._type.decode(data)
+            values = np.asarray(self._to_vector(message), dtype=float)
+            stamp = self._stamp(message) if self._stamp is not None else None
         except Exception as error:  # the type's own decoder: whatever it raises, the driver carries on
             self._reject("undecodable", str(error))
             return
@@ -135,13 +160,36 @@ class Inbox:
             return
         now = self._clock()
         with self._lock:
-            if self._sticky_max and not self._taken and self.values is not None:
-                values = np.maximum(values, self.values)
-            self._taken = False
-            self.values = values
-            self.received += 1
-            self.receipt_time = now
+            disorder = self._disorder(stamp, now)
+            if disorder is None:
+                self._accept(values, stamp, now)
+        if disorder is not None:
+            self._reject(disorder)
+            return
         self.first.set()
+
+    def _disorder(self, stamp: tuple[float, int] | None, now: float) -> str | None:
+        """Why a stamped message is out of order (module docstring), or None; under the lock."""
+        newest, since = self._newest_stamp, now - self.receipt_time
+        if stamp is None or newest is None or since > self._takeover_silence:
+            return None
+        (t, sequence), (t_newest, sequence_newest) = stamp, newest
+        if sequence <= sequence_newest or t < t_newest:
+            return "out_of_order"
+        allowed = since + self._max_clock_lead
+        if t - t_newest > allowed or sequence - sequence_newest > self._max_sequence_rate * allowed:
+            return "stamp_ahead"
+        return None
+
+    def _accept(self, values: np.ndarray, stamp: tuple[float, int] | None, now: float) -> None:
+        """Takes a valid message in; under the lock."""
+        if self._sticky_max and not self._taken and self.values is not None:
+            values = np.maximum(values, self.values)
+        self._taken = False
+        self.values = values
+        self.received += 1
+        self.receipt_time = now
+        self._newest_stamp = stamp
 
     def snapshot(self) -> tuple[np.ndarray | None, int, int, float]:
         """(newest values or None, messages received, messages rejected, receipt time [s])."""

@@ -22,13 +22,14 @@ import time
 from collections.abc import Callable
 
 import numpy as np
-from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
+from pydrake.systems.framework import BasicVector, DiscreteValues
 
 from pedi_drake import robot
 from pedi_drake.go1_command import COMMAND_SIZE
 from pedi_drake.go1_driver.config import Go1SafetyConfig
 from pedi_drake.go1_driver.constants import STATUS_CHANNELS
 from pedi_drake.jit import kernel
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 _log = logging.getLogger(__name__)
 
@@ -466,7 +467,7 @@ def _filter_step_kernel(published, memory, command, robot_status, estop, now, t,
     return log, latched
 
 
-class Go1SafetyFilter(LeafSystem):
+class Go1SafetyFilter(LeafSystemWithoutWitnesses):
     """command (60) + the robot's status + E-stop -> safe command (60).
 
     Inputs:

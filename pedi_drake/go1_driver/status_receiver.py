@@ -27,11 +27,12 @@ import time
 from collections.abc import Sequence
 
 import numpy as np
-from pydrake.systems.framework import Diagram, DiagramBuilder, DiscreteValues, LeafSystem
+from pydrake.systems.framework import Diagram, DiagramBuilder, DiscreteValues
 from pydrake.systems.primitives import Selector, SelectorParams
 
 from pedi_drake.exceptions import LcmTimeout
 from pedi_drake.go1_driver.link import Go1Link, Inbox
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 _log = logging.getLogger(__name__)
 
@@ -51,7 +52,7 @@ class ReceiverChannel:
     wait: bool = False
 
 
-class Go1LcmReceiver(LeafSystem):
+class Go1LcmReceiver(LeafSystemWithoutWitnesses):
     """Inboxes of `channels` -> one latched vector, at the control rate.
 
     Discrete state, the output `latched`: [values of every channel (in order), silence of every

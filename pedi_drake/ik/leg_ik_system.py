@@ -34,11 +34,12 @@ import math
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus, LeafSystem
+from pydrake.systems.framework import BasicVector, Context, DiscreteValues, EventStatus
 
 from pedi_drake import robot
 from pedi_drake.ik.fabrik import DEFAULT_MAX_ITERATIONS, solve_leg_ik
 from pedi_drake.jit import kernel
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 # Layout of the discrete state vector.
 _TARGET_B = slice(0, 3)  # trunk-frame target of the last solve [m] (NaN before the first one)
@@ -96,7 +97,7 @@ def _retarget(p_WF, pose, state, leg_index, tolerance, p_target_B) -> bool:
     return False
 
 
-class LegIkSystem(LeafSystem):
+class LegIkSystem(LeafSystemWithoutWitnesses):
     """Joint-space goal of the selected leg for a world-frame foot target (see the module doc)."""
 
     def __init__(

@@ -42,13 +42,14 @@ import dataclasses
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RotationMatrix
-from pydrake.systems.framework import BasicVector, LeafSystem
+from pydrake.systems.framework import BasicVector
 
 from pedi_drake import robot
 from pedi_drake.control import references as controller_refs
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE, BaseState
 from pedi_drake.exceptions import ConfigError, PediError
 from pedi_drake.fall import trunk_has_fallen
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.mission import mode_switch, semi_autonomous, spec
 from pedi_drake.mission.phases import (
     RUNNERS,
@@ -93,6 +94,7 @@ from pedi_drake.suf.live import SUF_SIZE, LiveSufReading
 from pedi_drake.suf.live_suf_system import suf_request_vector
 
 MISSION_STATUS_SIZE = 4  # [phase index, status code, pedipulation active, number of phases]
+MISSION_PERIOD = 0.01  # [s] the manager's update period, unless given
 _IDENTITY_POSE = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
 
 
@@ -117,7 +119,7 @@ def ik_legs_of(mission: spec.MissionSpec) -> tuple[str, ...]:
     return tuple(leg for leg in robot.LEG_NAMES if leg in legs)
 
 
-class MissionManager(LeafSystem):
+class MissionManager(LeafSystemWithoutWitnesses):
     """Mission phases -> controller references. Ports: see the module docstring."""
 
     def __init__(
@@ -127,7 +129,7 @@ class MissionManager(LeafSystem):
         prongs: ProngDesign | None = None,
         friction: float = 0.8,
         safety_margin: float = 0.03,
-        period: float = 0.01,
+        period: float = MISSION_PERIOD,
         force_estimate: str = "joint_torque",
         wait_for_plans: bool = True,
     ):
@@ -388,7 +390,7 @@ class MissionManager(LeafSystem):
 
     def _fell(self, view: RobotView, progress: MissionProgress) -> bool:
         standing_started = any(r.kind == "stand_up" and r.status == SUCCEEDED for r in progress.records)
-        on_prongs = bool(np.any(progress.references.contacts[4:] > 0.5))
+        on_prongs = any(loaded > 0.5 for loaded in progress.references.contacts[4:].tolist())
         return bool(
             trunk_has_fallen(
                 view.base.quaternion_wxyz,

@@ -10,7 +10,7 @@ import dataclasses
 import math
 
 import numpy as np
-from pydrake.math import RollPitchYaw, RotationMatrix
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
 from pedi_drake.control.references import safety_polygon_vector
@@ -147,13 +147,14 @@ class IkAnswer:
     target_B: np.ndarray  # (3,) the trunk-frame target it answers [m]
 
 
-def _ask_ik(progress: MissionProgress, view: RobotView, targets_B: dict[str, list], what: str) -> None:
-    """Asks the leg IK systems for the joint angles of `targets_B` (per leg, trunk frame, in order).
+def _ask_ik(progress: MissionProgress, view: RobotView, X_WB: RigidTransform, targets_B: dict, what: str) -> None:
+    """Asks the leg IK systems for the joint angles of `targets_B` (per leg, trunk frame, in order),
+    the trunk at X_WB (the pose the targets are planned in).
 
     The answers arrive over the manager's ports on later ticks (`receive_ik_answers`); the phase
     reads them with `_ik_solutions` and meanwhile holds its legs where their references are.
     """
-    pose = np.concatenate([view.base.quaternion_wxyz, view.base.p_WB])
+    pose = np.concatenate([X_WB.rotation().ToQuaternion().wxyz(), X_WB.translation()])
     progress.ik = IkPlan.ask(what, pose, targets_B, view.q)
 
 
@@ -183,11 +184,6 @@ def receive_ik_answers(plan: IkPlan, answers: dict[str, IkAnswer]) -> IkPlan:
             )
         plan = plan.answered(leg, answer.q, robot.leg_slice(leg))
     return plan
-
-
-def _to_trunk(view: RobotView, point, frame: str) -> np.ndarray:
-    point = np.asarray(point, float)
-    return view.X_WB.inverse() @ point if frame == "world" else point
 
 
 def target_problem(p_W: np.ndarray, X_WB) -> str | None:
@@ -362,25 +358,67 @@ def posture_request(
 ) -> PostureRequest:
     """The optimal-posture request of a leg_to_pedipulation phase (its `goal`), made from the
     loaded feet measured now (`contacts`: the contact set); the optimiser starts from the fixed
-    posture (p_fixed_W [m], R_WB), with the attitude of the goal's body_rotate if it has one."""
+    posture (p_fixed_W [m], R_WB), with the attitude of the goal's body_rotate if it has one.
+    Trunk-frame targets that stay fixed in the world (`target_anchor`) go to the optimiser as the
+    world points they name at that fixed posture."""
     goal = phase.goal
-    stance = [leg for k, leg in enumerate(robot.LEG_NAMES) if leg != phase.leg and contacts[k] > 0.5]
-    case = PostureCase(
-        stance_W=tuple((leg, tuple(float(v) for v in view.foot_W(leg))) for leg in stance),
-        leg=phase.leg,
-        targets=tuple(tuple(float(v) for v in p) for p in goal.targets),
-        frame=goal.frame,
-        reach_only=tuple(tuple(float(v) for v in p) for p in goal.reach_only),
-        lift_B=tuple(float(v) for v in working_position_B(phase.leg, phase.working_depth)),
-        prongs_key=robot.design_key(env.prongs),
-    )
     rpy = RollPitchYaw(R_WB).vector()
     fixed: tuple[str, ...] = ()
     if goal.attitude is not None:
         rpy = np.array([goal.attitude[0], goal.attitude[1], rpy[2] + goal.attitude[2]])
         fixed = ("roll", "pitch", "yaw")
     start = Posture(tuple(float(v) for v in p_fixed_W), tuple(float(v) for v in rpy))
+    anchor = target_anchor(phase, start)
+    frame = goal.frame if anchor is None else "world"
+
+    def points(given: list) -> tuple[tuple[float, float, float], ...]:
+        as_given = [np.asarray(p, float) for p in given]
+        return tuple(tuple(float(v) for v in (p if anchor is None else anchor @ p)) for p in as_given)
+
+    stance = [leg for k, leg in enumerate(robot.LEG_NAMES) if leg != phase.leg and contacts[k] > 0.5]
+    case = PostureCase(
+        stance_W=tuple((leg, tuple(float(v) for v in view.foot_W(leg))) for leg in stance),
+        leg=phase.leg,
+        targets=points(goal.targets),
+        frame=frame,
+        reach_only=points(goal.reach_only),
+        lift_B=tuple(float(v) for v in working_position_B(phase.leg, phase.working_depth)),
+        prongs_key=robot.design_key(env.prongs),
+    )
     return PostureRequest(case, start, fixed=fixed)
+
+
+def target_anchor(phase, start: Posture) -> RigidTransform | None:
+    """The pose X_WB in which the trunk-frame targets after the lift `phase` name their world
+    points: the trunk at the fixed posture `start` when they stay fixed in the world
+    (`trunk_targets: world`: the foot then goes where it would have gone without the optimiser,
+    whatever posture the trunk takes); None for world targets and for targets on the trunk."""
+    if phase.goal.frame != "trunk" or phase.trunk_targets != "world":
+        return None
+    return start.pose()
+
+
+def _reach_frame(progress: MissionProgress, X_WB: RigidTransform, leg: str, frame: str) -> RigidTransform:
+    """X_WF of the frame a reach's points for `leg` are given in: the world; the trunk at X_WB,
+    the pose the reach plans in; or, after an optimal posture, the trunk at the fixed posture in
+    which they name world points (`progress.target_anchors`)."""
+    if frame == "world":
+        return RigidTransform()
+    return progress.target_anchors.get(leg, X_WB)
+
+
+def _planning_pose(progress: MissionProgress, view: RobotView) -> RigidTransform:
+    """The trunk pose X_WB a reach plans its joint goals in: on its feet, the body reference
+    now, where the controller holds the trunk and brings it back after a disturbance (the
+    reaction of a press that has just ended, the swing of the leg itself), so that the goals put
+    the foot on its target once the trunk is back there; the estimate of a moment could be
+    millimetres and milliradians off, which the foot, 0.4 m out, would keep. On its prongs, the
+    estimate: there the prong contact holds the trunk, above its reference (which is set into the
+    ground to keep the prongs loaded)."""
+    if _on_prongs(progress.references):
+        return view.X_WB
+    p_WB, R_WB = _body_sample(progress, view.time)
+    return RigidTransform(R_WB, p_WB)
 
 
 def _posture_metrics(request: PostureRequest, result) -> dict:
@@ -446,13 +484,25 @@ class LegToPedipulationRunner(PhaseRunner):
             result = env.planner.answer(memo["request"], wait=env.wait_for_plans) if t >= memo["t_due"] else None
             if result is None:
                 return RUNNING
-            progress.records[-1].metrics.update(leg=leg, posture=_posture_metrics(memo["request"], result))
+            metrics = _posture_metrics(memo["request"], result)
+            progress.records[-1].metrics.update(leg=leg, posture=metrics)
             if not result.best.feasible:
-                raise UnreachableTarget(
-                    f"{phase.name}: no posture within the limits reaches the targets of {leg} ({result.best.reason})"
-                )
+                why = f"no posture within the limits reaches the targets of {leg} ({result.best.reason})"
+                if not phase.goal.fallback_to_fixed:
+                    metrics.update(taken="none", fallback="")
+                    raise UnreachableTarget(f"{phase.name}: {why}")
+                # The mission's own posture, which it runs without the optimiser: the trunk shifts
+                # as a fixed lift's does (position only: a later body_rotate turns it).
+                metrics.update(taken="fixed", fallback=f"{why}: the fixed posture is taken")
+                _move_body(progress, t, np.asarray(memo["request"].start.p_WB), None, SHIFT_DURATION)
+                memo.update(stage="shift", t_shifted=t + SHIFT_DURATION)
+                return RUNNING
+            metrics.update(taken="optimal", fallback="")
             posture = result.best.posture
             progress.pre_posture[leg] = _body_sample(progress, t)
+            anchor = target_anchor(phase, memo["request"].start)
+            if anchor is not None:
+                progress.target_anchors[leg] = anchor
             # A body_rotate among the targets turns the trunk later (about its origin): only the
             # position is taken now.
             R_goal = None if phase.goal.attitude is not None else RotationMatrix(RollPitchYaw(*posture.rpy))
@@ -462,7 +512,7 @@ class LegToPedipulationRunner(PhaseRunner):
             refs.contacts[k] = 0.0
             # The working pose's joint angles are asked now, to be there when the force has ramped away.
             p_work_B = working_position_B(leg, phase.working_depth)
-            _ask_ik(progress, view, {leg: [p_work_B]}, phase.name)
+            _ask_ik(progress, view, view.X_WB, {leg: [p_work_B]}, phase.name)
             memo.update(stage="release", t_release=t, p_work_B=p_work_B)
         elif memo["stage"] == "release" and t >= memo["t_release"] + CONTACT_RAMP_WAIT:
             solutions = _ik_solutions(progress)
@@ -488,6 +538,9 @@ def _reach_legs(phase) -> list[tuple[str, list, list]]:
 class ReachRunner(PhaseRunner):
     """IK to the target (and the approach and via points), then joint-space quintics through them.
 
+    The joint goals are planned in the trunk pose of `_planning_pose`, the targets given in the
+    trunk frame are in that pose too (or, after an optimal posture, in `progress.target_anchors`).
+
     With `together`, every listed leg gets its own quintics over the same time span, so the feet
     move and arrive together; the phase succeeds when every foot is within the tolerance.
     """
@@ -500,18 +553,22 @@ class ReachRunner(PhaseRunner):
                     f"{phase.name}: {leg} is not in pedipulation mode (add leg_to_pedipulation first)"
                 )
         targets_B, targets_W = {}, {}
+        X_WB = _planning_pose(progress, view)
+        X_BW = X_WB.inverse()
         for leg, target, via_points in legs:
             points = [np.asarray(p, float) for p in via_points]
             if phase.approach_offset:
                 points.append(np.asarray(target) + np.asarray(phase.approach_offset))
             points.append(np.asarray(target, float))
-            for point in points:
-                problem = target_problem(point if phase.frame == "world" else view.X_WB @ point, view.X_WB)
+            X_WF = _reach_frame(progress, X_WB, leg, phase.frame)
+            points_W = [X_WF @ point for point in points]
+            for p_W in points_W:
+                problem = target_problem(p_W, X_WB)
                 if problem is not None:
                     raise UnreachableTarget(f"{phase.name}: {leg}: {problem}")
-            targets_B[leg] = [_to_trunk(view, point, phase.frame) for point in points]
-            targets_W[leg] = np.asarray(target, float) if phase.frame == "world" else view.X_WB @ points[-1]
-        _ask_ik(progress, view, targets_B, phase.name)
+            targets_B[leg] = [X_BW @ p_W for p_W in points_W]
+            targets_W[leg] = points_W[-1]
+        _ask_ik(progress, view, X_WB, targets_B, phase.name)
         # The motion starts once the IK has answered (`t_arrive` is set then).
         progress.memo.update(t_arrive=math.inf, target_W=targets_W[phase.leg], targets_W=targets_W, t_ok=None)
 
@@ -687,7 +744,7 @@ class LegToSupportRunner(PhaseRunner):
         ground = np.array([p_WF[0], p_WF[1], robot.FOOT_RADIUS - PLACE_DEPTH])
         above = ground + [0.0, 0.0, 0.05]
         X_BW = view.X_WB.inverse()
-        _ask_ik(progress, view, {leg: [X_BW @ above, X_BW @ ground]}, phase.name)
+        _ask_ik(progress, view, view.X_WB, {leg: [X_BW @ above, X_BW @ ground]}, phase.name)
         progress.memo.update(stage="plan", footprint_W=ground)
 
     def step(self, phase, progress, view, env):
@@ -723,6 +780,7 @@ class LegToSupportRunner(PhaseRunner):
             goal = p_now if _on_prongs(refs) else _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
             # After an optimal posture: back to the height and attitude the trunk had before it.
             p_before, R_before = progress.pre_posture.pop(leg, (None, None))
+            progress.target_anchors.pop(leg, None)
             duration = SHIFT_DURATION if p_before is None else POSTURE_DURATION
             if p_before is not None:
                 goal[2] = p_before[2]

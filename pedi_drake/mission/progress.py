@@ -229,6 +229,9 @@ class MissionProgress:
     # Per lifted leg, the trunk reference (p_WB [m], R_WB) before an optimal posture moved it:
     # leg_to_support puts the trunk back there (re-centred over the feet as always).
     pre_posture: dict = dataclasses.field(default_factory=dict)
+    # Per lifted leg, after an optimal posture: the trunk pose X_WB (RigidTransform) of the fixed
+    # posture, in which its reaches' trunk-frame targets name the world points they stay at.
+    target_anchors: dict = dataclasses.field(default_factory=dict)
     # The running phase's lifted-foot push (None when no phase drives a foot against anything).
     push: FootPush | None = None
 
@@ -248,8 +251,9 @@ class MissionProgress:
             clone.records.append(record)
         # Lists of phases (never changed during a run) and of ModeSwitch values.
         clone.recovery, clone.interlude, clone.switches = list(self.recovery), list(self.interlude), list(self.switches)
-        # Of (array, RotationMatrix) values and of TargetRequest values, never changed.
+        # Of (array, RotationMatrix), RigidTransform and TargetRequest values, never changed.
         clone.pre_posture = dict(self.pre_posture)
+        clone.target_anchors = dict(self.target_anchors)
         clone.target_requests = list(self.target_requests)
         return clone
 

@@ -102,7 +102,7 @@ def target_sequence(block: spec.SemiAutonomousMode, p_W: np.ndarray, number: int
     posture for it, reach and hold, put the leg back."""
     name, leg, duration = f"{block.name}_{number}", block.leg, block.leg_duration
     target = [float(v) for v in p_W]
-    goal = spec.PostureGoal(leg=leg, frame="world", targets=[target])
+    goal = spec.PostureGoal(leg=leg, frame="world", targets=[target], fallback_to_fixed=False)
     lift = spec.LegToPedipulation(
         name=f"{name}_lift",
         leg=leg,

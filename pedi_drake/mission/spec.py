@@ -38,6 +38,11 @@ FRAMES = ("world", "trunk")
 # the centroid of the other supports at the current height and attitude; "optimal" takes the
 # posture of largest SUF at the foot's targets (pedi_drake.suf.posture).
 POSTURES = ("fixed", "optimal")
+# What the trunk-frame targets of the reaches after a lift with posture: optimal stay fixed to:
+# "world": the world point each names with the trunk in the fixed posture (a thing in the scene,
+# such as a hand: the optimal posture then takes the foot to the same point); "trunk": the trunk
+# (a point on the robot itself, such as its back: it moves with the posture).
+TRUNK_TARGETS = ("world", "trunk")
 
 
 @dataclasses.dataclass
@@ -144,6 +149,10 @@ class PostureGoal:
     # Roll, pitch and yaw (yaw relative to the heading) [rad] a body_rotate sets before the
     # targets: the posture keeps them. None: the attitude is optimised too.
     attitude: list[float] | None = None
+    # With no feasible posture: True, lift in the fixed posture (a mission's lift: the mission
+    # runs with it without the optimiser); False, fail before anything moves (an operator's
+    # target, which the semi-autonomous mode then refuses).
+    fallback_to_fixed: bool = True
 
 
 @dataclasses.dataclass
@@ -153,13 +162,17 @@ class LegToPedipulation(PhaseBase):
 
     `posture` says where the trunk goes first (POSTURES): with "optimal" the phase asks for the
     posture of largest SUF at the targets the leg reaches next (`goal`) and waits for it (up to
-    pedi_drake.mission.posture_planner.PLAN_LATENCY and the optimiser's time) before moving."""
+    pedi_drake.mission.posture_planner.PLAN_LATENCY and the optimiser's time) before moving; where
+    no posture is feasible, it takes the fixed one (see PostureGoal.fallback_to_fixed)."""
 
     leg: str = "FR"
     # Foot depth below the hip joint in the working position [m].
     working_depth: float = 0.15
     duration: float = 1.5
     posture: str = "fixed"
+    # With posture: optimal, what the following reaches' trunk-frame targets stay fixed to
+    # (TRUNK_TARGETS); no effect with the fixed posture, where both mean the same point.
+    trunk_targets: str = "world"
     # Set by the loader for posture: optimal (see PostureGoal); not a file field.
     goal: PostureGoal | None = None
 
@@ -193,7 +206,8 @@ class Reach(PhaseBase):
     """
 
     leg: str = "FR"
-    # Foot target [m], in `frame` ("world", or "trunk" at the phase start).
+    # Foot target [m], in `frame` ("world", or "trunk": the trunk where the controller holds it at
+    # the phase start, its reference; see LegToPedipulation.trunk_targets after an optimal posture).
     target: list[float] = dataclasses.field(default_factory=lambda: [0.4, -0.13, 0.2])
     frame: str = "world"
     # If set, first reach target + approach_offset (same frame) [m], then the target.
@@ -812,6 +826,11 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
     if isinstance(phase, LegToPedipulation):
         need(phase.posture in POSTURES, "posture", f"must be one of {POSTURES}, got {phase.posture!r}")
+        need(
+            phase.trunk_targets in TRUNK_TARGETS,
+            "trunk_targets",
+            f"must be one of {TRUNK_TARGETS}, got {phase.trunk_targets!r}",
+        )
         if phase.posture == "optimal":
             least = PLAN_LATENCY + POSTURE_DURATION + phase.duration
             need(

@@ -9,6 +9,8 @@ Plain functions on arrays (the TeleopFootRunner applies them every mission tick)
   * `slide_in_workspace`: a step from an inside target towards another: the step's end when it
     is inside, otherwise the boundary point on the way there plus the rest of the step with its
     outward component removed (the target slides along the boundary and never leaves it).
+  * `step_into_workspace`: from a target the workspace has moved away from (the trunk moved under
+    it), the nearest point back inside along the boundary's normal, within a step length;
   * `bound_speed`, `bound_force`: the velocity clipped to a speed, and without the component that
     pushes further into a contact whose estimated force exceeds a limit.
 """
@@ -105,12 +107,36 @@ def slide_in_workspace(margin, p_from: np.ndarray, p_to: np.ndarray) -> tuple[np
     return p, True
 
 
+def step_into_workspace(margin, p: np.ndarray, max_step: float) -> np.ndarray | None:
+    """The point of {margin >= 0} nearest to `p` (outside) along the margin's gradient at `p`, at
+    most `max_step` [m] away (to the bisection's resolution, on the inside); None when there is none
+    that close, or no gradient (beyond the leg's reach)."""
+    p = np.asarray(p, float)
+    normal = _inward_normal(margin, p)
+    if normal is None or margin(p + max_step * normal) < 0.0:
+        return None
+    outside, inside = 0.0, max_step
+    for _ in range(_BISECTION_STEPS):
+        middle = 0.5 * (inside + outside)
+        if margin(p + middle * normal) >= 0.0:
+            inside = middle
+        else:
+            outside = middle
+    return p + inside * normal
+
+
 def bound_speed(velocity: np.ndarray, max_speed: float) -> tuple[np.ndarray, bool]:
-    """(velocity scaled to at most `max_speed` [m/s], whether it was scaled)."""
-    speed = float(np.linalg.norm(velocity))
+    """(velocity scaled to at most `max_speed` [m/s], whether it was changed). A velocity that is
+    not finite (a command so large that its velocity overflowed) is no motion."""
+    velocity = np.asarray(velocity, float)
+    if not np.isfinite(velocity).all():
+        return np.zeros_like(velocity), True
+    largest = float(np.max(np.abs(velocity)))
+    # The norm of the scaled vector: a huge finite command's square would overflow.
+    speed = largest * float(np.linalg.norm(velocity / largest)) if largest > 0.0 else 0.0
     if speed <= max_speed:
-        return np.asarray(velocity, float), False
-    return np.asarray(velocity, float) * (max_speed / speed), True
+        return velocity, False
+    return velocity * (max_speed / speed), True
 
 
 def bound_force(velocity: np.ndarray, force_W: np.ndarray, max_force: float) -> tuple[np.ndarray, bool]:

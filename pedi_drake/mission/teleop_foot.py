@@ -13,7 +13,11 @@ a position command as the velocity that would reach it in one tick. Then, in thi
      live SUF in that direction (pedi_drake.mission.balance_bound: slowed near the limit,
      stopped at it, retreating beyond it), so the operator cannot push the robot over;
   5. workspace: the step is kept in the leg's workspace, sliding along its boundary
-     (pedi_drake.mission.teleop_bounds).
+     (pedi_drake.mission.teleop_bounds). When the trunk has moved under the foot's target so
+     that the target is outside, the target first steps back in along the boundary's normal, and
+     the operator's step gets what is left of the tick's length at the speed bound: the reference
+     neither jumps nor outruns the speed bound (the measured foot is no place to restart from: it
+     lies off the reference by the tracking error, possibly outside too).
 
 The reference is a RampSegment from where the previous one ended, so it never jumps. Each bound
 counts the ticks it acted in the phase's metrics (`bound_activations`); the balance bound also
@@ -40,7 +44,13 @@ from pedi_drake.mission.progress import (
     MissionProgress,
 )
 from pedi_drake.mission.robot_view import RobotView
-from pedi_drake.mission.teleop_bounds import bound_force, bound_speed, slide_in_workspace, workspace_margin
+from pedi_drake.mission.teleop_bounds import (
+    bound_force,
+    bound_speed,
+    slide_in_workspace,
+    step_into_workspace,
+    workspace_margin,
+)
 from pedi_drake.operator.command import FRAME_TRUNK, KIND_POSITION, MODE_AUTONOMOUS
 from pedi_drake.trajectory import RampSegment
 
@@ -140,9 +150,16 @@ class TeleopFootRunner:
 
         p_from_B = X_BW @ p_ref
         if margin(p_from_B) < 0.0:
-            # The trunk moved under the held target: start from the measured foot, which the leg reaches.
-            p_from_B = view.foot_B(phase.leg)
+            # The trunk moved under the held target: first back inside, along the boundary's normal,
+            # within this tick's length at the speed bound; the operator's step gets the rest.
             counts["workspace"] += 1
+            inside = step_into_workspace(margin, p_from_B, phase.max_speed * dt)
+            if inside is None:  # no way in at the speed bound (the trunk moved faster): hold
+                velocity = np.zeros(3)
+            else:
+                rest = phase.max_speed * dt - float(np.linalg.norm(inside - p_from_B))
+                p_from_B = inside
+                velocity, _ = bound_speed(velocity, max(rest, 0.0) / dt)
         p_to_B, clipped = slide_in_workspace(margin, p_from_B, p_from_B + X_BW.rotation() @ (velocity * dt))
         counts["workspace"] += clipped
         p_next = X_WB @ p_to_B

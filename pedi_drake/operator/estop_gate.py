@@ -8,15 +8,16 @@ to the driver's own `driver.estop` input instead, and this gate is not used.
 """
 
 import numpy as np
-from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
+from pydrake.systems.framework import BasicVector, DiscreteValues
 
 from pedi_drake.go1_command import COMMAND_SIZE
 from pedi_drake.go1_driver.config import Go1SafetyConfig
 from pedi_drake.go1_driver.safety import SafetyLimits, damping_command
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE, OperatorCommand
 
 
-class OperatorEstopGate(LeafSystem):
+class OperatorEstopGate(LeafSystemWithoutWitnesses):
     """command (60), operator_command, position_measured (12), velocity_measured (12) -> command (60).
 
     Discrete state: [latched (0 or 1), diagram time it latched [s], damping command (60)], updated

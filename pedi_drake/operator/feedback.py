@@ -17,9 +17,10 @@ so a haptic device feels what the foot feels and how close it is to the balance 
 
 import numpy as np
 from pydrake.lcm import DrakeLcmInterface
-from pydrake.systems.framework import EventStatus, LeafSystem
+from pydrake.systems.framework import EventStatus
 
 from pedi_drake.go1_driver.lcmtypes import foot_feedback_lcmt
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 FEEDBACK_SIZE = 8
 
@@ -58,7 +59,7 @@ def feedback_from_message(message: foot_feedback_lcmt) -> np.ndarray:
     )
 
 
-class OperatorFeedback(LeafSystem):
+class OperatorFeedback(LeafSystemWithoutWitnesses):
     """operator_feedback (FEEDBACK_SIZE) -> foot_feedback_lcmt on `channel` every `period` [s]."""
 
     def __init__(self, lcm: DrakeLcmInterface, channel: str, period: float):

@@ -28,8 +28,9 @@ import math
 
 import numpy as np
 from pydrake.geometry import Meshcat
-from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
+from pydrake.systems.framework import BasicVector, DiscreteValues
 
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import (
     FRAME_TRUNK,
     FRAME_WORLD,
@@ -60,7 +61,7 @@ _MODE, _VALUE, _ESTOP, _T_LAST, _RECEIVED, _DROPPED = 0, slice(3, 6), 6, 7, 8, 9
 _RANGE_TOLERANCE = 1e-9
 
 
-class MeshcatOperatorPanel(LeafSystem):
+class MeshcatOperatorPanel(LeafSystemWithoutWitnesses):
     """The operator's command from the Meshcat panel (port `operator_command`; see the module docstring)."""
 
     def __init__(self, config: MeshcatPanelConfig, meshcat: Meshcat, period: float):

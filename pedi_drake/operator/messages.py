@@ -38,6 +38,11 @@ def foot_command_vector(message) -> np.ndarray:
     )
 
 
+def foot_command_stamp(message) -> tuple[float, int]:
+    """(sender's time [s], sequence number) of a foot_command_lcmt: the order the receiver keeps."""
+    return message.timestamp_us * 1e-6, message.sequence
+
+
 def foot_command_in_range(values: np.ndarray) -> bool:
     """Whether the codes of a foot command vector are known ones (its values are checked finite before)."""
     return bool(

@@ -4,7 +4,12 @@ The source is the scenario's (`operator.source`): the project's foot_command_lcm
 ("lcm"), or the Go1 remote's rc_command ("remote"). Messages are checked as the Go1 driver checks
 its own (`pedi_drake.go1_driver.link.Inbox`): a message of the wrong size or fingerprint, that
 fails to decode, carries NaN or Inf, or an unknown code is dropped and counted by reason
-(`counts()`), so a foreign or broken publisher can never reach the foot.
+(`counts()`), so a foreign or broken publisher can never reach the foot. Foot commands are also
+kept in the order their sender stamped them (timestamp_us and sequence; the Inbox's order check):
+while the operator is live, a late, repeated or replayed message, or one stamped ahead of what the
+receiver's clock allows, is dropped too ("out_of_order", "stamp_ahead"); after
+SENDER_TAKEOVER_SILENCE without a valid message a restarted or new sender is taken, whatever its
+stamps.
 
 A periodic update takes in what arrived (polling the DrakeLcm: the diagram's time is the only
 clock, so a lock-step simulation and a real-time run see the same ages) and keeps in the discrete
@@ -13,19 +18,22 @@ diagram time of the last valid message. `age` on the output is the time since th
 """
 
 import math
+import time
 
 import numpy as np
 from pydrake.lcm import DrakeLcmInterface
-from pydrake.systems.framework import BasicVector, DiscreteValues, LeafSystem
+from pydrake.systems.framework import BasicVector, DiscreteValues
 
 from pedi_drake.go1_driver.constants import RC_COMMAND_CHANNEL
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt, rc_command_lcmt
 from pedi_drake.go1_driver.link import QUEUE_CAPACITY, Inbox
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import MODE_NONE, OPERATOR_COMMAND_SIZE
 from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.operator.messages import (
     MESSAGE_VECTOR_SIZE,
     foot_command_in_range,
+    foot_command_stamp,
     foot_command_vector,
     remote_command_vector,
     remote_in_range,
@@ -34,10 +42,19 @@ from pedi_drake.operator.messages import (
 # Discrete state: [mode_request, frame, kind, value (3), estop, t_last [s], received, dropped].
 _MODE, _FRAME_KIND_VALUE, _ESTOP, _T_LAST, _RECEIVED, _DROPPED = 0, slice(1, 6), 6, 7, 8, 9
 FOOT_COMMAND_ENCODED_SIZE = len(foot_command_lcmt().encode())
+# Silence after which a foot command is taken whatever its stamps (a restarted or new sender) [s]:
+# longer than any delivery delay, and the foot already holds after the teleop phase's hold_after.
+SENDER_TAKEOVER_SILENCE = 0.5
+# How far a foot command's time may run ahead of the newest accepted one's beyond the time the
+# receiver saw pass [s]: the jitter of delivery and of a late control loop catching up.
+MAX_CLOCK_LEAD = 0.5
+# The sequence numbers of foot commands advance at most this fast [1/s]: no operator sends faster.
+MAX_SEQUENCE_RATE = 10_000.0
 
 
-def operator_inbox(config: OperatorConfig) -> Inbox:
-    """The checked inbox of the configured source (foot_command_lcmt or the remote's rc_command)."""
+def operator_inbox(config: OperatorConfig, clock=time.monotonic) -> Inbox:
+    """The checked inbox of the configured source (foot_command_lcmt or the remote's rc_command);
+    `clock` [s] judges the foot commands' order (the remote's messages carry no stamps)."""
     if config.source == "lcm":
         return Inbox(
             config.channel,
@@ -45,6 +62,11 @@ def operator_inbox(config: OperatorConfig) -> Inbox:
             foot_command_vector,
             encoded_size=FOOT_COMMAND_ENCODED_SIZE,
             in_range=foot_command_in_range,
+            stamp=foot_command_stamp,
+            clock=clock,
+            takeover_silence=SENDER_TAKEOVER_SILENCE,
+            max_clock_lead=MAX_CLOCK_LEAD,
+            max_sequence_rate=MAX_SEQUENCE_RATE,
         )
     if config.source == "remote":
         return Inbox(
@@ -53,14 +75,17 @@ def operator_inbox(config: OperatorConfig) -> Inbox:
     raise ValueError(f"operator source {config.source!r} has no inbox")
 
 
-class OperatorInput(LeafSystem):
+class OperatorInput(LeafSystemWithoutWitnesses):
     """The operator's command (port `operator_command`, layout in pedi_drake.operator.command)."""
 
     def __init__(self, config: OperatorConfig, lcm: DrakeLcmInterface):
         """`lcm`: the bus the commands arrive on (polled by this system's update)."""
         super().__init__()
         self._lcm = lcm
-        self._inbox = operator_inbox(config)
+        # The diagram time of the poll under way: messages are handled only inside `_take_in`'s
+        # poll, so this is their receipt time, on the one clock of a lock-step or real-time run.
+        self._poll_time = -math.inf
+        self._inbox = operator_inbox(config, clock=lambda: self._poll_time)
         subscription = lcm.Subscribe(self._inbox.channel, self._inbox.handle)
         if hasattr(subscription, "set_queue_capacity"):
             subscription.set_queue_capacity(QUEUE_CAPACITY)
@@ -84,6 +109,7 @@ class OperatorInput(LeafSystem):
         return self._inbox.counts()
 
     def _take_in(self, context, discrete_state: DiscreteValues) -> None:
+        self._poll_time = context.get_time()
         self._lcm.HandleSubscriptions(0)
         values, received, dropped, _ = self._inbox.snapshot()
         x = context.get_discrete_state(self._state).get_value().copy()

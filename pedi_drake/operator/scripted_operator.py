@@ -3,18 +3,21 @@
 For tests, benchmarks and the example app: the script is a list of steps, each holding from its
 start time until the next one's; after the last step's `until` nothing more is published (the
 operator falls silent). Messages go out every `period` [s] of diagram time, with a sequence
-number, on a DrakeLcm (memq:// in one process, udpm:// to another).
+number, on a DrakeLcm (memq:// in one process, udpm:// to another). `script_stream` makes the
+same messages as data, for a MessagePlayer or a file.
 """
 
 import dataclasses
 
 import numpy as np
 from pydrake.lcm import DrakeLcmInterface
-from pydrake.systems.framework import EventStatus, LeafSystem
+from pydrake.systems.framework import EventStatus
 
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import FRAME_TRUNK, KIND_VELOCITY, MODE_NONE
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
+from pedi_drake.operator.message_stream import TimedMessage
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,7 +51,17 @@ def foot_command_message(step: ScriptStep, t: float, sequence: int) -> foot_comm
     return message
 
 
-class ScriptedOperator(LeafSystem):
+def script_stream(steps: list[ScriptStep], rate: float, end: float, channel: str) -> list[TimedMessage]:
+    """The messages of `steps` sent at `rate` [Hz] from 0 to `end` [s] (both ends) on `channel`,
+    sequence numbers from 1: the script as a stream (pedi_drake.operator.message_stream)."""
+    times = np.arange(int(np.floor(end * rate + 1e-9)) + 1) / rate
+    return [
+        TimedMessage(float(t), channel, foot_command_message(script_command(steps, t), float(t), k + 1).encode())
+        for k, t in enumerate(times)
+    ]
+
+
+class ScriptedOperator(LeafSystemWithoutWitnesses):
     """Publishes `steps` on `channel` every `period` [s] until `until` [s] (diagram time)."""
 
     def __init__(

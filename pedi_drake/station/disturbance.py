@@ -12,9 +12,10 @@ import numpy as np
 from pydrake.common.value import Value
 from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.plant import ExternallyAppliedSpatialForce, MultibodyPlant
-from pydrake.systems.framework import BasicVector, Context, LeafSystem
+from pydrake.systems.framework import BasicVector, Context
 
 from pedi_drake.exceptions import ScenarioError
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.scenario import Push
 
 PUSH_FORCE_SIZE = 3  # sim.push_force: the sum of the pushes' forces, world frame [N]
@@ -46,7 +47,7 @@ def _body_index(plant: MultibodyPlant, push: Push, where: str):
     return plant.GetBodyByName(push.body).index()
 
 
-class PushDisturbance(LeafSystem):
+class PushDisturbance(LeafSystemWithoutWitnesses):
     """Ports: output `forces` (list of ExternallyAppliedSpatialForce, for the plant) and output
     `push_force` (PUSH_FORCE_SIZE, the summed force in the world [N], for logging)."""
 

@@ -11,12 +11,13 @@ import math
 import numpy as np
 import scipy.sparse
 from pydrake import symbolic
-from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, LeafSystem
+from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder
 from pydrake.systems.primitives import Multiplexer, SparseMatrixGain, SymbolicVectorSystem
 
 from pedi_drake import robot
 from pedi_drake.go1_command import COMMAND_SIZE, pd_torque
 from pedi_drake.jit import kernel
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
 # Command entries are clipped to this magnitude before the motor law, so that no product or sum of
 # them can overflow to inf (or inf - inf to NaN) [rad, rad/s, N m/rad, N m s/rad, N m].
@@ -61,7 +62,7 @@ def motor_torque(command: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarr
     return np.minimum(np.maximum(tau, -robot.EFFORT_LIMIT), robot.EFFORT_LIMIT)
 
 
-class MotorCommandGuard(LeafSystem):
+class MotorCommandGuard(LeafSystemWithoutWitnesses):
     """go1.command -> `guarded_command(go1.command)`, by a compiled kernel.
 
     Its output depends on the command alone, so Drake computes it once per new command (once

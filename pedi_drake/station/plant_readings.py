@@ -22,10 +22,11 @@ import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.math import RotationMatrix
 from pydrake.multibody.plant import ContactResults, MultibodyPlant
-from pydrake.systems.framework import BasicVector, Context, LeafSystem
+from pydrake.systems.framework import BasicVector, Context
 
 from pedi_drake import robot
 from pedi_drake.jit import kernel
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.scenario import SensorNoiseConfig
 from pedi_drake.station.scene_contact import ROBOT_CONTACT_SOURCES
 from pedi_drake.vector3 import axis_angle_matrix, rotation_matrix_kernel
@@ -125,7 +126,7 @@ def _readings_kernel(x, vdot, torque, bodies, forces, normals, num_contacts, bod
             out[_SCENE_AT + obj * sources + source] += abs(np.dot(f, n))
 
 
-class PlantReadings(LeafSystem):
+class PlantReadings(LeafSystemWithoutWitnesses):
     """Plant outputs -> `readings`: imu, foot_contact, torque_estimated, foot_contact_forces,
     scene_contact_forces (readings_sizes), with the scenario's sensor noise.
 

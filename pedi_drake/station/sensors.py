@@ -15,10 +15,11 @@ on plain arrays and the plant's objects: the reference its compiled kernel is te
 import numpy as np
 from pydrake.math import RotationMatrix
 from pydrake.multibody.plant import ContactResults
-from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder, LeafSystem
+from pydrake.systems.framework import BasicVector, Diagram, DiagramBuilder
 from pydrake.systems.primitives import SparseMatrixGain
 
 from pedi_drake import robot
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.scenario import SensorNoiseConfig
 from pedi_drake.station.motor_model import selection_matrix
 from pedi_drake.vector3 import axis_angle_matrix, cross3, rotation_matrix_wxyz
@@ -27,7 +28,7 @@ from pedi_drake.vector3 import axis_angle_matrix, cross3, rotation_matrix_wxyz
 POSITION_CHANNEL, VELOCITY_CHANNEL = 0, 1
 
 
-class NoisyJointEncoders(LeafSystem):
+class NoisyJointEncoders(LeafSystemWithoutWitnesses):
     """plant_state -> position_measured, velocity_measured (12 each, Unitree order) with noise."""
 
     def __init__(self, plant_map: robot.Go1PlantMap, nq: int, nv: int, noise: SensorNoiseConfig, seed: int, period):

@@ -9,11 +9,14 @@ the Rejectable Force Polytope of the lifted foot (pedi_drake.suf.problem), is a 
 six posture numbers. The objective is the smallest SUF over the targets (the foot visits each with
 the same posture); a posture counts only where it is feasible:
 
-  * IK reachability: every stance foot and every target (and every point the foot must pass,
-    `reach_only`) has a closed-form solution at least `joint_margin` inside every joint limit;
-    a target stays clear of the trunk's box and above the floor; the lift's working position
-    (`lift_B`, where leg_to_pedipulation takes the foot before any reach) is reachable and at
-    least `lift_height` above the floor (a low, pitched trunk would put it into the ground);
+  * IK reachability: every stance foot and every world target (and every point the foot must
+    pass, `reach_only`) has a closed-form solution at least `joint_margin` inside every joint
+    limit; a point given in the trunk frame (targets that move with the trunk, and the lift's
+    working position `lift_B`, where leg_to_pedipulation takes the foot before any reach) has
+    the same joint angles at every posture, so it only has to be within the limits (how close
+    to them is the mission's choice, which no posture changes); a target stays clear of the
+    trunk's box and above the floor; the working position is at least `lift_height` above the
+    floor (a low, pitched trunk would put it into the ground);
   * balance: the centre of mass, projected on the ground, lies at least `com_margin` inside the
     stance feet's support polygon at every target (at rest the capture point is the CoM's
     projection; the controller keeps it in the polygon shrunk by its safety margin);
@@ -69,7 +72,9 @@ class PostureLimits:
     roll: float = 0.2
     pitch: float = 0.2
     yaw: float = 0.2
-    # Every IK solution stays this far inside every joint limit [rad].
+    # Every IK solution the posture sets (stance feet, world points) stays this far inside every
+    # joint limit [rad]; a trunk-frame point's does not depend on the posture (see the module
+    # docstring).
     joint_margin: float = 0.05
     # The CoM's ground projection stays this far inside the stance feet's polygon [m].
     com_margin: float = 0.05
@@ -223,9 +228,13 @@ def _configurations(case: PostureCase, posture: Posture, limits: PostureLimits):
         p_B = np.asarray(case.lift_B, float)
         if (X_WB @ p_B)[2] < limits.lift_height:
             return None, "the lift's working position too close to the floor"
-        if leg_angles(case.leg, p_B, joint_margin) is None:
+        if leg_angles(case.leg, p_B, 0.0) is None:
             return None, f"the lift's working position out of reach of {case.leg}"
     half = np.asarray(robot.TRUNK_HALF_EXTENTS) + robot.FOOT_RADIUS + limits.trunk_clearance
+    # A point given in the trunk frame has the same joint angles at every posture: how close they
+    # come to a limit is the mission's choice, which no posture changes; it only has to be within
+    # the limits. The margin holds where the posture sets the angles (stance feet, world points).
+    target_margin = joint_margin if case.frame == "world" else 0.0
     configurations = []
     for k, point in enumerate([*case.targets, *case.reach_only]):
         p = np.asarray(point, float)
@@ -234,7 +243,7 @@ def _configurations(case: PostureCase, posture: Posture, limits: PostureLimits):
             return None, f"point {k} below the floor"
         if np.all(np.abs(p_B) < half):
             return None, f"point {k} inside the trunk"
-        angles = leg_angles(case.leg, p_B, joint_margin)
+        angles = leg_angles(case.leg, p_B, target_margin)
         if angles is None:
             return None, f"point {k} out of reach of {case.leg}"
         if k < len(case.targets):

@@ -1,0 +1,73 @@
+"""An operator's stream of raw messages: kept in an LCM event log, played in lock step by a
+MessagePlayer at its diagram times, played on the wall clock, and aligned to a controller's clock
+by its first feedback message."""
+
+import threading
+import time
+
+import pytest
+from pydrake.lcm import DrakeLcm
+from pydrake.systems.analysis import Simulator
+
+from pedi_drake.apps.teleop_lcm import controller_clock_start
+from pedi_drake.operator.feedback import feedback_message, feedback_vector
+from pedi_drake.operator.message_stream import (
+    MessagePlayer,
+    TimedMessage,
+    play_messages,
+    read_lcm_log,
+    write_lcm_log,
+)
+
+STREAM = [
+    TimedMessage(0.0, "a", b"\x00\x01"),
+    TimedMessage(0.0015, "b", b""),  # an empty message is a message too (a truncated one)
+    TimedMessage(0.0100, "a", bytes(range(60))),
+]
+
+
+def test_an_lcm_log_keeps_times_channels_and_bytes(tmp_path):
+    assert read_lcm_log(write_lcm_log(STREAM, tmp_path / "stream.lcmlog")) == STREAM
+
+
+def test_the_player_publishes_each_message_once_at_its_diagram_time():
+    lcm = DrakeLcm("memq://")
+    received = []
+    for channel in ("a", "b"):
+        lcm.Subscribe(channel, lambda data, channel=channel: received.append((channel, data)))
+    player = MessagePlayer(lcm, STREAM, period=0.002)
+    simulator = Simulator(player)
+    simulator.Initialize()
+    simulator.AdvanceTo(0.005)
+    lcm.HandleSubscriptions(0)
+    assert received == [("a", STREAM[0].data), ("b", b"")]
+    simulator.AdvanceTo(0.1)
+    lcm.HandleSubscriptions(0)
+    assert len(received) == 3 and player.sent(simulator.get_context()) == 3
+
+
+def test_the_wall_clock_player_sends_in_order_at_start_plus_the_time():
+    clock = [100.0]
+    waits, sent = [], []
+
+    def sleep(seconds: float) -> None:
+        waits.append(seconds)
+        clock[0] += seconds
+
+    def publish(channel: str, data: bytes) -> None:
+        sent.append((clock[0], channel))
+
+    count = play_messages(STREAM, publish, 100.0, sleep, lambda: clock[0])
+    assert count == 3 and [channel for _, channel in sent] == ["a", "b", "a"]
+    assert [t for t, _ in sent] == pytest.approx([100.0, 100.0015, 100.01])
+
+
+def test_the_operator_takes_the_controllers_clock_from_its_feedback():
+    lcm = DrakeLcm("memq://")
+    message = feedback_message(feedback_vector(-1, None, 0.0, 0.0, 0, False), 12.5, 1).encode()
+    # The controller's feedback at its diagram time 12.5 s, once the operator listens.
+    threading.Timer(0.2, lambda: lcm.Publish("feedback", message)).start()
+    before = time.monotonic()
+    start = controller_clock_start(lcm, "feedback", timeout=2.0)
+    assert before - 12.5 <= start <= time.monotonic() - 12.5
+    assert controller_clock_start(DrakeLcm("memq://"), "feedback", timeout=0.1) is None
