@@ -40,6 +40,7 @@ from pedi_drake.operator.feedback import OperatorFeedback
 from pedi_drake.operator.meshcat_panel import MeshcatOperatorPanel
 from pedi_drake.operator.message_stream import MessagePlayer, TimedMessage
 from pedi_drake.operator.operator_input import OperatorInput
+from pedi_drake.run_checks import control_period
 from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
 from pedi_drake.station_interface import MakeStation
 from pedi_drake.suf.live_suf_system import LiveSufSystem
@@ -153,6 +154,8 @@ def _add_live_suf(builder: DiagramBuilder, scenario: Scenario, manager: MissionM
             mu=scenario.ground_friction,
             period=manager.period,
             offset=config.offset,
+            tick=control_period(scenario),
+            tick_work=config.tick_work,
             max_lps=config.max_lps,
         ),
     )

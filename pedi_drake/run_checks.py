@@ -28,7 +28,11 @@ OVERLAP_DEPTH = 0.002
 
 def control_period(scenario: Scenario) -> float:
     """Period of the controller the scenario runs [s]: one tick of it is the shortest run."""
-    return scenario.whole_body.period if scenario.controller == "whole_body" else scenario.stand.period
+    if scenario.controller == "whole_body":
+        return scenario.whole_body.period
+    if scenario.controller == "projected_impedance":
+        return scenario.projected_impedance.period
+    return scenario.stand.period
 
 
 def check_duration(scenario: Scenario, where: str = "simulation_duration") -> None:

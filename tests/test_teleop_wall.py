@@ -79,7 +79,10 @@ def test_the_foot_pushes_the_wall_and_the_balance_bound_limits_it(wall_run):
     record = _teleop_record(progress)
     contact = logs["sim.scene_contact_forces"]
     wall_force = contact.data[scene_contact_index("wall", "FR", scene_names)]
-    t_suf, readings = update_samples(logs["mission.suf"].times, logs["mission.suf"].data)
+    _, readings = update_samples(logs["mission.suf"].times, logs["mission.suf"].data)
+    # Each update from the time of the stance it describes (its inputs'), however many control
+    # ticks it then took.
+    t_suf = np.array([r.stance_time for r in readings])
     pushing = (t_suf >= PUSH_START) & (np.array([r.leg for r in readings]) == 0)
     limits = np.array([MARGIN * r.reach for r in readings])[pushing]
     # The true force at every tick, against the limit of the live SUF update in force then.

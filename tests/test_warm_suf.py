@@ -2,7 +2,9 @@
 a teleoperated path and on random nearby stances; the live SUF builds the same rows from the
 state estimate; a spent LP budget falls back to the single-direction SUF and says so."""
 
+import copy
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -15,7 +17,7 @@ from pedi_drake.benchmarks.suf import random_stance
 from pedi_drake.exceptions import SufError
 from pedi_drake.suf import warm_projection as wp
 from pedi_drake.suf.go1_configuration import stance_problem, teleoperation_stance
-from pedi_drake.suf.live import LiveSuf, LiveSufReading, idle_vector, rfp_rows
+from pedi_drake.suf.live import LiveSuf, LiveSufReading, idle_vector, rfp_rows, without_timing
 from pedi_drake.suf.methods import suf_exact, suf_single
 from pedi_drake.suf.problem import ContactPoint, build_problem
 
@@ -90,15 +92,69 @@ def test_the_compiled_projection_matches_its_interpreted_reference(compiled):
     problem = stance_problem(teleoperation_stance(trunk_height=0.25))
     G, h, N_F, F0, _ = wp.problem_rows(problem)
     results = []
-    for project in (wp.project, wp.project.py_func):
+    for project_within in (wp.project_within, wp.project_within.py_func):
         hull, meta = wp.new_projection_arrays(G.shape[1])
         none = (np.zeros((1, 3)), np.zeros((1, G.shape[1]), np.int64), np.zeros(1, np.int64))
-        status, lps = project(G, h, N_F, F0, *none, 0, wp.TOLERANCE, 5000, hull, meta)
+        progress = wp.new_progress()
+        status, _ = project_within(G, h, N_F, F0, *none, 0, wp.TOLERANCE, 5000, hull, meta, progress, math.inf)
         assert status == wp.EXACT
-        results.append((wp.polytope_of(hull), lps))
+        results.append((wp.polytope_of(hull), wp.progress_lps(progress)))
     (compiled_polytope, compiled_lps), (reference_polytope, reference_lps) = results
     assert compiled_lps == reference_lps
     np.testing.assert_allclose(compiled_polytope.b, reference_polytope.b, atol=1e-9)
+
+
+def _project_in_calls(rows, warm, budget: float, max_lps: int = 5000):
+    """(status, LPs, polytope, the work of every call) of a projection done in calls of `budget`."""
+    G, h, N_F, F0, _ = rows
+    hull, meta = wp.new_projection_arrays(G.shape[1])
+    if warm is None:
+        directions, active, num_active = np.zeros((1, 3)), np.zeros((1, G.shape[1]), np.int64), np.zeros(1, np.int64)
+    else:
+        directions, active, num_active = warm.directions, warm.active, warm.num_active
+    num_warm = 0 if warm is None else len(warm.directions)
+    progress = wp.new_progress()
+    works = []
+    while True:
+        status, work = wp.project_within(
+            G, h, N_F, F0, directions, active, num_active, num_warm, wp.TOLERANCE, max_lps, hull, meta, progress, budget
+        )
+        works.append(work)
+        if status != wp.PENDING:
+            return status, wp.progress_lps(progress), wp.polytope_of(hull), works
+
+
+# The most one step is charged: a facet's check, its LP and the point it finds joined to the hull.
+LARGEST_STEP = wp.CHECK_WORK + wp.LP_WORK + wp.INSERT_WORK
+
+
+@pytest.mark.parametrize("budget", [1e-9, 0.5, 3.0])
+@pytest.mark.parametrize("start", ["cold", "warm", "out of LPs"])
+def test_a_projection_done_in_calls_ends_as_the_one_done_in_one_call(compiled, budget, start):
+    stances = teleoperated_path(40)
+    rows = wp.problem_rows(stance_problem(stances[12]))
+    warm = wp.suf_exact_warm(stance_problem(stances[10]))[1] if start == "warm" else None
+    max_lps = 8 if start == "out of LPs" else 5000
+    status, lps, polytope, works = _project_in_calls(rows, warm, math.inf, max_lps)
+    assert status == (wp.INCOMPLETE if start == "out of LPs" else wp.EXACT) and len(works) == 1
+    sliced_status, sliced_lps, sliced, works = _project_in_calls(rows, warm, budget, max_lps)
+    assert (sliced_status, sliced_lps) == (status, lps) and len(works) > 1
+    np.testing.assert_array_equal(sliced.A, polytope.A)
+    np.testing.assert_array_equal(sliced.b, polytope.b)
+    np.testing.assert_array_equal(sliced.vertices, polytope.vertices)
+    # A call stops at its budget, past it by at most the one step it had started.
+    assert max(works) <= budget + LARGEST_STEP + 1e-12
+
+
+def test_a_finished_projection_does_nothing_more(compiled):
+    G, h, N_F, F0, _ = rows = wp.problem_rows(stance_problem(teleoperation_stance()))
+    status, lps, _, _ = _project_in_calls(rows, None, math.inf)
+    hull, meta = wp.new_projection_arrays(G.shape[1])
+    none = (np.zeros((1, 3)), np.zeros((1, G.shape[1]), np.int64), np.zeros(1, np.int64))
+    progress = wp.new_progress()
+    wp.project_within(G, h, N_F, F0, *none, 0, wp.TOLERANCE, 5000, hull, meta, progress, math.inf)
+    again = wp.project_within(G, h, N_F, F0, *none, 0, wp.TOLERANCE, 5000, hull, meta, progress, math.inf)
+    assert again == (status, 0.0) and wp.progress_lps(progress) == lps
 
 
 # The live SUF ---------------------------------------------------------------------------------
@@ -184,3 +240,51 @@ def test_a_warm_start_from_another_contact_set_does_not_change_the_suf(live):
     warm_reading, cold_reading = LiveSufReading.from_vector(warm_other), LiveSufReading.from_vector(cold_other)
     assert warm_reading.leg == rl and warm_reading.status == cold_reading.status
     assert warm_reading.value == pytest.approx(cold_reading.value, rel=RELATIVE_TOLERANCE, abs=1e-3)
+
+
+def _live_in_calls(live, work, previous, base, q, contacts, effector, push, budget):
+    """The work charged by every call of a live update done in `work` in calls of `budget`."""
+    live.start(work, previous, base, q, contacts, effector, push)
+    works = [live.advance(work, budget)]
+    while work.under_way:
+        works.append(live.advance(work, budget))
+    return works
+
+
+@pytest.mark.parametrize("budget", [1e-9, 1.0, 3.0])
+def test_live_updates_done_in_calls_give_the_vectors_and_warm_starts_of_one_call(live, budget):
+    push, loaded = np.array([-1.0, 0.0, 0.0]), np.array([0.0, 1.0, 1.0, 1.0])
+    tight = LiveSuf(mu=0.6, max_lps=8)  # runs out: the single-direction SUF
+    work = live.new_workspace()  # its warm start: the last sliced update's
+    warm, vector, sliced_vector = None, idle_vector(), idle_vector()
+    for k, stance in enumerate(teleoperated_path(40)[:12]):
+        base, q = _stance_state(stance)
+        solver = tight if k == 6 else live
+        if k == 6:
+            warm = None  # cold: more LPs than `tight` has
+            work.set_warm_start(None)
+        vector, warm = solver.update(warm, vector, base, q, loaded, 0, push)
+        calls = _live_in_calls(solver, work, sliced_vector, base, q, loaded, 0, push, budget)
+        assert not work.under_way and LiveSufReading.from_vector(work.result).slices == len(calls)
+        np.testing.assert_array_equal(without_timing(work.result), without_timing(vector))
+        sliced_warm = work.warm_start()
+        assert (sliced_warm is None) == (warm is None)
+        if warm is not None:
+            np.testing.assert_array_equal(sliced_warm.directions, warm.directions)
+            np.testing.assert_array_equal(sliced_warm.active, warm.active)
+        sliced_vector = work.result.copy()
+    assert LiveSufReading.from_vector(vector).fallbacks == 1
+
+
+def test_a_copied_workspace_goes_on_alone(live):
+    base, q = _stance_state(teleoperation_stance())
+    work = live.new_workspace()
+    live.start(work, idle_vector(), base, q, np.array([0.0, 1.0, 1.0, 1.0]), 0, np.zeros(3))
+    live.advance(work, 2.0)
+    copied = copy.deepcopy(work)
+    while work.under_way:
+        live.advance(work, 2.0)
+    assert copied.under_way and not np.array_equal(copied.progress, work.progress)
+    while copied.under_way:
+        live.advance(copied, 5.0)
+    np.testing.assert_array_equal(without_timing(copied.result), without_timing(work.result))

@@ -70,7 +70,7 @@ from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.phases import RUNNERS
 from pedi_drake.mission.progress import MissionProgress
 from pedi_drake.run import simulate
-from pedi_drake.scenario import load_scenario
+from pedi_drake.scenario import apply_scenario_text, load_scenario
 from pedi_drake.suf.live_suf_system import LiveSufSystem
 from pedi_drake.wall_clock import WallClock
 
@@ -80,7 +80,7 @@ STAGES = (
     ("receive", Go1LcmReceiver, ("_latch",)),
     ("estimate", KalmanEstimator, ("_update",)),
     ("mission", MissionManager, ("_update", "_calc_references", "_calc_body", "_calc_legs")),
-    ("suf", LiveSufSystem, ("_update",)),
+    ("suf", LiveSufSystem, ("_slice",)),
     ("ik", LegIkSystem, ("_update",)),
     ("control", WholeBodyController, ("_update",)),
     ("safety", Go1SafetyFilter, ("_update",)),
@@ -111,7 +111,7 @@ NO_OPS = (
     (KalmanEstimator, "_update", lambda self, context, state: None),
     (MissionManager, "_update", lambda self, context, state: None),
     (MissionManager, "_calc_references", lambda self, context, output: None),
-    (LiveSufSystem, "_update", lambda self, context, state: None),
+    (LiveSufSystem, "_slice", lambda self, context, state, starts: None),
     (LegIkSystem, "_update", lambda self, context, state: _SUCCEEDED),
     (WholeBodyController, "_update", lambda self, context, state: None),
     (Go1SafetyFilter, "_update", lambda self, context, state: None),
@@ -120,11 +120,11 @@ NO_OPS = (
 )
 
 
-def _scenario(mission: str, period: float, lcm_url: str = "", qp_backend: str | None = None):
+def _scenario(mission: str, period: float, lcm_url: str = "", qp_backend: str | None = None, scenario_text: str = "{}"):
     backend = f", qp_backend: {qp_backend}" if qp_backend else ""
     periods = f"whole_body: {{period: {period}{backend}}}, kalman: {{period: {period}}}"
     text = f"{{{periods}, go1_driver: {{safety: {{period: {period}}}}}}}"
-    scenario = load_scenario(scenario_text=text)
+    scenario = apply_scenario_text(load_scenario(scenario_text=text), scenario_text)
     scenario.mission, scenario.controller = mission, "whole_body"
     if lcm_url:
         scenario.lcm_buses["go1"].lcm_url = lcm_url
@@ -172,11 +172,19 @@ def _distribution(x_ms: np.ndarray) -> dict:
 
 class Replay:
     """The hardware diagram on an in-process bus, fed the recorded status tick by tick
-    (`qp_backend`: the whole-body controller's level QP solver)."""
+    (`qp_backend`: the whole-body controller's level QP solver; `scenario_text`: YAML onto the
+    scenario)."""
 
-    def __init__(self, mission: str, period: float, samples: np.ndarray, qp_backend: str | None = None):
+    def __init__(
+        self,
+        mission: str,
+        period: float,
+        samples: np.ndarray,
+        qp_backend: str | None = None,
+        scenario_text: str = "{}",
+    ):
         self.period, self.samples = period, samples
-        self.scenario = _scenario(mission, period, "memq://", qp_backend)
+        self.scenario = _scenario(mission, period, "memq://", qp_backend, scenario_text)
         self.built = MakePedipulationDiagram(self.scenario, hardware=True)
         self.diagram = self.built.diagram
         self.link = hardware_link(self.diagram)

@@ -57,7 +57,7 @@ def teleoperated_path(steps: int) -> list[Go1Stance]:
     return stances
 
 
-def _state_of(stance: Go1Stance) -> tuple[np.ndarray, np.ndarray]:
+def stance_state(stance: Go1Stance) -> tuple[np.ndarray, np.ndarray]:
     """The base state (13,) and joints (12,) of a stance, as the estimator would give them."""
     base = np.array([1.0, 0.0, 0.0, 0.0, *stance.trunk_xy, stance.trunk_height, *np.zeros(6)])
     return base, stance.joint_angles()
@@ -94,7 +94,7 @@ def run(steps: int) -> dict:
     fallbacks = 0
     for stance in teleoperated_path(steps):
         problem = stance_problem(stance)
-        base, q = _state_of(stance)
+        base, q = stance_state(stance)
         cold, elapsed = _timed(lambda problem=problem: suf_exact(problem))
         reference.append(cold.value)
         columns["cold_clp"][0].append(elapsed)

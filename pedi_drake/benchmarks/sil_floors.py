@@ -27,6 +27,14 @@ def _load() -> list[str] | None:
     return path.read_text().split()[:3] if path.exists() else None
 
 
+def _live_suf_figures(summary: dict | None) -> dict | None:
+    """The run's live SUF: its updates, fallbacks and the control ticks an update took."""
+    if summary is None:
+        return None
+    keys = ("updates", "fallbacks", "ticks_median", "ticks_max")
+    return {key: summary.get(key) for key in keys}
+
+
 def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str = "{}", separate: bool = False) -> dict:
     load_before = _load()
     start = time.monotonic()
@@ -50,6 +58,7 @@ def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str 
         "command_interdeparture_ms": loop["command_interdeparture_ms"],
         "controller_tick_ms": result["controller_tick_ms"],
         "real_time_factor": result["real_time_factor"],
+        "live_suf": _live_suf_figures(result.get("live_suf")),
         "wall_s": time.monotonic() - start,
         "load_before": load_before,
         "load_after": _load(),

@@ -63,6 +63,9 @@ def live_suf_summary(times: np.ndarray, data: np.ndarray, phases: list[dict]) ->
     summary = _figures(readings, t)
     summary["lps_median"] = float(np.median([r.lps for r in readings]))
     summary["lps_max"] = int(max(r.lps for r in readings))
+    # Control ticks from an update's start to its publication, that one included.
+    summary["ticks_median"] = float(np.median([r.slices for r in readings]))
+    summary["ticks_max"] = int(max(r.slices for r in readings))
     rows = []
     for phase in phases:
         if phase["status"] == "skipped" or phase["t_start"] is None:

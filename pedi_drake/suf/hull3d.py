@@ -128,6 +128,28 @@ def _signed_volume(points, i, j, k, m) -> float:
 def start_hull(points, faces, normals, offsets, alive, certified, counts, num_points, eps) -> int:
     """The tetrahedron of the first `num_points` points (already in `points`) that spans the most,
     then every other of them inserted. STARTED, FLAT (no tetrahedron thicker than eps), or FULL."""
+    corners = np.zeros(4, dtype=np.int64)
+    started = start_tetrahedron(points, faces, normals, offsets, alive, certified, counts, num_points, eps, corners)
+    if started != STARTED:
+        return started
+    for k in range(num_points):
+        if not is_corner(corners, k):
+            if insert_existing(points, faces, normals, offsets, alive, certified, counts, k, eps) == FULL:
+                return FULL
+    return STARTED
+
+
+@kernel
+def is_corner(corners, k) -> bool:
+    """Whether point k is one of the tetrahedron's `corners` (4,)."""
+    return k == corners[0] or k == corners[1] or k == corners[2] or k == corners[3]
+
+
+@kernel
+def start_tetrahedron(points, faces, normals, offsets, alive, certified, counts, num_points, eps, corners) -> int:
+    """The first step of `start_hull`: the hull is the tetrahedron of the first `num_points` points
+    that spans the most, its corners' indices written into `corners` (4,) int64; STARTED, FLAT or
+    FULL. The other points are then joined one by one (`insert_existing`), in any number of calls."""
     counts[0] = num_points
     counts[1] = 0
     if num_points < 4:
@@ -162,11 +184,7 @@ def start_hull(points, faces, normals, offsets, alive, certified, counts, num_po
     for a, b, c in ((i, j, k3), (i, k4, j), (j, k4, k3), (k3, k4, i)):
         if _new_face(points, faces, normals, offsets, alive, certified, counts, a, b, c) < 0:
             return FULL
-    for k in range(num_points):
-        if k == i or k == j or k == k3 or k == k4:
-            continue
-        if _insert_existing(points, faces, normals, offsets, alive, certified, counts, k, eps) == FULL:
-            return FULL
+    corners[0], corners[1], corners[2], corners[3] = i, j, k3, k4
     return STARTED
 
 
@@ -179,14 +197,14 @@ def insert_point(points, faces, normals, offsets, alive, certified, counts, p, e
         return FULL
     points[k, 0], points[k, 1], points[k, 2] = p[0], p[1], p[2]
     counts[0] = k + 1
-    status = _insert_existing(points, faces, normals, offsets, alive, certified, counts, k, eps)
+    status = insert_existing(points, faces, normals, offsets, alive, certified, counts, k, eps)
     if status != INSERTED:
         counts[0] = k  # not a vertex: forget it
     return status
 
 
 @kernel
-def _insert_existing(points, faces, normals, offsets, alive, certified, counts, k, eps) -> int:
+def insert_existing(points, faces, normals, offsets, alive, certified, counts, k, eps) -> int:
     """Joins the stored point k to the hull (see `insert_point`)."""
     px, py, pz = points[k, 0], points[k, 1], points[k, 2]
     num_faces = counts[1]

@@ -1,4 +1,5 @@
-"""LiveSufSystem: the live SUF of the robot's stance (pedi_drake.suf.live) as a periodic update.
+"""LiveSufSystem: the live SUF of the robot's stance (pedi_drake.suf.live) as periodic updates
+spread over the control ticks.
 
 Inputs: `base_state` (the estimate), `position_measured` (12), `contact_set` (the mission's: four
 feet, then prong tips) and `suf_request` (the mission's: [leg index or -1, direction (3)]: the
@@ -6,26 +7,50 @@ lifted foot to analyse and the direction to report the SUF along). Output: `suf`
 pedi_drake.suf.live (a state output port: no computation when the mission, the operator feedback
 or the log reads it).
 
-Where it runs, and why: its own periodic update at the mission manager's period, offset from the
-manager's update (by default 4 ms of a 10 ms period, a multiple of the 2 ms control tick), so the
-two never share a control tick: the manager reads the SUF of an update 6 ms old. The update is
-one compiled call, warm-started from the previous update's vertices (its Context's abstract
-state), with a fixed budget of LPs, so its worst case is bounded by the budget whatever the
-stance did; an update that runs out of budget uses the single-direction SUF and counts itself
-in the vector's `fallbacks`. No thread and no wall clock: the same inputs give the same SUF, so
-a simulation is as deterministic with it as without it.
+When it runs: an update starts at the mission manager's period, offset from the manager's update
+(by default 4 ms of a 10 ms period), reading its inputs then. Its work (the rows, then the
+warm-started exact projection step by step, then the vector) is done in slices of at most
+`tick_work` (in LPs; pedi_drake.suf.warm_projection.project_within charges each step) on the
+control ticks from its start on, skipping the manager's ticks (the slots of `slice_offsets`: 4,
+6, 8, 12 ms of each 10 ms), and the vector is published at the end of the slice that finishes it;
+the next update starts at the first start slot after that. A slice is cut at a step's end, never
+inside one, so a tick pays at most `tick_work` plus one step (an LP and a point joined to the
+hull; a fallback's finishing step, its two single-direction LPs) plus the slice's fixed cost. A
+`tick_work` no update reaches (1.0e+9) does every update in its start's tick.
+
+How much older the SUF is: the manager reads it only at its own updates, so an update finished
+on a slot before the manager's next update (4, 6 or 8 ms) is read exactly as old as before (6 ms:
+the inputs of 4 ms; the vector's `stance_time` says when they were read); one that takes a slot
+more is read a period (10 ms) later, and the update after it starts a period late.
+
+The updates are discrete updates, and the update under way lives in a workspace
+(pedi_drake.suf.live.LiveSufWorkspace) that is abstract state of the Context, allocated once and
+changed in place by them: nothing else reads it, and copying a Context copies it. An unrestricted
+update would copy the workspace twice per event (pydrake deep-copies abstract state for it) and
+makes the simulator look up every system's witness functions again, a cost of its own on top of
+the update's (pedi_drake.benchmarks.suf_offload --replay, `unrestricted` against `one_tick`).
+
+Why slices and not a worker thread: the work is counted, not timed, so a simulation gives the
+same SUF sequence at any machine speed, and the tick's share is bounded whatever the operating
+system does (measured: at most 0.18 ms of a tick, against 0.85 ms for the whole update in one).
+A thread (the kernels release the GIL) costs the tick less on average, only the hand-over, but
+not a bounded amount: the tick that collects the result waits for the worker, or for the GIL its
+Python holds (once 2.4 ms in two replays, with a core to spare); on this project's 2-core machines
+it shares the loop's core (the simulator bridge has the other), under SCHED_FIFO
+(`go1_driver.realtime_priority`) it would run at the loop's priority, and its result is a period
+older. docs/real_time.md has the measurements (pedi_drake.benchmarks.suf_offload).
 """
 
-import dataclasses
+import functools
+import math
 
 import numpy as np
 from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import LeafSystem
 
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
+from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.suf.live import DEFAULT_MAX_LPS, LiveSuf, idle_vector
-from pedi_drake.suf.warm_projection import WarmStart
 
 # [leg index (Unitree order) or -1, direction (3), world]
 SUF_REQUEST_SIZE = 4
@@ -41,17 +66,19 @@ def suf_request_vector(leg: int, direction: np.ndarray | None) -> np.ndarray:
     return x
 
 
-@dataclasses.dataclass(frozen=True)
-class _Memory:
-    """The abstract state: the warm start of the next update (None: the next one is cold)."""
+def slice_offsets(period: float, offset: float, tick: float) -> list[float]:
+    """The first time of each slot [s], each slot then recurring every `period`: the update's
+    start (`offset`), then every control `tick` after it within one period, except the times at
+    multiples of `period` (the mission manager's updates)."""
+    offsets = [offset]
+    for j in range(1, math.ceil(period / tick - 1e-9)):
+        t = offset + j * tick
+        if abs(t / period - round(t / period)) > 1e-9:
+            offsets.append(t)
+    return offsets
 
-    warm: WarmStart | None = None
 
-    def __deepcopy__(self, memo) -> "_Memory":
-        return self  # a value: an update stores a new one
-
-
-class LiveSufSystem(LeafSystem):
+class LiveSufSystem(LeafSystemWithoutWitnesses):
     """The live SUF (see the module docstring)."""
 
     def __init__(
@@ -61,6 +88,8 @@ class LiveSufSystem(LeafSystem):
         mu: float,
         period: float,
         offset: float,
+        tick: float,
+        tick_work: float,
         max_lps: int = DEFAULT_MAX_LPS,
     ):
         """
@@ -68,35 +97,49 @@ class LiveSufSystem(LeafSystem):
             prongs: the robot's prongs (their tips are contacts when the contact set loads them).
             mu: the ground's friction coefficient [-] (the contacts' pyramids).
             period: update period [s]; offset: the first update's time [s].
+            tick: the control period [s]: the update's slices run on the control ticks after
+                its start.
+            tick_work: the work one control tick may do [LP] (see the module docstring).
             max_lps: the LP budget of one update (see pedi_drake.suf.live).
         """
         super().__init__()
         self._live = LiveSuf(prongs, mu=mu, max_lps=max_lps)
+        self._tick_work = float(tick_work)
         self._base_state = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
         self._position = self.DeclareVectorInputPort("position_measured", 12)
         self._contacts = self.DeclareVectorInputPort("contact_set", self._live.num_contacts)
         self._request = self.DeclareVectorInputPort("suf_request", SUF_REQUEST_SIZE)
-        self._memory = self.DeclareAbstractState(AbstractValue.Make(_Memory()))
+        # The workspace of the update under way and of the warm start (a LiveSufWorkspace): see
+        # the module docstring for why the discrete updates change it in place.
+        self._workspace = self.DeclareAbstractState(AbstractValue.Make(self._live.new_workspace()))
         self._suf = self.DeclareDiscreteState(idle_vector())
-        self.DeclarePeriodicUnrestrictedUpdateEvent(period, offset, self._update)
+        for index, slot in enumerate(slice_offsets(period, offset, tick)):
+            self.DeclarePeriodicDiscreteUpdateEvent(period, slot, functools.partial(self._slice, starts=index == 0))
         self.DeclareStateOutputPort("suf", self._suf)
 
-    def _update(self, context, state) -> None:
-        request = np.asarray(self._request.Eval(context))
-        previous = context.get_discrete_state(self._suf).get_value()
-        leg = int(round(request[0]))
-        if leg < 0:
-            state.get_mutable_discrete_state(self._suf).SetFromVector(idle_vector(previous))
-            return
-        memory = context.get_abstract_state(self._memory).get_value()
-        vector, warm = self._live.update(
-            memory.warm,
-            previous,
-            np.asarray(self._base_state.Eval(context)),
-            np.asarray(self._position.Eval(context)),
-            np.asarray(self._contacts.Eval(context)),
-            leg,
-            request[1:4],
-        )
-        state.get_mutable_discrete_state(self._suf).SetFromVector(vector)
-        state.get_mutable_abstract_state(self._memory).set_value(_Memory(warm))
+    def _slice(self, context, discrete_state, starts: bool) -> None:
+        """One control tick's share: the update under way goes on, or, at the start slot with
+        none under way, a new one starts (or the idle vector, with no lifted foot)."""
+        work = context.get_abstract_state(self._workspace).get_value()
+        if not work.under_way:
+            if not starts:
+                return
+            request = np.asarray(self._request.Eval(context))
+            previous = context.get_discrete_state(self._suf).get_value()
+            leg = int(round(request[0]))
+            if leg < 0:
+                discrete_state.get_mutable_vector(self._suf).SetFromVector(idle_vector(previous))
+                return
+            self._live.start(
+                work,
+                previous,
+                np.asarray(self._base_state.Eval(context)),
+                np.asarray(self._position.Eval(context)),
+                np.asarray(self._contacts.Eval(context)),
+                leg,
+                request[1:4],
+                stance_time=context.get_time(),
+            )
+        self._live.advance(work, self._tick_work)
+        if not work.under_way:
+            discrete_state.get_mutable_vector(self._suf).SetFromVector(work.result)

@@ -23,9 +23,16 @@ path where the robot moves a few millimetres per tick:
 4. A budget of LPs (`max_lps`): a projection that would need more stops with status INCOMPLETE
    and its callers use the single-direction SUF (`ray_suf`) for that update; the budget makes
    the worst case a fixed amount of work, whatever the configuration did.
+5. Resumable (`project_within`): the projection is a sequence of steps (a point found by a check
+   or an LP, the first tetrahedron, a point joined to the hull, a facet checked or certified by
+   an LP) whose whole state is in its arrays and a small `progress` array, so it can stop after
+   any step and go on in a later call. Each call gets a budget of work counted in LPs (each kind
+   of step charged its measured cost against an LP's, `*_WORK`), not in time: where it stops
+   depends only on the problem and the budgets, so a caller that spreads a projection over its
+   control ticks stays deterministic.
 
-Everything from the rows on is one `pedi_drake.jit.kernel` call (nopython, nogil), so a caller
-in a control loop pays no Python per LP. `suf_exact_warm` is the Python entry point on a
+Everything from the rows on is one `pedi_drake.jit.kernel` call (nopython, nogil) per call of
+`project_within`, so a caller in a control loop pays no Python per LP. `suf_exact_warm` is the Python entry point on a
 RejectableForceProblem; pedi_drake.suf.live builds the rows from the robot's state in compiled
 code too.
 """
@@ -298,10 +305,55 @@ _AXES = np.array(
 )
 
 
+# The resumable projection's progress (an int64 array of PROGRESS_SIZE, `new_progress`): its stage,
+# whether it fell back from the warm start to the axis rays, the next point (or facet) to look at,
+# the points found, the LPs solved, the tetrahedron's corners, and the final status (0 until done).
+_STAGE, _ATTEMPT, _NEXT, _NUM_POINTS, _LPS, _CORNERS, _FINAL = 0, 1, 2, 3, 4, 5, 9
+PROGRESS_SIZE = 10
+_POINTS, _TETRAHEDRON, _HULL, _CERTIFY = 0, 1, 2, 3
+# The status of a call that spent its work budget before the projection was done: call again.
+PENDING = -1
+# What the projection's steps cost, in the work unit of `project_within`'s budget: one LP on the
+# Go1's problems, about 5 us of CPU on this project's machines; a vertex's or a facet's check
+# (a small solve) under 0.5 us; a point joined to the hull (or the first tetrahedron) under 1 us
+# [LP]. Measured with pedi_drake.benchmarks.live_suf_slices (each kind of step timed alone), and
+# rounded up: they make a budget of work a budget of time, roughly.
+LP_WORK = 1.0
+CHECK_WORK = 0.1
+INSERT_WORK = 0.2
+TETRAHEDRON_WORK = 0.2
+
+
 @kernel
-def project(G, h, N_F, F0, warm_directions, warm_active, warm_num_active, num_warm, tol, max_lps, hull, meta):
-    """The support-function projection into `hull` (hull3d arrays), warm-started from `num_warm`
-    directions with their active sets; (status, LPs solved).
+def new_progress():
+    """The progress of a projection not yet started (see `project_within`)."""
+    return np.zeros(PROGRESS_SIZE, dtype=np.int64)
+
+
+@kernel
+def progress_lps(progress) -> int:
+    """LPs the projection of `progress` has solved so far."""
+    return progress[_LPS]
+
+
+@kernel
+def _finished(progress, status):
+    progress[_FINAL] = status
+    return status
+
+
+@kernel
+def project_within(
+    G, h, N_F, F0, warm_directions, warm_active, warm_num_active, num_warm, tol, max_lps, hull, meta, progress, budget
+):
+    """Goes on with the projection recorded in `progress` (hull3d arrays in `hull`, warm-started
+    from `num_warm` directions with their active sets) until it is done or this call's work
+    reaches `budget` [LP, see LP_WORK]; (status, work done). The status is PENDING when the
+    budget ran out first: a later call with the same arrays goes on where this one stopped, so
+    any sequence of budgets ends on the same polytope, with the same LPs, as one call with an
+    infinite budget (steps are never cut: a call that starts a step finishes it, so a call's work
+    exceeds its budget by at most one step, an LP and a point joined to the hull). Once done, the
+    status is the projection's (`progress_lps`: its LPs) and later calls do nothing.
 
     meta = (directions (point_cap, 3), active sets (point_cap, nz) int64, their sizes
     (point_cap,) int64): for every hull point, the LP direction that found it and its vertex's
@@ -309,55 +361,93 @@ def project(G, h, N_F, F0, warm_directions, warm_active, warm_num_active, num_wa
     """
     points, faces, normals, offsets, alive, certified, counts = hull
     directions, actives, num_actives = meta
+    if progress[_FINAL] != 0:
+        return progress[_FINAL], 0.0
     nz, m = G.shape[1], G.shape[0]
     lp = _lp_scratch(nz, m)
     F = np.zeros(3)
     a = np.zeros(3)
     active = np.zeros(max(nz, 1), dtype=np.int64)
-    lps = 0
-    # 1. Points: the warm directions from their active sets, or the six axis rays.
-    for attempt in range(2):
-        warm = attempt == 0 and num_warm >= 4
-        num_points = 0
-        total = num_warm if warm else 6
-        for k in range(total):
+    corners = progress[_CORNERS:_FINAL]
+    work = 0.0
+    while True:
+        if work >= budget:
+            return PENDING, work
+        stage = progress[_STAGE]
+        warm = progress[_ATTEMPT] == 0 and num_warm >= 4
+        if stage == _POINTS:
+            # 1. Points: the warm directions from their active sets, or the six axis rays.
+            k = progress[_NEXT]
+            if k >= (num_warm if warm else 6):
+                progress[_STAGE] = _TETRAHEDRON
+                continue
+            num_points = progress[_NUM_POINTS]
             if num_points >= points.shape[0]:
-                return NUMERICAL, lps
+                return _finished(progress, NUMERICAL), work
             for i in range(3):
                 a[i] = warm_directions[k, i] if warm else _AXES[k, i]
             start = warm_num_active[k] if warm else 0
-            if warm and start == nz and _vertex(G, h, N_F, F0, warm_active[k], F):
+            kept = False
+            if warm and start == nz:
+                work += CHECK_WORK
+                kept = _vertex(G, h, N_F, F0, warm_active[k], F)
+            if kept:
                 q = nz  # the previous vertex is still one: no LP
                 for j in range(nz):
                     active[j] = warm_active[k, j]
             else:
                 status, _, q = _support(G, h, N_F, F0, a, warm_active[k] if warm else active, start, active, F, lp)
-                lps += 1
+                progress[_LPS] += 1
+                work += LP_WORK
                 if status == dense_qp.INFEASIBLE:
-                    return INFEASIBLE, lps
+                    return _finished(progress, INFEASIBLE), work
                 if status != dense_qp.OPTIMAL:
-                    return NUMERICAL, lps
+                    return _finished(progress, NUMERICAL), work
             for i in range(3):
                 points[num_points, i] = F[i]
                 directions[num_points, i] = a[i]
             for j in range(q):
                 actives[num_points, j] = active[j]
             num_actives[num_points] = q
-            num_points += 1
-        started = hull3d.start_hull(points, faces, normals, offsets, alive, certified, counts, num_points, HULL_EPS)
-        if started == hull3d.STARTED:
-            break
-        if started == hull3d.FULL:
-            return NUMERICAL, lps
-        if not warm:
-            return FLAT, lps
-    # 2. Certify every facet; a facet an LP finds a force beyond gains that force.
-    while True:
-        changed = False
-        pending = False
-        for f in range(counts[1]):
-            if alive[f] == 0 or certified[f] == 1:
+            progress[_NUM_POINTS] = num_points + 1
+            progress[_NEXT] = k + 1
+        elif stage == _TETRAHEDRON:
+            work += TETRAHEDRON_WORK
+            started = hull3d.start_tetrahedron(
+                points, faces, normals, offsets, alive, certified, counts, progress[_NUM_POINTS], HULL_EPS, corners
+            )
+            if started == hull3d.FULL:
+                return _finished(progress, NUMERICAL), work
+            if started == hull3d.FLAT:
+                if not warm:
+                    return _finished(progress, FLAT), work
+                # The warm points are flat here: start again from the axis rays.
+                progress[_ATTEMPT], progress[_STAGE], progress[_NEXT], progress[_NUM_POINTS] = 1, _POINTS, 0, 0
                 continue
+            progress[_STAGE], progress[_NEXT] = _HULL, 0
+        elif stage == _HULL:
+            # Every other point joined to the tetrahedron.
+            k = progress[_NEXT]
+            if k >= progress[_NUM_POINTS]:
+                progress[_STAGE], progress[_NEXT] = _CERTIFY, 0
+                continue
+            if not hull3d.is_corner(corners, k):
+                work += INSERT_WORK
+                if hull3d.insert_existing(points, faces, normals, offsets, alive, certified, counts, k, HULL_EPS) == (
+                    hull3d.FULL
+                ):
+                    return _finished(progress, NUMERICAL), work
+            progress[_NEXT] = k + 1
+        else:
+            # 2. Certify every facet, in slot order from the last point added; a facet an LP finds
+            # a force beyond gains that force, and the facets are looked at from the first again.
+            f = progress[_NEXT]
+            while f < counts[1] and (alive[f] == 0 or certified[f] == 1):
+                f += 1
+            if f >= counts[1]:
+                return _finished(progress, EXACT), work
+            progress[_NEXT] = f
+            work += CHECK_WORK
             normal_size = abs(normals[f, 0]) + abs(normals[f, 1]) + abs(normals[f, 2])
             if normal_size == 0.0:
                 certified[f] = 1  # a zero-area triangle: its neighbours hold the plane
@@ -386,33 +476,39 @@ def project(G, h, N_F, F0, warm_directions, warm_active, warm_num_active, num_wa
                         break
             if certified[f] == 1:
                 continue
-            if lps >= max_lps:
-                pending = True
-                break
+            if progress[_LPS] >= max_lps:
+                return _finished(progress, INCOMPLETE), work
             status, value, q = _support(G, h, N_F, F0, a, actives[first], num_actives[first], active, F, lp)
-            lps += 1
+            progress[_LPS] += 1
+            work += LP_WORK
             if status != dense_qp.OPTIMAL:
-                return NUMERICAL, lps
+                return _finished(progress, NUMERICAL), work
             if value > offsets[f] + tol:
                 k = counts[0]
                 inserted = hull3d.insert_point(points, faces, normals, offsets, alive, certified, counts, F, HULL_EPS)
                 if inserted == hull3d.FULL:
-                    return NUMERICAL, lps
+                    return _finished(progress, NUMERICAL), work
                 if inserted == hull3d.INSERTED:
+                    work += INSERT_WORK
                     for i in range(3):
                         directions[k, i] = a[i]
                     for j in range(q):
                         actives[k, j] = active[j]
                     num_actives[k] = q
-                    changed = True
-                    break
-                certified[f] = 1  # within HULL_EPS of the hull: nothing to add
-            else:
-                certified[f] = 1
-        if pending:
-            return INCOMPLETE, lps
-        if not changed:
-            return EXACT, lps
+                    progress[_NEXT] = 0
+                    continue
+            certified[f] = 1  # certified, or within HULL_EPS of the hull: nothing to add
+
+
+@kernel
+def project(G, h, N_F, F0, warm_directions, warm_active, warm_num_active, num_warm, tol, max_lps, hull, meta):
+    """The whole projection in one call (`project_within` with no budget); (status, LPs solved)."""
+    progress = new_progress()
+    status, _ = project_within(
+        G, h, N_F, F0, warm_directions, warm_active, warm_num_active, num_warm, tol, max_lps, hull, meta, progress,
+        math.inf,
+    )  # fmt: skip
+    return status, progress[_LPS]
 
 
 @kernel
