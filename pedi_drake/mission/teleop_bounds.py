@@ -77,6 +77,18 @@ def _inward_normal(margin, p: np.ndarray) -> np.ndarray | None:
     return gradient / norm if norm > 0 else None
 
 
+def _last_inside(margin, p: np.ndarray, direction: np.ndarray, inside: float, outside: float) -> float:
+    """The boundary of {margin >= 0} along p + s * direction, bisected between a parameter s
+    `inside` the set and one `outside` it: the last s found inside (never outside)."""
+    for _ in range(_BISECTION_STEPS):
+        middle = 0.5 * (inside + outside)
+        if margin(p + middle * direction) >= 0.0:
+            inside = middle
+        else:
+            outside = middle
+    return inside
+
+
 def slide_in_workspace(margin, p_from: np.ndarray, p_to: np.ndarray) -> tuple[np.ndarray, bool]:
     """(target, clipped): the step p_from -> p_to [m] kept in {margin >= 0}, sliding along its boundary.
 
@@ -88,13 +100,7 @@ def slide_in_workspace(margin, p_from: np.ndarray, p_to: np.ndarray) -> tuple[np
     for _ in range(_MAX_SLIDES):
         if margin(p + remaining) >= 0.0:
             return p + remaining, not np.array_equal(p + remaining, p_to)
-        inside, outside = 0.0, 1.0
-        for _ in range(_BISECTION_STEPS):
-            middle = 0.5 * (inside + outside)
-            if margin(p + middle * remaining) >= 0.0:
-                inside = middle
-            else:
-                outside = middle
+        inside = _last_inside(margin, p, remaining, 0.0, 1.0)
         p = p + inside * remaining
         remaining = (1.0 - inside) * remaining
         normal = _inward_normal(margin, p)
@@ -115,14 +121,7 @@ def step_into_workspace(margin, p: np.ndarray, max_step: float) -> np.ndarray | 
     normal = _inward_normal(margin, p)
     if normal is None or margin(p + max_step * normal) < 0.0:
         return None
-    outside, inside = 0.0, max_step
-    for _ in range(_BISECTION_STEPS):
-        middle = 0.5 * (inside + outside)
-        if margin(p + middle * normal) >= 0.0:
-            inside = middle
-        else:
-            outside = middle
-    return p + inside * normal
+    return p + _last_inside(margin, p, normal, max_step, 0.0) * normal
 
 
 def bound_speed(velocity: np.ndarray, max_speed: float) -> tuple[np.ndarray, bool]:
