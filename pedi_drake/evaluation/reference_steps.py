@@ -12,8 +12,10 @@ Limits, per controller tick (2 ms), and where they come from:
     below 1 mm. A phase planned faster exceeds it without any step: a semi-autonomous reach of
     25 cm in 1 s peaks at 0.63 m/s;
   * MAX_FOOT_STEP_AT_MODE_CHANGE (1 cm): where a leg's reference changes mode (joint angles <->
-    foot position) the new one starts where the leg is, so it may step by the controller's
-    tracking error, under 1 cm;
+    foot position) the new one starts where the old one is, converted at the trunk's estimate
+    (a joint reference starts at a foot reference's joint angles; a foot reference at the
+    measured foot, within the controller's tracking error), while this check converts at the trunk's
+    reference: the step is the trunk's and the foot's tracking error, under 1 cm;
   * the joint position targets, of go1.command (q_des) and of a leg's joint reference: at most the
     Go1 driver's rate limit (Go1SafetyConfig.max_target_rate, 8 rad/s) times the control period,
     16 mrad. On hardware the driver clips a faster target; in simulation nothing does, so a step

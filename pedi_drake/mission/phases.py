@@ -32,6 +32,7 @@ from pedi_drake.mission.progress import (
     LegTrajectory,
     MissionProgress,
 )
+from pedi_drake.mission.reference_start import foot_reference_start, joint_reference_start
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_foot import TeleopFootRunner
 from pedi_drake.polygon import shrink_polygon
@@ -322,12 +323,12 @@ class BodyPathRunner(PhaseRunner):
 
 
 class HoldFootPoseRunner(PhaseRunner):
-    """The lifted foot held at its world position (and its calf's roll and pitch) from now on."""
+    """The lifted foot held where its reference is now (and its calf's roll and pitch) from now on."""
 
     def start(self, phase, progress, view, env):
         if phase.leg not in progress.references.legs:
             raise UnreachableTarget(f"{phase.name}: {phase.leg} is not in pedipulation mode")
-        p = view.foot_W(phase.leg)
+        p = foot_reference_start(progress, view, phase.leg)
         hold = QuinticSegment(p, p, view.time, 1e-3)
         if phase.orientation:
             rotation = orientation_error_W(view.calf_rotation_W(phase.leg), np.eye(3))  # its rotation vector
@@ -518,7 +519,9 @@ class LegToPedipulationRunner(PhaseRunner):
             solutions = _ik_solutions(progress)
             if solutions is None:
                 return RUNNING
-            lift = PiecewiseQuintic.through(np.array([view.leg_q(leg), solutions[leg][0]]), t, [phase.duration])
+            lift = PiecewiseQuintic.through(
+                np.array([joint_reference_start(progress, view, leg), solutions[leg][0]]), t, [phase.duration]
+            )
             refs.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, lift)
             memo.update(stage="lift", t_lift_end=t + phase.duration)
         elif memo["stage"] == "lift" and t >= memo["t_lift_end"]:
@@ -578,7 +581,10 @@ class ReachRunner(PhaseRunner):
         solutions = _ik_solutions(progress)
         if solutions is None:
             return
-        plans = [(leg, np.array([view.leg_q(leg), *solutions[leg]])) for leg in progress.memo["targets_W"]]
+        plans = [
+            (leg, np.array([joint_reference_start(progress, view, leg), *solutions[leg]]))
+            for leg in progress.memo["targets_W"]
+        ]
         # Every leg spans the time of the leg with the most segments (`duration` per segment).
         t = view.time
         span = phase.duration * max(len(waypoints) - 1 for _, waypoints in plans)
@@ -756,7 +762,9 @@ class LegToSupportRunner(PhaseRunner):
                 return RUNNING
             q_above, q_ground = solutions[leg]
             trajectory = PiecewiseQuintic.through(
-                np.array([view.leg_q(leg), q_above, q_ground]), t, [phase.duration, 0.6 * phase.duration]
+                np.array([joint_reference_start(progress, view, leg), q_above, q_ground]),
+                t,
+                [phase.duration, 0.6 * phase.duration],
             )
             refs.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
             memo.update(stage="place", t_above=t + phase.duration, t_down=t + 1.6 * phase.duration)

@@ -43,6 +43,7 @@ from pedi_drake.mission.progress import (
     LegTrajectory,
     MissionProgress,
 )
+from pedi_drake.mission.reference_start import foot_reference_start
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_bounds import (
     bound_force,
@@ -82,13 +83,7 @@ class TeleopFootRunner:
         estimates = view.foot_force_estimates_W(phase.leg)
         if env.force_estimate not in estimates:
             raise UnreachableTarget(f"{phase.name}: the {env.force_estimate} force estimate is not available")
-        # A foot reference continues where it is (no jump); after a joint-space one (the lift) the
-        # foot is where those angles put it, within the controller's tracking error.
-        leg_reference = progress.references.legs[phase.leg]
-        if leg_reference.mode == LEG_MODE_FOOT:
-            p_ref = leg_reference.trajectory.sample(view.time).position
-        else:
-            p_ref = view.foot_W(phase.leg)
+        p_ref = foot_reference_start(progress, view, phase.leg)
         progress.references.legs[phase.leg] = LegTrajectory(
             LEG_MODE_FOOT, RampSegment(p_ref, np.zeros(3), view.time, _FIRST_TICK)
         )
