@@ -153,9 +153,11 @@ def _is_damping(commands: np.ndarray) -> np.ndarray:
     return np.all(kp == 0, axis=0) & np.all(kd > 0, axis=0) & np.all(tau_ff == 0, axis=0)
 
 
+# These tests judge the link's logic, at the OS's normal scheduling (realtime_priority=0): a
+# stalled loop that spins under SCHED_FIFO would starve the fake robot, a normal process, of a core.
 # Watchdogs as shipped (40 ms status), and a loop silence limit longer than the stall so that only
 # the robot-silence watchdog is under test.
-PATIENT_LOOP = Go1DriverConfig(safety=Go1SafetyConfig(status_timeout=0.04, command_timeout=0.5))
+PATIENT_LOOP = Go1DriverConfig(realtime_priority=0, safety=Go1SafetyConfig(status_timeout=0.04, command_timeout=0.5))
 
 
 def test_status_is_stamped_while_a_tick_is_blocked_and_a_late_tick_does_not_look_like_robot_silence(
@@ -202,7 +204,7 @@ def test_robot_silence_still_trips_the_watchdog_within_its_timeout(fake_robot, t
 
 
 def test_the_guard_damps_a_hung_loop_within_command_timeout(fake_robot, tmp_path):
-    config = Go1DriverConfig(safety=Go1SafetyConfig(status_timeout=0.5, command_timeout=0.05))
+    config = Go1DriverConfig(realtime_priority=0, safety=Go1SafetyConfig(status_timeout=0.5, command_timeout=0.05))
     robot = fake_robot()
     diagram, simulator, link, stall = _driver(config, {"at": 1.2, "duration": 0.3, "busy": False})
     with hardware_run(diagram, shutdown_damping_duration=0.05):
@@ -225,7 +227,7 @@ def test_the_guard_damps_a_hung_loop_within_command_timeout(fake_robot, tmp_path
 
 def test_a_flood_of_malformed_messages_is_counted_by_channel_and_reason_and_latches_nothing(fake_robot, tmp_path):
     robot = fake_robot("--flood_at", "1.0", "--flood_duration", "1.0", "--flood_rate", "500")
-    diagram, simulator, link, _ = _driver(Go1DriverConfig())
+    diagram, simulator, link, _ = _driver(Go1DriverConfig(realtime_priority=0))
     with hardware_run(diagram, shutdown_damping_duration=0.05):
         simulator.Initialize()
         simulator.AdvanceTo(3.0)

@@ -15,7 +15,7 @@ from pedi_drake.exceptions import ScenarioError
 from pedi_drake.scenario import load_scenario
 from pedi_drake.suf.go1_configuration import teleoperation_stance
 from pedi_drake.suf.live import LiveSuf, LiveSufReading, idle_vector, without_timing
-from pedi_drake.suf.live_suf_system import LiveSufSystem, slice_offsets, suf_request_vector
+from pedi_drake.suf.live_suf_system import LiveSufSystem, slot_at, suf_request_vector
 
 PERIOD, OFFSET, TICK = 0.01, 0.004, 0.002
 PUSH = np.array([-1.0, 0.0, 0.0])
@@ -59,11 +59,28 @@ def _run(tick_work: float, duration: float = DURATION):
     return times, readings, data.data()[:, index].T
 
 
+def _slots(period: float, offset: float, tick: float, duration: float) -> dict[str, list[float]]:
+    """The control ticks up to `duration` [s] by what they are to the live SUF (slot_at)."""
+    slots = {"start": [], "slice": []}
+    for k in range(round(duration / tick) + 1):
+        kind = slot_at(k * tick, period, offset, tick)
+        if kind is not None:
+            slots[kind].append(k * tick)
+    return slots
+
+
 def test_the_slices_are_the_ticks_after_the_start_except_the_managers():
-    assert slice_offsets(PERIOD, OFFSET, TICK) == pytest.approx([0.004, 0.006, 0.008, 0.012])
-    assert slice_offsets(PERIOD, 0.002, TICK) == pytest.approx([0.002, 0.004, 0.006, 0.008])
-    # At 250 Hz the manager's updates fall between control ticks: every tick is a slot.
-    assert slice_offsets(PERIOD, OFFSET, 0.004) == pytest.approx([0.004, 0.008, 0.012])
+    slots = _slots(PERIOD, OFFSET, TICK, 0.03)
+    np.testing.assert_allclose(slots["start"], [0.004, 0.014, 0.024], atol=1e-12)
+    np.testing.assert_allclose(slots["slice"], [0.006, 0.008, 0.012, 0.016, 0.018, 0.022, 0.026, 0.028], atol=1e-12)
+    # Thousands of periods on: the control ticks' own times, no rounding error apart, still sorted right.
+    late = _slots(PERIOD, OFFSET, TICK, 600.0)
+    assert len(late["start"]) == 60000 and len(late["slice"]) == 3 * 60000 - 1
+    # At 250 Hz the manager's updates fall between control ticks every other period: a start is
+    # then the first tick after its time, one an update period.
+    slots = _slots(PERIOD, OFFSET, 0.004, 0.04)
+    np.testing.assert_allclose(slots["start"], [0.004, 0.016, 0.024, 0.036], atol=1e-12)
+    np.testing.assert_allclose(slots["slice"], [0.008, 0.012, 0.028, 0.032], atol=1e-12)
 
 
 def test_in_one_tick_the_updates_are_the_live_sufs_at_the_start_ticks():
@@ -85,9 +102,7 @@ def test_a_small_tick_budget_publishes_the_same_updates_later_on_slot_ticks():
     for mine, theirs in zip(sliced, whole, strict=False):
         np.testing.assert_array_equal(without_timing(mine), without_timing(theirs))
     # Published on a slot tick, as many ticks after its start as it took, never the manager's.
-    slots = np.array(slice_offsets(PERIOD, OFFSET, TICK)) % PERIOD
-    phases = (np.asarray(times) - TICK) % PERIOD
-    assert np.all(np.min(np.abs(phases[:, None] - slots[None, :]), axis=1) < 1e-9)
+    assert all(slot_at(t - TICK, PERIOD, OFFSET, TICK) is not None for t in times)
     assert np.all(times[: len(whole_times)] >= whole_times[: len(times)] - 1e-9)
     # Each describes the stance at its start: a start slot, before its publication.
     starts = np.array([r.stance_time for r in readings])

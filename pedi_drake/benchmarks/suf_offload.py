@@ -60,7 +60,7 @@ from pedi_drake.benchmarks.sil_floors import one_run
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.suf.live import DEFAULT_MAX_LPS, LiveSuf, LiveSufWorkspace, idle_vector
-from pedi_drake.suf.live_suf_system import SUF_REQUEST_SIZE, LiveSufSystem
+from pedi_drake.suf.live_suf_system import SUF_REQUEST_SIZE, LiveSufSystem, slot_at
 from pedi_drake.suf.warm_projection import WarmStart
 
 DESIGNS = ("none", "unrestricted", "one_tick", "slices", "thread")
@@ -84,11 +84,13 @@ class ThreadedLiveSuf(LiveSufSystem):
     update handed over is kept on the workspace (`pending`), which the worker changes meanwhile."""
 
     def __init__(self, prongs, *, mu, period, offset, tick, tick_work, max_lps=DEFAULT_MAX_LPS):
-        # One slot a period (the start's); the whole update runs on the worker.
-        super().__init__(prongs, mu=mu, period=period, offset=offset, tick=period, tick_work=math.inf, max_lps=max_lps)
+        super().__init__(prongs, mu=mu, period=period, offset=offset, tick=tick, tick_work=math.inf, max_lps=max_lps)
         self._worker = concurrent.futures.ThreadPoolExecutor(max_workers=1, initializer=_lower_priority)
 
-    def _slice(self, context, discrete_state, starts: bool) -> None:
+    def _on_tick(self, context, discrete_state) -> None:
+        # Only the start slots: the whole update runs on the worker.
+        if slot_at(context.get_time(), *self._schedule) != "start":
+            return
         work = context.get_abstract_state(self._workspace).get_value()
         pending = getattr(work, "pending", None)
         previous = np.array(context.get_discrete_state(self._suf).get_value())

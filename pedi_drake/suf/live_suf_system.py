@@ -11,8 +11,8 @@ When it runs: an update starts at the mission manager's period, offset from the 
 (by default 4 ms of a 10 ms period), reading its inputs then. Its work (the rows, then the
 warm-started exact projection step by step, then the vector) is done in slices of at most
 `tick_work` (in LPs; pedi_drake.suf.warm_projection.project_within charges each step) on the
-control ticks from its start on, skipping the manager's ticks (the slots of `slice_offsets`: 4,
-6, 8, 12 ms of each 10 ms), and the vector is published at the end of the slice that finishes it;
+control ticks from its start on, skipping the manager's ticks (`slot_at`: at 500 Hz, 4, 6, 8 and
+12 ms of each 10 ms), and the vector is published at the end of the slice that finishes it;
 the next update starts at the first start slot after that. A slice is cut at a step's end, never
 inside one, so a tick pays at most `tick_work` plus one step (an LP and a point joined to the
 hull; a fallback's finishing step, its two single-direction LPs) plus the slice's fixed cost. A
@@ -41,7 +41,6 @@ it shares the loop's core (the simulator bridge has the other), under SCHED_FIFO
 older. docs/real_time.md has the measurements (pedi_drake.benchmarks.suf_offload).
 """
 
-import functools
 import math
 
 import numpy as np
@@ -66,16 +65,21 @@ def suf_request_vector(leg: int, direction: np.ndarray | None) -> np.ndarray:
     return x
 
 
-def slice_offsets(period: float, offset: float, tick: float) -> list[float]:
-    """The first time of each slot [s], each slot then recurring every `period`: the update's
-    start (`offset`), then every control `tick` after it within one period, except the times at
-    multiples of `period` (the mission manager's updates)."""
-    offsets = [offset]
-    for j in range(1, math.ceil(period / tick - 1e-9)):
-        t = offset + j * tick
-        if abs(t / period - round(t / period)) > 1e-9:
-            offsets.append(t)
-    return offsets
+# [s] how close two times must be to count as the same instant (the periods are multiples of 0.5 ms).
+_SAME_TIME = 1e-9
+
+
+def slot_at(t: float, period: float, offset: float, tick: float) -> str | None:
+    """What the control tick at `t` [s] is to the live SUF: "start" (the first tick at or after
+    `offset` + k `period`: an update may start), "slice" (an update under way goes on) or None
+    (before the first start, or a tick at a multiple of `period`: the mission manager's update)."""
+    if abs(t / period - round(t / period)) < _SAME_TIME / period:
+        return None
+    since = t - offset
+    if since < -_SAME_TIME:
+        return None
+    phase = since - math.floor(since / period + _SAME_TIME / period) * period
+    return "start" if phase < tick - _SAME_TIME else "slice"
 
 
 class LiveSufSystem(LeafSystemWithoutWitnesses):
@@ -113,16 +117,23 @@ class LiveSufSystem(LeafSystemWithoutWitnesses):
         # the module docstring for why the discrete updates change it in place.
         self._workspace = self.DeclareAbstractState(AbstractValue.Make(self._live.new_workspace()))
         self._suf = self.DeclareDiscreteState(idle_vector())
-        for index, slot in enumerate(slice_offsets(period, offset, tick)):
-            self.DeclarePeriodicDiscreteUpdateEvent(period, slot, functools.partial(self._slice, starts=index == 0))
+        # One event on the control ticks themselves (period `tick`, offset 0: the very times of the
+        # controller's events): events of their own, at offset + k period plus some ticks, would
+        # land a rounding error away from the control tick in about a third of the periods, and
+        # the simulator would take a step of its own for them.
+        self._schedule = (period, offset, tick)
+        self.DeclarePeriodicDiscreteUpdateEvent(tick, 0.0, self._on_tick)
         self.DeclareStateOutputPort("suf", self._suf)
 
-    def _slice(self, context, discrete_state, starts: bool) -> None:
-        """One control tick's share: the update under way goes on, or, at the start slot with
-        none under way, a new one starts (or the idle vector, with no lifted foot)."""
+    def _on_tick(self, context, discrete_state) -> None:
+        """One control tick's share: the update under way goes on, or, at a start slot with none
+        under way, a new one starts (or the idle vector, with no lifted foot)."""
+        slot = slot_at(context.get_time(), *self._schedule)
+        if slot is None:
+            return
         work = context.get_abstract_state(self._workspace).get_value()
         if not work.under_way:
-            if not starts:
+            if slot != "start":
                 return
             request = np.asarray(self._request.Eval(context))
             previous = context.get_discrete_state(self._suf).get_value()
