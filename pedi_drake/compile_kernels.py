@@ -24,21 +24,32 @@ from pedi_drake.scenario import load_scenario
 
 _log = logging.getLogger(__name__)
 
-# The diagrams built: (controller, hardware). The mission brings the mission manager's kernels.
-VARIANTS = (("whole_body", False), ("projected_impedance", False), ("whole_body", True))
-MISSION = "hit_target_front"
+# Controllers of the simulated diagrams; the hardware diagram runs the default one.
+CONTROLLERS = ("whole_body", "projected_impedance")
+# Missions whose controller side is also built as a hardware run (the software-in-the-loop ones).
+HARDWARE_MISSIONS = ("hit_target_front", "prong_push_box")
+
+
+def variants() -> list[tuple[str, str, bool]]:
+    """(mission, controller, hardware) of every diagram built: every shipped mission with either
+    controller, as each mission's robot variant (prongs) and task stack give its records other
+    shapes, and so its kernels other signatures; and the hardware runs' controller side."""
+    from pedi_drake.mission.spec import shipped_missions
+
+    built = [(mission, controller, False) for mission in shipped_missions() for controller in CONTROLLERS]
+    return built + [(mission, "whole_body", True) for mission in HARDWARE_MISSIONS]
 
 
 def compile_kernels() -> float:
-    """Builds every VARIANTS diagram (compiling what the cache lacks); returns the wall time [s]."""
+    """Builds every `variants` diagram (compiling what the cache lacks); returns the wall time [s]."""
     from pedi_drake.diagram import MakePedipulationDiagram
 
     start = time.perf_counter()
     if not jit.ENABLED:
         return 0.0
-    for controller, hardware in VARIANTS:
+    for mission, controller, hardware in variants():
         scenario = load_scenario()
-        scenario.mission, scenario.controller = MISSION, controller
+        scenario.mission, scenario.controller = mission, controller
         if hardware:
             scenario.lcm_buses["go1"].lcm_url = "memq://"  # in-process: nothing goes on the network
         MakePedipulationDiagram(scenario, hardware=hardware)

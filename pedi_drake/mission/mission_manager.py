@@ -47,6 +47,7 @@ from pydrake.systems.framework import BasicVector
 from pedi_drake import robot
 from pedi_drake.control import references as controller_refs
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE, BaseState
+from pedi_drake.estimation.leg_odometry import foot_kinematics_B
 from pedi_drake.exceptions import ConfigError, PediError
 from pedi_drake.fall import trunk_has_fallen
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
@@ -223,6 +224,8 @@ class MissionManager(LeafSystemWithoutWitnesses):
         # The stance's safety polygon is shrunk at every update: its kernel is compiled here, not
         # in the first update (on hardware, a first tick late by the compile latches the driver).
         shrink_polygon(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), self._safety_margin)
+        # So are the feet's kinematics every RobotView computes.
+        foot_kinematics_B(robot.STANDING_Q)
 
     @property
     def mission(self) -> spec.MissionSpec:
