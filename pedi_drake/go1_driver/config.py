@@ -64,8 +64,8 @@ class Go1DriverConfig:
     # side) and the simulator bridge's (robot side); 0: the OS's normal scheduling. Where the OS
     # refuses (no root, CAP_SYS_NICE or `ulimit -r`), the loop runs at normal priority with a
     # warning, and result.json says which it got (see pedi_drake.realtime_priority). Off by
-    # default: with it the semi-autonomous mode's posture plans did not arrive at real time
-    # (docs/real_time.md has the misses with and without, and what is not yet understood).
+    # default: with it the semi-autonomous mode's posture plans, computed at normal priority,
+    # came too late (docs/real_time.md has the misses with and without).
     realtime_priority: int = 0
     # Safety layer bounds and watchdogs.
     safety: Go1SafetyConfig = dataclasses.field(default_factory=Go1SafetyConfig)
