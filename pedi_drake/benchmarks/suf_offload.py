@@ -98,22 +98,10 @@ class ThreadedLiveSuf(LiveSufSystem):
             previous = pending.result()  # handed over a period ago; waits if it is still running
             discrete_state.get_mutable_vector(self._suf).SetFromVector(previous)
             work.pending = None
-        request = np.asarray(self._request.Eval(context))
-        leg = int(round(request[0]))
-        if leg < 0:
+        if not self._start_update(context, work, previous):
             if pending is None:
                 discrete_state.get_mutable_vector(self._suf).SetFromVector(idle_vector(previous))
             return
-        self._live.start(
-            work,
-            previous,
-            np.asarray(self._base_state.Eval(context)),
-            np.asarray(self._position.Eval(context)),
-            np.asarray(self._contacts.Eval(context)),
-            leg,
-            request[1:4],
-            stance_time=context.get_time(),
-        )
         work.pending = self._worker.submit(_advance_whole, self._live, work)
 
 
@@ -192,7 +180,8 @@ def _handler_timer(ticks: int):
     """While active, the live SUF systems built get their handler timed in the loop thread's CPU
     time: yields {"suf": (ticks,) [ms], "tick": the running tick, set by Replay.run}."""
     times = {"suf": np.zeros(ticks), "tick": -1}
-    originals = [(cls, cls._slice) for cls in (LiveSufSystem, ThreadedLiveSuf, UnrestrictedLiveSuf)]
+    handlers = ((LiveSufSystem, "_on_tick"), (ThreadedLiveSuf, "_on_tick"), (UnrestrictedLiveSuf, "_slice"))
+    originals = [(cls, name, getattr(cls, name)) for cls, name in handlers]
 
     def timed(method):
         def wrapper(*args, **kwargs):
@@ -205,13 +194,13 @@ def _handler_timer(ticks: int):
 
         return wrapper
 
-    for cls, method in originals:
-        cls._slice = timed(method)
+    for cls, name, method in originals:
+        setattr(cls, name, timed(method))
     try:
         yield times
     finally:
-        for cls, method in originals:
-            cls._slice = method
+        for cls, name, method in originals:
+            setattr(cls, name, method)
 
 
 def _percentiles(x_ms: np.ndarray) -> dict:

@@ -135,22 +135,29 @@ class LiveSufSystem(LeafSystemWithoutWitnesses):
         if not work.under_way:
             if slot != "start":
                 return
-            request = np.asarray(self._request.Eval(context))
             previous = context.get_discrete_state(self._suf).get_value()
-            leg = int(round(request[0]))
-            if leg < 0:
+            if not self._start_update(context, work, previous):
                 discrete_state.get_mutable_vector(self._suf).SetFromVector(idle_vector(previous))
                 return
-            self._live.start(
-                work,
-                previous,
-                np.asarray(self._base_state.Eval(context)),
-                np.asarray(self._position.Eval(context)),
-                np.asarray(self._contacts.Eval(context)),
-                leg,
-                request[1:4],
-                stance_time=context.get_time(),
-            )
         self._live.advance(work, self._tick_work)
         if not work.under_way:
             discrete_state.get_mutable_vector(self._suf).SetFromVector(work.result)
+
+    def _start_update(self, context, work, previous: np.ndarray) -> bool:
+        """Starts an update in `work` for the lifted foot `suf_request` names, of the stance the
+        inputs give now; False (nothing started) when no foot is lifted."""
+        request = np.asarray(self._request.Eval(context))
+        leg = int(round(request[0]))
+        if leg < 0:
+            return False
+        self._live.start(
+            work,
+            previous,
+            np.asarray(self._base_state.Eval(context)),
+            np.asarray(self._position.Eval(context)),
+            np.asarray(self._contacts.Eval(context)),
+            leg,
+            request[1:4],
+            stance_time=context.get_time(),
+        )
+        return True
