@@ -11,12 +11,15 @@ commands is intended:
 Speed work on the estimator, mission manager, IK, whole-body controller or driver must leave
 every command within the solver's tolerance of the reference.
 
-It was last recorded when reaches began to plan their joint targets from the trunk's reference
-pose instead of its estimate (an intended change of the commands from the reach on, about 0.1 rad
-at most in q_des during the replayed reach), on the compiled whole-body tick, whose level QPs are solved exactly
-(`pedi_drake.control.dense_qp`; tests/test_compiled_controller.py and tests/test_dense_qp.py
-tie it to the Python reference and to DAQP at tight tolerances). The reference it replaced had
-been recorded with DAQP at the controller's settings, which stops within its tolerance: the
+It was last recorded when the hardware diagram began to initialise its state estimate from the
+robot's first status (an intended change of the commands from the third tick on: before, the
+mission's first update planned the stand-up from the estimator's unset output, a trunk at z = 0,
+so the replayed stand-up differed by up to 0.1 rad in q_des and 2.8 N m in tau_ff). The
+recording before that one began when reaches planned their joint targets from the trunk's
+reference pose instead of its estimate. Both were made on the compiled whole-body tick, whose
+level QPs are solved exactly (`pedi_drake.control.dense_qp`; tests/test_compiled_controller.py
+and tests/test_dense_qp.py tie it to the Python reference and to DAQP at tight tolerances). An
+older reference had been recorded with DAQP at the controller's settings, which stops within its tolerance: the
 compiled tick's commands differed from it by at most 1.2e-7 rad (q_des), 7.4e-5 N m (tau_ff)
 and 3.2e-4 rad/s (qd_des, which integrates the per-tick differences of the joint accelerations
 over the 4000 open-loop ticks).

@@ -27,7 +27,7 @@ import time
 from collections.abc import Sequence
 
 import numpy as np
-from pydrake.systems.framework import Diagram, DiagramBuilder, DiscreteValues
+from pydrake.systems.framework import Diagram, DiagramBuilder, DiscreteValues, State
 from pydrake.systems.primitives import Selector, SelectorParams
 
 from pedi_drake.exceptions import LcmTimeout
@@ -95,7 +95,11 @@ class Go1LcmReceiver(LeafSystemWithoutWitnesses):
         initial = np.concatenate([*(c.initial_values for c in self._channels), np.full(k, math.inf), np.zeros(2 * k)])
         self._state = self.DeclareDiscreteState(initial)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._latch)
-        self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
+        # An unrestricted update: the Simulator applies those before any system's discrete
+        # initialisation, so the state estimator's own initialisation already sees the robot's
+        # first status (with a discrete one it would see the receiver's zeros, start from an
+        # unset estimate, and the mission's first update would plan from a trunk at z = 0).
+        self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.latched = self.DeclareStateOutputPort("latched", self._state)
 
     @property
@@ -121,7 +125,7 @@ class Go1LcmReceiver(LeafSystemWithoutWitnesses):
             x[counts] = received
             x[counts + 1] = dropped
 
-    def _initialize(self, context, discrete_state: DiscreteValues) -> None:
+    def _initialize(self, context, state: State) -> None:
         if self._wait_timeout > 0.0 and self._link is not None:
             for channel in self._channels:
                 if channel.wait and not self._link.wait_for_first(channel.inbox, self._wait_timeout):
@@ -130,7 +134,7 @@ class Go1LcmReceiver(LeafSystemWithoutWitnesses):
                         f"within {self._wait_timeout:g} s: is the Go1 bridge (or "
                         "`python -m pedi_drake.apps.sim_bridge`) running on that URL?"
                     )
-        self._latch(context, discrete_state)
+        self._latch(context, state.get_mutable_discrete_state())
 
 
 def MakeLcmReceiver(
