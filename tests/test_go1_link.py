@@ -23,7 +23,15 @@ from pedi_drake.go1_driver.config import Go1DriverConfig, Go1SafetyConfig
 from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.go1_driver.hardware_station import MakeHardwareStation
 from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt
-from pedi_drake.go1_driver.link import LEG_CONTROL_FIELDS, STATE_ESTIMATOR_FIELDS, FloatFields, Go1Link, Inbox
+from pedi_drake.go1_driver.link import (
+    LEG_CONTROL_FIELDS,
+    STATE_ESTIMATOR_FIELDS,
+    FloatFields,
+    Go1Link,
+    Inbox,
+    LoopTiming,
+    loop_stalls,
+)
 from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.scenario import load_scenario
 
@@ -183,6 +191,35 @@ def test_status_is_stamped_while_a_tick_is_blocked_and_a_late_tick_does_not_look
     assert report["guard"]["latched"] == "shutdown"
     assert report["loop"]["lateness_ms"]["max"] > 140.0
     assert report["loop"]["deadline_misses"] >= 1
+    # The loop spun through the stall: reported as a stall in which it computed.
+    stalls = report["loop"]["stalls"]
+    assert stalls["computing"] >= 1
+    longest = stalls["longest"][0]
+    assert longest["gap_ms"] > 140.0 and longest["loop_cpu_ms"] > 0.5 * longest["gap_ms"]
+    assert 1.0 <= longest["t"] < 1.2
+
+
+def test_stalls_tell_a_loop_that_computed_from_one_that_waited():
+    timing = LoopTiming()
+    # Ticks of 2 ms; the publication at t = 0.010 comes 30 ms late after 25 ms of the loop's CPU,
+    # the one at t = 0.020 20 ms late after 1 ms of it.
+    departures = [0.002 * k for k in range(12)]
+    cpu = [0.0003 * k for k in range(12)]
+    departures[5:] = [d + 0.030 for d in departures[5:]]
+    cpu[5:] = [x + 0.025 for x in cpu[5:]]
+    departures[10:] = [d + 0.020 for d in departures[10:]]
+    cpu[10:] = [x + 0.001 for x in cpu[10:]]
+    for k, (wall, loop_cpu) in enumerate(zip(departures, cpu, strict=True)):
+        timing.departures.append(wall)
+        timing.offsets.append(wall - 0.002 * k)
+        timing.times.append(0.002 * k)
+        timing.loop_cpu.append(loop_cpu)
+    stalls = loop_stalls(timing, 0.002)
+    assert (stalls["count"], stalls["computing"], stalls["waiting"]) == (2, 1, 1)
+    first, second = stalls["longest"]
+    assert first["t"] == pytest.approx(0.010) and first["gap_ms"] == pytest.approx(32.0)
+    assert first["loop_cpu_ms"] == pytest.approx(25.3)
+    assert second["t"] == pytest.approx(0.020) and second["loop_cpu_ms"] == pytest.approx(1.3)
 
 
 def test_robot_silence_still_trips_the_watchdog_within_its_timeout(fake_robot, tmp_path):

@@ -255,6 +255,18 @@ def main() -> int:
         f"(longest {loop['longest_miss_ms']:.1f} ms), lateness median {lateness.get('median', 0):.2f} ms, "
         f"max {lateness.get('max', 0):.1f} ms; driver latched: {result['driver']['latched']}"
     )
+    stalls = loop["stalls"]
+    longest = stalls["longest"][0] if stalls["longest"] else None
+    print(
+        f"stalls (more than two periods between commands): {stalls['count']}, the loop computing in "
+        f"{stalls['computing']} and waiting in {stalls['waiting']}"
+        + (
+            f"; the longest {longest['gap_ms']:.1f} ms at t = {longest['t']:.3f} s, "
+            f"{longest['loop_cpu_ms']:.1f} ms of it computing"
+            if longest
+            else ""
+        )
+    )
     print(f"scheduling: controller {loop['scheduling']}, bridge {result['sil']['bridge_scheduling']}")
     print(f"wrote {out_dir / 'sil.json'}")
     return 0 if result["success"] else 1

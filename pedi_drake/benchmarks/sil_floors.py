@@ -7,7 +7,9 @@ Each run is `python -m pedi_drake.apps.sil --mission M` (the simulator bridge in
 the controller here, both at real time), judged by the bridge's ground truth. With `--separate`
 the controller is its own program too, `run_sim.py --hardware`, as the README's two terminals run it. Per run: success,
 the driver's latch, the largest true foot error, the loop's deadline misses per 1000 ticks and
-the longest, its lateness, and the load average before and after (this machine may be shared).
+the longest, its lateness, its stalls (gaps of more than two periods between commands: computing
+or waiting, see docs/results.md), and the load average before and after (this machine may be
+shared).
 """
 
 import argparse
@@ -56,6 +58,7 @@ def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str 
         "scheduling": {"controller": loop["scheduling"], "bridge": sil["bridge_scheduling"]},
         "controller_process": sil["controller"],
         "command_interdeparture_ms": loop["command_interdeparture_ms"],
+        "stalls": loop["stalls"],
         "controller_tick_ms": result["controller_tick_ms"],
         "real_time_factor": result["real_time_factor"],
         "live_suf": _live_suf_figures(result.get("live_suf")),
@@ -90,6 +93,7 @@ def main() -> None:
                 f"{mission:<18} run {run}: {'ok  ' if row['success'] else 'FAIL'} latched {row['latched']}, "
                 f"true foot error {error if error is None else round(error, 1)} mm, "
                 f"misses {row['deadline_misses_per_1000']:.2f}/1000 (longest {row['longest_miss_ms']:.1f} ms), "
+                f"stalls {row['stalls']['computing']} computing / {row['stalls']['waiting']} waiting, "
                 f"load {row['load_before']} -> {row['load_after']}",
                 flush=True,
             )

@@ -261,15 +261,19 @@ def _estop_vector(fields: tuple[str, ...]) -> Callable[[object], np.ndarray]:
 
 
 @dataclasses.dataclass
-class _Timing:
-    """The loop's publications: the wall time of each [s] and its offset from its tick's schedule
-    (wall time - diagram time / realtime rate) [s]. Lateness follows in `report`: the offset less
-    the earliest offset so far (the Simulator never runs ahead of its schedule, so the earliest
-    tick sets the schedule's anchor); inter-departure times are the differences of the times."""
+class LoopTiming:
+    """The loop's publications: the wall time of each [s], its offset from its tick's schedule
+    (wall time - diagram time / realtime rate) [s], its diagram time [s] and the loop thread's CPU
+    time then [s]. Lateness follows in `report`: the offset less the earliest offset so far (the
+    Simulator never runs ahead of its schedule, so the earliest tick sets the schedule's anchor);
+    inter-departure times are the differences of the times, and the loop's CPU time between two
+    publications tells a stall in which the loop computed from one in which it waited."""
 
     # array('d'): 8 bytes a tick and no Python objects for the garbage collector to walk.
     departures: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
     offsets: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
+    times: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
+    loop_cpu: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
 
 
 def _distribution_ms(values) -> dict | None:
@@ -323,7 +327,7 @@ class Go1Link:
             c.RC_COMMAND_CHANNEL, _estop_vector(tuple(config.safety.rc_estop_fields)), sticky_max=True
         )
         self.last_look = -math.inf
-        self._timing = _Timing()
+        self._timing = LoopTiming()
         self._last_publish: float | None = None  # wall time of the loop's last publication [s]
         self.guard_latched: str | None = None  # why the link itself put damping on the wire
         self._guard_published = 0
@@ -451,8 +455,11 @@ class Go1Link:
             if not self._publish(command, int(round(t * 1e6))):
                 return False
             self._last_publish = now
-        self._timing.departures.append(now)
-        self._timing.offsets.append(now - t / self.realtime_rate)
+        timing = self._timing
+        timing.departures.append(now)
+        timing.offsets.append(now - t / self.realtime_rate)
+        timing.times.append(t)
+        timing.loop_cpu.append(time.thread_time())
         return True
 
     def _guard(self) -> None:
@@ -512,6 +519,7 @@ class Go1Link:
                 "deadline_misses_per_1000": 1000.0 * misses / len(lateness) if len(lateness) else 0.0,
                 "longest_miss_ms": float(1e3 * lateness.max()) if misses else 0.0,
                 "command_interdeparture_ms": _distribution_ms(np.diff(np.asarray(self._timing.departures))),
+                "stalls": loop_stalls(self._timing, self._period),
             },
             "guard": {
                 "latched": self.guard_latched,
@@ -519,6 +527,37 @@ class Go1Link:
                 "shutdown_damping_sent": self._shutdown_published,
             },
         }
+
+
+# A gap between two publications longer than this many periods is a stall of the loop.
+STALL_PERIODS = 2.0
+# The longest stalls kept in a report.
+STALLS_REPORTED = 20
+
+
+def loop_stalls(timing: LoopTiming, period: float) -> dict:
+    """The loop's stalls: gaps of more than STALL_PERIODS periods between two publications.
+
+    `count`; `computing` and `waiting`: how many of them the loop thread spent mostly computing
+    (its CPU time over half the gap: its own work was long) or mostly not (it waited: for a
+    core, the interpreter lock, the kernel); `longest`: the STALLS_REPORTED longest, each the
+    diagram time of the publication that ended it [s], the gap and the loop's CPU time in it [ms].
+    """
+    gaps = np.diff(np.asarray(timing.departures))
+    cpu = np.diff(np.asarray(timing.loop_cpu))
+    stalled = np.flatnonzero(gaps > STALL_PERIODS * period)
+    computing = int(np.count_nonzero(cpu[stalled] > 0.5 * gaps[stalled]))
+    longest = stalled[np.argsort(gaps[stalled])[::-1][:STALLS_REPORTED]]
+    times = np.asarray(timing.times)
+    return {
+        "count": len(stalled),
+        "computing": computing,
+        "waiting": len(stalled) - computing,
+        "longest": [
+            {"t": float(times[k + 1]), "gap_ms": float(1e3 * gaps[k]), "loop_cpu_ms": float(1e3 * cpu[k])}
+            for k in longest
+        ],
+    }
 
 
 def _receive_loop(link_ref: "weakref.ref[Go1Link]", stop: threading.Event) -> None:
