@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from pedi_drake.batch.engines import RayEngine, SerialEngine
+from pedi_drake.batch.engines import RayEngine, SerialEngine, longest_first
 from pedi_drake.batch.results_file import read_rows
 from pedi_drake.batch.runner import run_study
 from pedi_drake.batch.study import StudyError, load_study, scenario_for, study_from_dict
@@ -109,6 +109,26 @@ def test_a_grid_has_every_combination_and_a_list_zips():
         {"ground_friction": 0.6, "random_seed": 0},
         {"ground_friction": 0.9, "random_seed": 1},
     ]
+
+
+def test_ray_gets_the_longest_missions_first_and_equal_ones_in_study_order():
+    study = study_from_dict(
+        {
+            "name": "order",
+            "factors": [
+                {"name": "mission", "values": ["hit_target_front", "prong_pivot_rotations", "open_door"]},
+                {"name": "random_seed", "values": [0, 1]},
+            ],
+        },
+        "order",
+    )
+    ordered = longest_first(study.tasks)
+    # Planned durations: prong_pivot_rotations 29.4 s, open_door 10 s, hit_target_front 8 s.
+    assert [t.settings["mission"] for t in ordered] == ["prong_pivot_rotations"] * 2 + ["open_door"] * 2 + [
+        "hit_target_front"
+    ] * 2
+    assert [t.settings["random_seed"] for t in ordered] == [0, 1] * 3
+    assert sorted(t.task_id for t in ordered) == sorted(t.task_id for t in study.tasks)
 
 
 def test_four_runs_on_a_local_ray_with_two_workers_give_the_serial_rows(tmp_path):

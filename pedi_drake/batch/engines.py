@@ -4,13 +4,17 @@ Both call `on_row(row)` as each task finishes, in completion order. With Ray, ea
 remote function call in a worker process; a worker that dies (killed, out of memory) is an
 infrastructure failure that Ray retries up to `max_retries` times, while a task's own failure
 (a mission that fails, an exception, a timeout) is already a row and is never retried.
+
+Ray is given the tasks longest first (`longest_first`): with more tasks than workers, the last
+ones to start are then the shortest, so the workers run out of work at nearly the same time
+instead of one waiting through the tail of a long task. The serial engine keeps the study's order.
 """
 
 import os
 from collections.abc import Callable, Iterable
 
 from pedi_drake.batch.study import Task
-from pedi_drake.batch.tasks import run_task
+from pedi_drake.batch.tasks import expected_cost, run_task
 
 ENGINES = ("ray", "serial")
 
@@ -49,7 +53,7 @@ class RayEngine:
                 options |= {"num_cpus": self.num_cpus or os.cpu_count(), "object_store_memory": 200 * 2**20}
             ray.init(address=self.address, **options)
         remote = ray.remote(num_cpus=1, max_retries=self.max_retries, retry_exceptions=False)(run_task)
-        pending = {remote.remote(task, code_version): task for task in tasks}
+        pending = {remote.remote(task, code_version): task for task in longest_first(tasks)}
         try:
             while pending:
                 ready, _ = ray.wait(list(pending), num_returns=1, timeout=1.0)
@@ -65,6 +69,11 @@ class RayEngine:
                 ray.cancel(ref, force=True)
             if started_here:
                 ray.shutdown()
+
+
+def longest_first(tasks: Iterable[Task]) -> list[Task]:
+    """The tasks by expected cost, the longest first; tasks of equal cost keep their order."""
+    return sorted(tasks, key=expected_cost, reverse=True)
 
 
 def crashed_row(task: Task, code_version: str, reason: str) -> dict:

@@ -6,6 +6,7 @@ become a row with `status` and `reason`, so a study never loses its other rows. 
 of the process itself (an infrastructure failure) is left to the engine, which retries it.
 """
 
+import functools
 import os
 import signal
 import time
@@ -13,12 +14,35 @@ import traceback
 
 from pedi_drake.batch.study import Task, scenario_for, suf_design_for
 from pedi_drake.evaluation.judge import judge_run
+from pedi_drake.exceptions import ConfigError
+from pedi_drake.mission.spec import load_mission
 from pedi_drake.run import simulate
 from pedi_drake.suf.design import best_feet, evaluate
 
 # Columns whose values depend on the machine's load, not on the task: left out when two
 # engines' rows are compared.
 TIMING_COLUMNS = ("wall_time_s", "real_time_factor", "controller_tick_median_ms", "worker_pid")
+
+
+def expected_cost(task: Task) -> float:
+    """How long `task` should take, roughly and relative to the study's other tasks: a mission
+    task's planned simulated time [s] (its mission's phase durations), 1 for any other task, 0
+    when it cannot be told (a task whose mission does not load fails on its own, with a reason)."""
+    if task.kind != "mission":
+        return 1.0
+    mission = task.settings.get("mission")
+    if not isinstance(mission, str):
+        duration = task.settings.get("simulation_duration")
+        return float(duration) if isinstance(duration, int | float) else 0.0
+    return _planned_seconds(mission)
+
+
+@functools.lru_cache(maxsize=256)
+def _planned_seconds(mission: str) -> float:
+    try:
+        return load_mission(mission).planned_duration()
+    except (ConfigError, OSError):
+        return 0.0
 
 
 class TaskTimeout(Exception):

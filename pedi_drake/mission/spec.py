@@ -493,6 +493,11 @@ class MissionSpec:
     # The E-stop button press the judge requires (None: none).
     button_press: ButtonPress | None = None
 
+    def planned_duration(self) -> float:
+        """Simulated time [s] the mission takes when every phase runs for its planned `duration`
+        (a phase without one, such as a press, counts nothing): a rough measure of its cost."""
+        return sum(getattr(phase, "duration", 0.0) for phase in self.phases)
+
     def longest_duration(self) -> float:
         """Simulated time [s] the mission can take at most: every phase running to its timeout,
         then a failure's recovery putting both front legs back down."""
