@@ -17,7 +17,8 @@ from pedi_drake.batch.results_file import read_rows
 from pedi_drake.batch.runner import run_study
 from pedi_drake.batch.study import StudyError, load_study, scenario_for, study_from_dict
 from pedi_drake.batch.summary import wilson_interval
-from pedi_drake.batch.tasks import TIMING_COLUMNS, run_task
+from pedi_drake.batch.tasks import run_task
+from pedi_drake.benchmarks.batch import deterministic, differing_fields
 from pedi_drake.benchmarks.suf import height_sweep_rows
 from pedi_drake.suf.design import height_sweep
 
@@ -33,16 +34,6 @@ STANDS = {
         {"name": "seed", "field": "random_seed", "values": [0, 1]},
     ],
 }
-
-
-def _deterministic(row: dict) -> dict:
-    """A row without the columns that depend on the machine's load."""
-    row = {k: v for k, v in row.items() if k not in TIMING_COLUMNS}
-    if "result" in row:
-        row["result"] = {
-            k: v for k, v in row["result"].items() if k not in ("wall_time_s", "real_time_factor", "controller_tick_ms")
-        }
-    return row
 
 
 def _write(tmp_path: Path, text: str) -> Path:
@@ -136,8 +127,8 @@ def test_four_runs_on_a_local_ray_with_two_workers_give_the_serial_rows(tmp_path
     serial = run_study(study, tmp_path / "serial", SerialEngine(), quiet=True).rows
     on_ray = run_study(study, tmp_path / "ray", RayEngine(num_cpus=2), quiet=True).rows
     assert len(serial) == len(on_ray) == 4
-    by_id = {row["task_id"]: _deterministic(row) for row in serial}
-    assert {row["task_id"]: _deterministic(row) for row in on_ray} == by_id
+    by_id = {row["task_id"]: deterministic(row) for row in serial}
+    assert {row["task_id"]: deterministic(row) for row in on_ray} == by_id
     assert all(row["status"] == "ok" and row["success"] for row in on_ray)
     # The rows came from worker processes, not from this one.
     assert {row["worker_pid"] for row in on_ray} - {os.getpid()}
@@ -270,3 +261,11 @@ def test_the_height_sweep_study_gives_the_design_module_s_figures(tmp_path):
 def test_every_shipped_study_loads():
     for path in sorted((REPO / "studies").glob("*.yaml")):
         assert load_study(path).tasks, path
+
+
+def test_differing_fields_names_each_field_and_counts_its_tasks():
+    row = {"task_id": "a", "code_version": "1 (abc)", "worker_pid": 7, "result": {"error_mm": 1.0, "wall_time_s": 3.0}}
+    other = {**row, "code_version": "1 (abc+dirty)", "worker_pid": 8, "result": {"error_mm": 1.5, "wall_time_s": 9.0}}
+    assert differing_fields([row], [dict(row, worker_pid=9)]) == {}
+    assert differing_fields([row], [other]) == {"code_version": 1, "result.error_mm": 1}
+    assert differing_fields([row], []) == {"task_id": 1}

@@ -48,6 +48,30 @@ def deterministic(row: dict) -> dict:
     return row
 
 
+def differing_fields(rows_a: list[dict], rows_b: list[dict]) -> dict[str, int]:
+    """For each field (`result.<key>` inside a run's result) that differs between the two engines'
+    `deterministic` rows of one task, the number of tasks where it differs; a task missing from
+    one side counts under `task_id`."""
+    a = {r["task_id"]: deterministic(r) for r in rows_a}
+    b = {r["task_id"]: deterministic(r) for r in rows_b}
+    counts: dict[str, int] = {}
+    for task_id in sorted(set(a) | set(b)):
+        if task_id not in a or task_id not in b:
+            counts["task_id"] = counts.get("task_id", 0) + 1
+            continue
+        flat_a, flat_b = _flat(a[task_id]), _flat(b[task_id])
+        for field in sorted(set(flat_a) | set(flat_b)):
+            if flat_a.get(field) != flat_b.get(field):
+                counts[field] = counts.get(field, 0) + 1
+    return counts
+
+
+def _flat(row: dict) -> dict:
+    flat = {k: v for k, v in row.items() if k != "result"}
+    flat.update({f"result.{k}": v for k, v in row.get("result", {}).items()})
+    return flat
+
+
 def timed_study(study, engine) -> tuple[float, list[dict]]:
     with tempfile.TemporaryDirectory() as folder:
         start = time.perf_counter()
@@ -87,7 +111,7 @@ def speed_up(missions: list[str], seeds: list[int]) -> dict:
     study = mission_study(missions, seeds)
     ray_time, ray_rows = timed_study(study, RayEngine())
     serial_time, serial_rows = timed_study(study, SerialEngine())
-    same = {r["task_id"]: deterministic(r) for r in ray_rows} == {r["task_id"]: deterministic(r) for r in serial_rows}
+    differing = differing_fields(ray_rows, serial_rows)
     ray_task_s = {r["task_id"]: r["wall_time_s"] for r in ray_rows if "wall_time_s" in r}
     serial_task_s = {r["task_id"]: r["wall_time_s"] for r in serial_rows if "wall_time_s" in r}
     both = sorted(set(ray_task_s) & set(serial_task_s))
@@ -97,7 +121,8 @@ def speed_up(missions: list[str], seeds: list[int]) -> dict:
         "ray_s": ray_time,
         "serial_s": serial_time,
         "speed_up": serial_time / ray_time,
-        "identical_rows": same,
+        "identical_rows": not differing,
+        "differing_fields": differing,
         "succeeded_ray": sum(bool(r.get("success")) for r in ray_rows),
         "succeeded_serial": sum(bool(r.get("success")) for r in serial_rows),
         "workers": workers,
@@ -130,6 +155,8 @@ def main() -> None:
             f"{'mission study':<28}{s['tasks']:>6}{s['ray_s']:>9.1f}{s['serial_s']:>10.1f}"
             f"{s['speed_up']:>14.2f}x, rows {'identical' if s['identical_rows'] else 'DIFFER'}"
         )
+        for field, tasks in s["differing_fields"].items():
+            print(f"  {field} differs in {tasks} of {s['tasks']} tasks")
         print(
             f"  each task beside another: {s['two_at_once_slowdown']:.2f}x its serial wall time (median); "
             f"Ray's workers busy {100 * s['packing']:.1f} % of the study's wall time"
