@@ -1,7 +1,8 @@
 """Latency of the controller side of a hardware run, against a replay of recorded status messages.
 
     python -m pedi_drake.benchmarks.controller_latency [--mission hit_target_front] [--period 0.002]
-        [--qp-backend compiled|daqp|dense_qp] [--out benchmarks/results/controller_latency.json]
+        [--qp-backend compiled|daqp|dense_qp] [--callbacks [--window START:END]] [--parts]
+        [--framework-floor] [--out benchmarks/results/controller_latency.json]
 
 1. Records: the mission in simulation (seed 0); the status the robot would have sent at every
    tick (q, qd, tau_est, IMU, foot sensors) is read from the run's logs.
@@ -21,7 +22,9 @@
    Drake's framework (event dispatch, port evaluation, the log sinks).
    With `--callbacks`, one more pass times every Python callback of the diagram (periodic event
    handlers and output calculations, whatever their system): what the framework share is made
-   of, and what Drake and pybind cost outside all Python code.
+   of, and what Drake and pybind cost outside all Python code; and the costliest ticks of the run
+   (or of `--window START:END`, in seconds of diagram time: where a run at real time stalled),
+   each with the callbacks that took its time.
    With `--parts`, one more pass times the parts of the mission manager's update and the
    whole-body controller's compiled call (PARTS: CPU time per call, each part's own and its
    callees'). With `--framework-floor`, one more pass with every handler of the controller side
@@ -457,6 +460,27 @@ def _callback_table(times: dict, calls: dict, cpu_ms: np.ndarray) -> dict:
     return rows
 
 
+def costliest_ticks(times: dict, cpu_ms: np.ndarray, period: float, window: tuple[float, float] | None, count: int = 6):
+    """The `count` ticks of the callbacks pass with the most CPU time, in the diagram-time
+    `window` [s] (start, end) or over the whole run: per tick its time [s], CPU time [ms] and the
+    callbacks that took more than 20 us of it, largest first [ms]."""
+    ticks = np.arange(len(cpu_ms))
+    if window is not None:
+        ticks = ticks[(ticks * period >= window[0]) & (ticks * period < window[1])]
+    costliest = ticks[np.argsort(cpu_ms[ticks])[::-1][:count]]
+    rows = []
+    for k in sorted(costliest):
+        spent = {key: float(per_tick[k]) for key, per_tick in times.items() if key != "tick" and per_tick[k] > 0.02}
+        rows.append(
+            {
+                "t": float(k * period),
+                "cpu_ms": float(cpu_ms[k]),
+                "callbacks_ms": dict(sorted(spent.items(), key=lambda item: -item[1])),
+            }
+        )
+    return rows
+
+
 def _parts() -> list[tuple[str, object, str]]:
     steps = [(f"  phase step: {kind.__name__}", runner, "step") for kind, runner in RUNNERS.items()]
     return [*PARTS[:4], *steps, *PARTS[4:]]
@@ -545,9 +569,21 @@ def main() -> None:
         help="the whole-body controller's tick: compiled (the default) or the reference with daqp or dense_qp",
     )
     parser.add_argument("--callbacks", action="store_true", help="one more pass: every Python callback timed")
+    parser.add_argument(
+        "--window",
+        help="with --callbacks: START:END [s] of diagram time whose costliest ticks are listed (default: all)",
+    )
     parser.add_argument("--parts", action="store_true", help="one more pass: the parts of PARTS timed")
     parser.add_argument("--framework-floor", action="store_true", help="one more pass: every handler a no-op")
     args = parser.parse_args()
+    window = None
+    if args.window:
+        try:
+            window = tuple(float(x) for x in args.window.split(":"))
+            if len(window) != 2 or window[0] >= window[1]:
+                raise ValueError
+        except ValueError:
+            parser.error(f"--window: expected START:END in seconds with START < END, got {args.window!r}")
     if args.record_reference:
         record_reference(args.mission, args.period, args.reference_ticks, args.record_reference)
         return
@@ -573,11 +609,13 @@ def main() -> None:
         stages[name] = {"mean_ms": float(per_tick.mean()), **_distribution(per_tick)}
     framework = timed_run["cpu_ms"] - sum(stage_times[name] for name, _, _ in STAGES)
     stages["framework"] = {"mean_ms": float(framework.mean()), **_distribution(framework)}
-    callbacks = None
+    callbacks, costliest = None, None
     if args.callbacks:
         with callback_timers(ticks) as (callback_times, callback_calls):
             timed = Replay(args.mission, args.period, samples)
-        callbacks = _callback_table(callback_times, callback_calls, timed.run(ticks, callback_times)["cpu_ms"])
+        callback_cpu_ms = timed.run(ticks, callback_times)["cpu_ms"]
+        callbacks = _callback_table(callback_times, callback_calls, callback_cpu_ms)
+        costliest = costliest_ticks(callback_times, callback_cpu_ms, args.period, window)
     parts = None
     if args.parts:
         with part_timers() as part_times:
@@ -630,6 +668,12 @@ def main() -> None:
                 f"  {name:<58}{row['calls_per_tick']:7.2f}{1e3 * row['mean_ms']:8.1f}"
                 f"{1e3 * row['median']:8.1f}{1e3 * row['p99']:8.1f}"
             )
+    if costliest is not None:
+        where = f"between {window[0]:g} and {window[1]:g} s" if window else "of the run"
+        print(f"The costliest ticks {where} (callbacks pass), with the callbacks over 20 us [ms]:")
+        for row in costliest:
+            spent = ", ".join(f"{name} {ms:.2f}" for name, ms in row["callbacks_ms"].items())
+            print(f"  t = {row['t']:.3f} s: {row['cpu_ms']:.2f} ms ({spent})")
     if parts is not None:
         print("CPU time by part (parts pass; a part's callees included) [us]:")
         print(f"  {'part':<46}{'calls/tick':>11}{'per call':>10}{'p99':>8}{'per tick':>10}")
@@ -665,6 +709,8 @@ def main() -> None:
                 "replay": rows,
                 "stage_cpu_ms_per_tick": stages,
                 "callback_cpu_ms_per_tick": callbacks,
+                "costliest_ticks": costliest,
+                "costliest_ticks_window_s": window,
                 "part_cpu_ms": parts,
                 "framework_floor_cpu_ms": floor,
                 "simulation": sim,
