@@ -311,6 +311,7 @@ def test_every_progress_field_is_either_shared_or_duplicated_by_copy():
         "reason",
         "started",
         "phase_start",
+        "plan_wait",
         "memo",
         "references",
         "records",

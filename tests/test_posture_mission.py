@@ -21,8 +21,9 @@ from pedi_drake.mission.phases import (
     posture_request,
     target_anchor,
 )
-from pedi_drake.mission.posture_planner import solve_request
+from pedi_drake.mission.posture_planner import PLAN_LATENCY, PLAN_WAIT_LIMIT, solve_request
 from pedi_drake.mission.progress import (
+    FAILED,
     LEG_MODE_JOINTS,
     RUNNING,
     LegTrajectory,
@@ -190,3 +191,49 @@ def test_a_semi_autonomous_lift_with_no_feasible_posture_fails_before_anything_m
         LegToPedipulationRunner().step(lift, progress, view, env)
     assert progress.records[-1].metrics["posture"]["taken"] == "none"
     np.testing.assert_allclose(progress.references.body_position.sample(10.0).position, [0.0, 0.0, HEIGHT])
+
+
+class _LatePlanner:
+    """Answers a real-time poll (wait=False) only from its `answers_from`-th call on."""
+
+    def __init__(self, request, answers_from: int):
+        self.result, self.calls, self.answers_from = solve_request(request), 0, answers_from
+
+    def answer(self, request, *, wait):
+        assert not wait  # a real-time run polls
+        self.calls += 1
+        return self.result if self.calls >= self.answers_from else None
+
+
+def _polling_lift(paw_plan, planner):
+    mission, request, _, _ = paw_plan
+    lift = mission.phases[2]
+    progress, view, env = _planning_lift(lift, request, planner)
+    env.wait_for_plans = False
+    return lift, progress, view, env
+
+
+def _at(view, t: float):
+    return dataclasses.replace(view, time=t)
+
+
+def test_a_late_posture_plan_is_waited_for_without_counting_against_the_timeout(paw_plan):
+    lift, progress, view, env = _polling_lift(paw_plan, _LatePlanner(paw_plan[1], answers_from=3))
+    runner = LegToPedipulationRunner()
+    progress.phase_start = -PLAN_LATENCY  # asked at -2 s, due at 0 s
+    assert runner.step(lift, progress, _at(view, 4.0), env) == RUNNING
+    assert progress.plan_wait == 4.0 and progress.memo["stage"] == "plan"
+    assert runner.step(lift, progress, _at(view, 9.0), env) == RUNNING
+    # 11 s since the phase started, of which 9 s waiting: the timeout sees the 2 s of PLAN_LATENCY.
+    assert progress.plan_wait == 9.0 and progress.phase_time(9.0) == PLAN_LATENCY
+    assert runner.step(lift, progress, _at(view, 9.5), env) == RUNNING
+    assert progress.memo["stage"] == "shift"
+    assert progress.plan_wait == 9.5 and progress.records[-1].metrics["posture"]["plan_wait_s"] == 9.5
+
+
+def test_a_posture_plan_that_never_comes_ends_the_lift_with_the_reason(paw_plan):
+    lift, progress, view, env = _polling_lift(paw_plan, _LatePlanner(paw_plan[1], answers_from=10**9))
+    runner = LegToPedipulationRunner()
+    assert runner.step(lift, progress, _at(view, PLAN_WAIT_LIMIT), env) == RUNNING
+    assert runner.step(lift, progress, _at(view, PLAN_WAIT_LIMIT + 0.01), env) == FAILED
+    assert progress.reason == f"{lift.name}: no posture plan {PLAN_WAIT_LIMIT:.0f} s after it was due"

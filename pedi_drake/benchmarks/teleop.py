@@ -1,7 +1,7 @@
 """The teleoperation floors at real time over UDP: three processes, as on the robot.
 
     python -m pedi_drake.benchmarks.teleop [--scenarios square fuzz switches] [--fuzz_count 10000]
-        [--seed N] [--work out/teleop_benchmark] [--out benchmarks/results/teleop.json]
+        [--seed N] [--realtime_priority 0] [--work out/teleop_benchmark] [--out benchmarks/results/teleop.json]
 
 Each scenario (pedi_drake.evaluation.teleop_floors) is `pedi_drake.apps.sil` with an operator:
 the simulator bridge (the robot side, its own process, real time, 500 Hz, writing the ground
@@ -15,7 +15,8 @@ against the bridge's ground truth, on the controller's logs, as the lock-step te
 Prints a table (square tracking error max and RMS, violations, fuzz messages sent and rejected by
 reason, switches done, falls, the controller loop's deadline misses per 1000 ticks, the load
 average before and after) and writes the figures as JSON. This machine may be shared: the load
-average says how quiet it was.
+average says how quiet it was. `--realtime_priority N` runs the controller and the bridge under
+SCHED_FIFO at priority N (the driver's `realtime_priority`), as a robot's computer would.
 """
 
 import argparse
@@ -57,13 +58,15 @@ def _stream(name: str, seed: int | None, fuzz_count: int):
     return random_switches.MISSION, stream.messages, stream.simulation_duration, stream
 
 
-def one_scenario(name: str, seed: int | None, fuzz_count: int, work: Path) -> dict:
-    """Runs scenario `name` at real time over UDP and judges it (module docstring)."""
+def one_scenario(name: str, seed: int | None, fuzz_count: int, work: Path, realtime_priority: int = 0) -> dict:
+    """Runs scenario `name` at real time over UDP and judges it (module docstring); with
+    `realtime_priority` > 0 the controller and the bridge run under SCHED_FIFO at that priority."""
     mission_name, messages, duration, stream = _stream(name, seed, fuzz_count)
     out_dir = work / name
     log = write_lcm_log(messages, work / f"{name}_operator.lcmlog")
     # The controller side's scenario: apps.sil adds the mission, the bus, the controller and estimator.
-    scenario_text = f"{{operator: {{source: lcm}}, simulation_duration: {duration}}}"
+    scenario_text = f"{{operator: {{source: lcm}}, simulation_duration: {duration}"
+    scenario_text += f", go1_driver: {{realtime_priority: {realtime_priority}}}}}"
     scenario = apply_scenario_text(load_scenario(scenario_text=SCENARIO_TEXT), scenario_text)
     load_before, start = _load(), time.monotonic()
     records = []
@@ -156,19 +159,31 @@ def main() -> None:
         "--seed", type=int, default=None, help="seed of the fuzzed and the switching operators (default: the tests')"
     )
     parser.add_argument("--fuzz_count", type=int, default=command_fuzz.FUZZ_COUNT)
+    parser.add_argument(
+        "--realtime_priority",
+        type=int,
+        default=0,
+        help="SCHED_FIFO priority of the controller and the bridge (0: normal scheduling)",
+    )
     parser.add_argument("--work", default="out/teleop_benchmark", help="folder of the runs' outputs")
     parser.add_argument("--out", default="benchmarks/results/teleop.json")
     args = parser.parse_args()
     rows = []
     for name in args.scenarios:
-        row = one_scenario(name, args.seed, args.fuzz_count, Path(args.work))
+        row = one_scenario(name, args.seed, args.fuzz_count, Path(args.work), args.realtime_priority)
         rows.append(row)
         print(f"{name}: done in {row['wall_s']:.0f} s, load {row['load_before']} -> {row['load_after']}", flush=True)
     print_table(rows)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     machine = {"processor": platform.processor() or platform.machine(), "cpus": os.cpu_count()}
-    out.write_text(json.dumps({"seed": args.seed, "machine": machine, "scenarios": rows}, indent=2, default=float))
+    out.write_text(
+        json.dumps(
+            {"seed": args.seed, "realtime_priority": args.realtime_priority, "machine": machine, "scenarios": rows},
+            indent=2,
+            default=float,
+        )
+    )
     print(f"wrote {out}")
 
 

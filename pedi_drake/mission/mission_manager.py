@@ -352,6 +352,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
             )
         if not progress.started:
             progress.started, progress.phase_start, progress.memo = True, view.time, {}
+            progress.plan_wait = 0.0
             progress.records.append(PhaseRecord(phase.name, kind_name(phase), RUNNING, view.time))
             try:
                 runner.start(phase, progress, view, self._env)
@@ -364,7 +365,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
                 outcome = runner.step(phase, progress, view, self._env)
             except PediError as error:
                 outcome, progress.reason = FAILED, str(error)
-        if outcome == RUNNING and view.time - progress.phase_start > phase.timeout:
+        if outcome == RUNNING and progress.phase_time(view.time) > phase.timeout:
             detail = ReachRunner.timeout_reason(phase, progress) if isinstance(phase, spec.Reach) else "not done"
             outcome, progress.reason = FAILED, f"{phase.name}: timed out after {phase.timeout:.1f} s ({detail})"
         if outcome == RUNNING and self._fell(view, progress):

@@ -19,7 +19,13 @@ from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
 from pedi_drake.mission import spec
 from pedi_drake.mission.balance_bound import balance_limit
-from pedi_drake.mission.posture_planner import PLAN_LATENCY, POSTURE_DURATION, PosturePlanner, PostureRequest
+from pedi_drake.mission.posture_planner import (
+    PLAN_LATENCY,
+    PLAN_WAIT_LIMIT,
+    POSTURE_DURATION,
+    PosturePlanner,
+    PostureRequest,
+)
 from pedi_drake.mission.progress import (
     FAILED,
     LEG_MODE_FOOT,
@@ -484,8 +490,19 @@ class LegToPedipulationRunner(PhaseRunner):
         if memo["stage"] == "plan":
             result = env.planner.answer(memo["request"], wait=env.wait_for_plans) if t >= memo["t_due"] else None
             if result is None:
+                if t >= memo["t_due"]:
+                    # Late (a loaded machine, or the worker beside real-time loops): the robot holds
+                    # still, which the phase's timeout does not count; a planner that never answers
+                    # ends the phase.
+                    progress.plan_wait = t - memo["t_due"]
+                    if progress.plan_wait > PLAN_WAIT_LIMIT:
+                        late = f"no posture plan {PLAN_WAIT_LIMIT:.0f} s after it was due"
+                        return _fail(progress, f"{phase.name}: {late}")
                 return RUNNING
+            if progress.plan_wait > 0.0:
+                progress.plan_wait = t - memo["t_due"]  # held still until this update too
             metrics = _posture_metrics(memo["request"], result)
+            metrics["plan_wait_s"] = progress.plan_wait
             progress.records[-1].metrics.update(leg=leg, posture=metrics)
             if not result.best.feasible:
                 why = f"no posture within the limits reaches the targets of {leg} ({result.best.reason})"

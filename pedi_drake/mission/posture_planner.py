@@ -29,6 +29,11 @@ from pedi_drake.suf.posture import Posture, PostureCase, PostureLimits, PostureR
 # Diagram time between asking for a posture and taking the answer [s]: about what one
 # optimisation takes on this project's 2-core machine beside a real-time run.
 PLAN_LATENCY = 2.0
+# Longest wait for an answer beyond PLAN_LATENCY [s] before the phase fails. Only a real-time run
+# waits so: a lock-step simulation blocks for the worker. The robot holds still meanwhile, so the
+# wait is not counted against the phase's timeout (MissionProgress.plan_wait); an optimisation
+# takes a few seconds of CPU, more on a loaded machine or beside real-time loops.
+PLAN_WAIT_LIMIT = 20.0
 # Time the trunk takes to move to an optimal posture [s] (attitude changes of up to 0.2 rad).
 POSTURE_DURATION = 1.5
 # The worker's scheduling priority relative to the process that starts it (higher: nicer).

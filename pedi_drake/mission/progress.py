@@ -202,6 +202,9 @@ class MissionProgress:
     reason: str = ""
     started: bool = False  # the current phase's start() has run
     phase_start: float = 0.0
+    # [s] how long the running phase has held still waiting for a late posture plan (beyond
+    # PLAN_LATENCY): time its timeout does not count.
+    plan_wait: float = 0.0
     memo: dict = dataclasses.field(default_factory=dict)  # the current phase's private data
     references: References | None = None
     records: list[PhaseRecord] = dataclasses.field(default_factory=list)
@@ -234,6 +237,11 @@ class MissionProgress:
     target_anchors: dict = dataclasses.field(default_factory=dict)
     # The running phase's lifted-foot push (None when no phase drives a foot against anything).
     push: FootPush | None = None
+
+    def phase_time(self, t: float) -> float:
+        """[s] how long the running phase has run at time `t` [s], less its wait for a late posture
+        plan: what its timeout judges."""
+        return t - self.phase_start - self.plan_wait
 
     def copy(self) -> "MissionProgress":
         """A copy that is safe to change (a progress in a Context is never changed): its containers
