@@ -24,7 +24,6 @@ from pedi_drake.evaluation.out_dir import claim_out_dir
 from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.interrupt import StopRequest
-from pedi_drake.mission.posture_planner import realtime_worker
 from pedi_drake.mission.progress import FAILED, RUNNING, SUCCEEDED, MissionProgress
 from pedi_drake.operator.message_stream import TimedMessage
 from pedi_drake.scenario import Scenario
@@ -105,12 +104,8 @@ def simulate(
     manager = diagram.GetSubsystemByName("mission") if built.mission is not None else None
     monitor = _MissionMonitor(diagram, manager, built.mission, scenario.simulation_duration, quiet, stop)
     simulator.set_monitor(monitor)
-    with contextlib.ExitStack() as loop:
-        if hardware:
-            # Every exit of the loop (its end, a stop request, an exception) leaves damping on the wire.
-            link = loop.enter_context(hardware_run(diagram, realtime_rate=realtime_rate))
-            # Under real-time loops the posture planner's worker runs just below them, not behind them.
-            loop.enter_context(realtime_worker(link.scheduling))
+    # On hardware every exit of the loop (its end, a stop request, an exception) leaves damping on the wire.
+    with hardware_run(diagram, realtime_rate=realtime_rate) if hardware else contextlib.nullcontext():
         simulator.Initialize()
         recording = meshcat is not None and not hardware
         if recording:

@@ -2,7 +2,6 @@
 its planner in a worker process."""
 
 import dataclasses
-import os
 import time
 
 import numpy as np
@@ -12,15 +11,8 @@ from pedi_drake import robot
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
 from pedi_drake.exceptions import SufError
 from pedi_drake.leg_kinematics import foot_position_B
-from pedi_drake.mission import posture_planner
 from pedi_drake.mission.phases import working_position_B
-from pedi_drake.mission.posture_planner import (
-    WORKER_REALTIME_PRIORITY,
-    PosturePlanner,
-    PostureRequest,
-    realtime_worker,
-    solve_request,
-)
+from pedi_drake.mission.posture_planner import PosturePlanner, PostureRequest, solve_request
 from pedi_drake.suf.posture import (
     Posture,
     PostureCase,
@@ -192,24 +184,3 @@ def test_every_coordinate_does_at_least_as_well_as_the_trunk_shift_alone(small_c
     print(f"\nx, y only {planar.best.suf:.3f} N; all six {full.best.suf:.3f} N at {full.best.posture}")
     assert full.best.feasible
     assert full.best.suf >= planar.best.suf
-
-
-def test_under_real_time_loops_the_worker_runs_just_below_them_and_is_put_back_after(monkeypatch):
-    planner = PosturePlanner()
-    try:
-        before = planner.worker_scheduling()
-        assert before == (os.SCHED_OTHER, 0)
-        with realtime_worker("normal scheduling") as granted:
-            assert granted is None  # nothing is started for loops at normal scheduling
-        monkeypatch.setattr(posture_planner, "_shared", planner)
-        with realtime_worker("SCHED_FIFO 50") as granted:
-            inside = planner.worker_scheduling()
-        after = planner.worker_scheduling()
-    finally:
-        planner.close()
-    if granted.startswith("refused: "):  # no right to raise a priority here: nothing changed
-        assert inside == before
-    else:
-        assert granted == f"SCHED_FIFO {WORKER_REALTIME_PRIORITY}"
-        assert inside == (os.SCHED_FIFO, WORKER_REALTIME_PRIORITY)
-    assert after == before

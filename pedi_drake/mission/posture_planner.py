@@ -19,7 +19,6 @@ stopped at exit.
 
 import atexit
 import concurrent.futures
-import contextlib
 import dataclasses
 import multiprocessing
 import os
@@ -39,10 +38,6 @@ PLAN_WAIT_LIMIT = 20.0
 POSTURE_DURATION = 1.5
 # The worker's scheduling priority relative to the process that starts it (higher: nicer).
 WORKER_NICENESS = 10
-# The worker's SCHED_FIFO priority while a hardware run's loops are real-time (`realtime_worker`):
-# the lowest, so every loop preempts it while it still runs ahead of ordinary processes. At its
-# niceness beside the real-time loops a plan came about 3 s later than at normal scheduling.
-WORKER_REALTIME_PRIORITY = 1
 
 
 @dataclasses.dataclass(frozen=True)
@@ -85,7 +80,7 @@ class PosturePlanner:
         self._futures: dict[PostureRequest, concurrent.futures.Future] = {}
         self._lock = threading.Lock()
         # The worker starts with its first task: start it now, not in a mission update.
-        self.worker_pid = self._pool.submit(os.getpid).result()
+        self._pool.submit(int).result()
 
     def ask(self, request: PostureRequest) -> None:
         """Starts solving `request` unless it is solved or being solved (returns at once)."""
@@ -102,46 +97,12 @@ class PosturePlanner:
             return None
         return future.result()
 
-    def set_worker_scheduling(self, policy: int, priority: int = 0) -> str:
-        """Puts the worker under `policy` (os.SCHED_FIFO, or os.SCHED_OTHER, which keeps its
-        niceness) at `priority`, at once, even while it optimises; returns what was granted
-        ("refused: ..." without the right to raise a priority)."""
-        try:
-            os.sched_setscheduler(self.worker_pid, policy, os.sched_param(priority))
-        except PermissionError as error:
-            return f"refused: {error.strerror}"
-        except ProcessLookupError:
-            return "refused: the worker has exited"
-        return f"SCHED_FIFO {priority}" if policy == os.SCHED_FIFO else "normal scheduling"
-
-    def worker_scheduling(self) -> tuple[int, int]:
-        """The worker's (policy, priority)."""
-        return os.sched_getscheduler(self.worker_pid), os.sched_getparam(self.worker_pid).sched_priority
-
     def close(self) -> None:
         self._pool.shutdown(wait=False, cancel_futures=True)
 
 
 _shared: PosturePlanner | None = None
 _shared_lock = threading.Lock()
-
-
-@contextlib.contextmanager
-def realtime_worker(loop_scheduling: str):
-    """While the block runs, the shared planner's worker (if one was started) is under SCHED_FIFO
-    at WORKER_REALTIME_PRIORITY when the loops' `loop_scheduling` is SCHED_FIFO (as
-    pedi_drake.realtime_priority reports it); otherwise nothing changes. Yields what the worker was
-    granted, or None."""
-    planner = _shared
-    if planner is None or not loop_scheduling.startswith("SCHED_FIFO"):
-        yield None
-        return
-    granted = planner.set_worker_scheduling(os.SCHED_FIFO, WORKER_REALTIME_PRIORITY)
-    try:
-        yield granted
-    finally:
-        if not granted.startswith("refused"):
-            planner.set_worker_scheduling(os.SCHED_OTHER)
 
 
 def shared_planner() -> PosturePlanner:
