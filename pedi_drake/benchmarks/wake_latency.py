@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pedi_drake.go1_driver.link import distribution_ms, lateness_against_earliest
 from pedi_drake.realtime_priority import realtime_priority
 
 LATE_REPORTED = 0.005  # [s] lateness counted per minute
@@ -107,14 +108,6 @@ def paced_loop(seconds: float, period: float, work_iterations: int = 0) -> dict[
         k = max(k + 1, int((now - start) / period) + 1)
 
 
-def _distribution_ms(x: np.ndarray) -> dict:
-    return {
-        "median": float(1e3 * np.median(x)),
-        "p99_9": float(1e3 * np.percentile(x, 99.9)),
-        "max": float(1e3 * x.max()),
-    }
-
-
 def condition(seconds: float, period: float, priority: int, load: int, work_iterations: int = 0) -> dict:
     """One condition: the paced loop at `priority` (0: normal) beside `load` busy processes."""
     busy = [multiprocessing.Process(target=_busy, daemon=True) for _ in range(load)]
@@ -133,8 +126,8 @@ def condition(seconds: float, period: float, priority: int, load: int, work_iter
             process.terminate()
             process.join()
     minutes = seconds / 60.0
-    # Against the earliest tick so far, as the driver's report measures a command's lateness.
-    lateness = ticks["lateness"] - np.minimum.accumulate(ticks["lateness"])
+    # As the driver's report measures a command's lateness.
+    lateness = lateness_against_earliest(ticks["lateness"])
     misses = int(np.count_nonzero(lateness > period))
     return {
         "priority": priority,
@@ -143,9 +136,9 @@ def condition(seconds: float, period: float, priority: int, load: int, work_iter
         "ticks": len(lateness),
         "misses_per_1000": 1000.0 * misses / len(lateness),
         "late_over_5ms_per_minute": float(np.count_nonzero(lateness > LATE_REPORTED)) / minutes,
-        "lateness_ms": _distribution_ms(lateness),
-        "work_cpu_ms": _distribution_ms(ticks["work_cpu"]),
-        "work_wall_ms": _distribution_ms(ticks["work_wall"]),
+        "lateness_ms": distribution_ms(lateness),
+        "work_cpu_ms": distribution_ms(ticks["work_cpu"]),
+        "work_wall_ms": distribution_ms(ticks["work_wall"]),
         "steal_ms_per_minute": 1e3 * steal / minutes,
     }
 

@@ -276,7 +276,16 @@ class LoopTiming:
     loop_cpu: array.array = dataclasses.field(default_factory=lambda: array.array("d"))
 
 
-def _distribution_ms(values) -> dict | None:
+def lateness_against_earliest(offsets) -> np.ndarray:
+    """Each tick's lateness [s] from its offset to its schedule [s]: against the smallest offset so
+    far, which stands for the loop's on-time tick (the offsets share an unknown constant, the
+    time a tick takes when nothing delays it)."""
+    offsets = np.asarray(offsets, dtype=float)
+    return offsets - np.minimum.accumulate(offsets) if len(offsets) else offsets
+
+
+def distribution_ms(values) -> dict | None:
+    """Median, p99, p99.9 and max [ms] of `values` [s]; None when there are none."""
     if len(values) == 0:
         return None
     x = 1e3 * np.asarray(values)
@@ -505,8 +514,7 @@ class Go1Link:
 
     def report(self) -> dict:
         """Messages by channel (received, dropped, rejected by reason), the loop's timing, the guard."""
-        offsets = np.asarray(self._timing.offsets)
-        lateness = offsets - np.minimum.accumulate(offsets) if len(offsets) else offsets
+        lateness = lateness_against_earliest(self._timing.offsets)
         misses = int(np.count_nonzero(lateness > self._period))
         return {
             "messages": {inbox.channel: inbox.counts() for inbox in self.inboxes},
@@ -514,11 +522,11 @@ class Go1Link:
                 "period_s": self._period,
                 "scheduling": self.scheduling,
                 "ticks": len(lateness),
-                "lateness_ms": _distribution_ms(lateness),
+                "lateness_ms": distribution_ms(lateness),
                 "deadline_misses": misses,
                 "deadline_misses_per_1000": 1000.0 * misses / len(lateness) if len(lateness) else 0.0,
                 "longest_miss_ms": float(1e3 * lateness.max()) if misses else 0.0,
-                "command_interdeparture_ms": _distribution_ms(np.diff(np.asarray(self._timing.departures))),
+                "command_interdeparture_ms": distribution_ms(np.diff(np.asarray(self._timing.departures))),
                 "stalls": loop_stalls(self._timing, self._period),
             },
             "guard": {
