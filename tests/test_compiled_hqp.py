@@ -1,0 +1,96 @@
+"""The compiled hierarchical QP (compiled_hqp) against the Python one (hqp) on the same levels.
+
+The levels are shaped like the whole-body stack's: a top level of equalities alone (the
+dynamics and the stance feet), a level of hard and soft inequalities with sparse rows (limits
+on one or two variables, torque-like rows on a dozen), then equalities on a few rows and a
+regularisation of more rows than the null space left has columns.
+"""
+
+import numpy as np
+import pytest
+
+from pedi_drake.control import compiled_hqp
+from pedi_drake.control.hqp import EqualityTask, HqpSettings, InequalityTask, Level, solve_hqp
+from pedi_drake.exceptions import QpInfeasible
+
+N = 30
+SETTINGS = HqpSettings(backend="dense_qp")
+
+
+def sparse_rows(rng: np.random.Generator, rows: int, nonzeros: int) -> np.ndarray:
+    """(rows, N) with `nonzeros` random entries a row, the rest exactly zero."""
+    M = np.zeros((rows, N))
+    for i in range(rows):
+        M[i, rng.choice(N, nonzeros, replace=False)] = rng.normal(size=nonzeros)
+    return M
+
+
+def stack_like_levels(rng: np.random.Generator, tight: float) -> list[Level]:
+    """Four levels as the whole-body stack builds them, feasible at a random point; `tight`
+    (0 to 1) moves the hard bounds onto that point, so more of them bind."""
+    x_feasible = rng.normal(size=N)
+    physics = rng.normal(size=(15, N))
+    limits = np.vstack([sparse_rows(rng, 24, 1), sparse_rows(rng, 24, 2), sparse_rows(rng, 12, 12)])
+    limits = np.vstack([limits, -limits[-12:]])
+    slack = rng.uniform(0.0, 1.0, len(limits)) * (1.0 - tight)
+    soft = rng.normal(size=(3, N))
+    return [
+        Level("physics", [EqualityTask("dynamics", physics, physics @ x_feasible)], []),
+        Level(
+            "feasibility",
+            [],
+            [
+                InequalityTask("limits", limits, limits @ x_feasible + slack, hard=True),
+                InequalityTask("capture point", soft, soft @ x_feasible - rng.uniform(0.0, 1.0, 3), hard=False),
+            ],
+        ),
+        Level("pose", [EqualityTask("pose", rng.normal(size=(9, N)), rng.normal(size=9) * 3)], []),
+        Level("regularisation", [EqualityTask("small", sparse_rows(rng, 36, 1), np.zeros(36), weight=1e-3)], []),
+    ]
+
+
+@pytest.mark.parametrize("seed", range(20))
+@pytest.mark.parametrize("tight", [0.0, 0.9])
+def test_strict_solve_equals_the_python_reference(seed, tight):
+    levels = stack_like_levels(np.random.default_rng(seed), tight)
+    expected = solve_hqp(levels, N, SETTINGS)
+    status, x, residuals = compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, N), SETTINGS)
+    assert status == compiled_hqp.STATUS_OK
+    np.testing.assert_allclose(x, expected.x, rtol=0, atol=1e-8 * max(1.0, np.abs(expected.x).max()))
+    np.testing.assert_allclose(residuals, expected.equality_residuals, rtol=1e-8, atol=1e-9)
+
+
+def test_random_dense_levels_equal_the_python_reference():
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        n = int(rng.integers(4, 16))
+        levels = []
+        for k in range(4):
+            m = int(rng.integers(0, n + 3))
+            A = rng.normal(size=(m, n))
+            inequalities = []
+            if k == 1:
+                G = rng.normal(size=(5, n))
+                inequalities.append(InequalityTask("hard", G, G @ rng.normal(size=n) + 0.5, hard=True))
+            levels.append(Level(f"L{k}", [EqualityTask(f"eq{k}", A, rng.normal(size=m))], inequalities))
+        try:
+            expected = solve_hqp(levels, n, SETTINGS)
+        except QpInfeasible:
+            continue
+        status, x, _ = compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, n), SETTINGS)
+        assert status == compiled_hqp.STATUS_OK
+        np.testing.assert_allclose(x, expected.x, rtol=0, atol=1e-8 * max(1.0, np.abs(expected.x).max()))
+
+
+def test_infeasible_hard_rows_are_reported():
+    G = np.zeros((2, N))
+    G[0, 3], G[1, 3] = 1.0, -1.0
+    levels = [
+        Level("physics", [EqualityTask("pin", np.eye(N)[:2], np.ones(2))], []),
+        Level("limits", [], [InequalityTask("contradiction", G, np.array([-1.0, -1.0]), hard=True)]),
+        Level("pose", [EqualityTask("pose", np.eye(N)[4:6], np.ones(2))], []),
+    ]
+    with pytest.raises(QpInfeasible):
+        solve_hqp(levels, N, SETTINGS)
+    status, _, _ = compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, N), SETTINGS)
+    assert status == compiled_hqp.STATUS_INFEASIBLE
