@@ -27,6 +27,14 @@ def pack_command(q_des, qd_des, kp, kd, tau_ff) -> np.ndarray:
     return np.concatenate([np.broadcast_to(np.asarray(x, float), (12,)) for x in (q_des, qd_des, kp, kd, tau_ff)])
 
 
+def initial_command(kd: float) -> np.ndarray:
+    """The command a controller holds before its first tick: no position gain, no torque and `kd`
+    [N m s/rad] of joint damping. On hardware the driver sends its own damping first, then the
+    controller's command of the tick before: starting here, that is damping too, not a limp motor
+    (kp, kd and tau all 0)."""
+    return pack_command(0.0, 0.0, 0.0, kd, 0.0)
+
+
 def pd_torque(command: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     """tau_ff + kp (q_des - q) + kd (qd_des - qd) [N m], before the motors' saturation."""
     q_des, qd_des, kp, kd, tau_ff = split_command(command)

@@ -11,7 +11,11 @@ commands is intended:
 Speed work on the estimator, mission manager, IK, whole-body controller or driver must leave
 every command within the solver's tolerance of the reference.
 
-It was last recorded when the hardware diagram began to initialise its state estimate from the
+It was last recorded when the controllers began to hold damping until their first tick
+(go1_command.initial_command: the second command on the wire, tick 1, went from kp = kd = 0, a
+limp motor, to kd = 1 N m s/rad; the other 4000 commands stayed within one float32 rounding of
+the recording before, 1.5e-8 rad/s in qd_des, from the recorded status's own last bits). The
+recording before it began when the hardware diagram began to initialise its state estimate from the
 robot's first status (an intended change of the commands from the third tick on: before, the
 mission's first update planned the stand-up from the estimator's unset output, a trunk at z = 0,
 so the replayed stand-up differed by up to 0.1 rad in q_des and 2.8 N m in tau_ff). The
@@ -69,3 +73,11 @@ def test_commands_equal_the_reference(replayed, field):
     assert error.max() <= TOLERANCE[field], (
         f"{field}: tick {worst[0]} joint {worst[1]} differs by {error.max():.3g} from the reference"
     )
+
+
+def test_no_command_on_the_wire_leaves_a_motor_limp(replayed):
+    # From the first command on, every joint has damping: the driver's own before the controller's
+    # first command, then the controller's (its damping before its first tick, then its gains).
+    _, sent = replayed
+    kd = sent[:, FIELDS["kd"]]
+    assert kd.min() > 0.0, f"a command with kd = 0 at tick {np.argmin(kd.min(axis=1))}"

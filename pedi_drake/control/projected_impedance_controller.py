@@ -53,7 +53,6 @@ from pedi_drake.control import projected_impedance_tick, references, tasks
 from pedi_drake.control.config import ProjectedImpedanceConfig
 from pedi_drake.control.robot_model import ControllerModel, RobotSnapshot
 from pedi_drake.control.whole_body_controller import (
-    COMMAND_SIZE,
     STATUS_BAD_INPUT,
     STATUS_OK,
     STATUS_QP_FAILED,
@@ -61,7 +60,7 @@ from pedi_drake.control.whole_body_controller import (
 )
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, QpInfeasible
-from pedi_drake.go1_command import held_command
+from pedi_drake.go1_command import held_command, initial_command
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
 from pedi_drake.prongs import ProngDesign
@@ -158,7 +157,7 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
         self.safety_polygon_port = self.DeclareVectorInputPort("safety_polygon", references.SAFETY_POLYGON_SIZE)
         self.friction_port = self.DeclareVectorInputPort("friction", 1)
 
-        self.command_state = self.DeclareDiscreteState(COMMAND_SIZE)
+        self.command_state = self.DeclareDiscreteState(initial_command(config.failure_kd))
         self.reference_state = self.DeclareDiscreteState(24)  # q_ref (12), qd_ref (12)
         self.ramp_state = self.DeclareDiscreteState(nc)
         self.hold_state = self.DeclareDiscreteState(8)  # initialised flag, p_WB (3), quat (4)

@@ -41,7 +41,7 @@ from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, PediError, QpInfeasible
-from pedi_drake.go1_command import COMMAND_SIZE, held_command
+from pedi_drake.go1_command import held_command, initial_command
 from pedi_drake.jit import new_record
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.polygon import polygon_halfplanes
@@ -139,7 +139,7 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         self.safety_polygon_port = self.DeclareVectorInputPort("safety_polygon", references.SAFETY_POLYGON_SIZE)
         self.friction_port = self.DeclareVectorInputPort("friction", 1)
 
-        self.command_state = self.DeclareDiscreteState(COMMAND_SIZE)
+        self.command_state = self.DeclareDiscreteState(initial_command(config.failure_kd))
         self.reference_state = self.DeclareDiscreteState(24)  # q_ref (12), qd_ref (12)
         self.ramp_state = self.DeclareDiscreteState(nc)
         self.hold_state = self.DeclareDiscreteState(8)  # initialised flag, p_WB (3), quat (4)
