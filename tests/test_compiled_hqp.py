@@ -25,11 +25,15 @@ def sparse_rows(rng: np.random.Generator, rows: int, nonzeros: int) -> np.ndarra
     return M
 
 
-def stack_like_levels(rng: np.random.Generator, tight: float) -> list[Level]:
+def stack_like_levels(rng: np.random.Generator, tight: float, redundant: int = 0) -> list[Level]:
     """Four levels as the whole-body stack builds them, feasible at a random point; `tight`
-    (0 to 1) moves the hard bounds onto that point, so more of them bind."""
+    (0 to 1) moves the hard bounds onto that point, so more of them bind. `redundant` top-level
+    rows are combinations of the others, as a stance on the prongs gives (two contacts on the
+    trunk fix one rotation twice): the top level is then rank-deficient."""
     x_feasible = rng.normal(size=N)
     physics = rng.normal(size=(15, N))
+    if redundant:
+        physics = np.vstack([physics, rng.normal(size=(redundant, 15)) @ physics])
     limits = np.vstack([sparse_rows(rng, 24, 1), sparse_rows(rng, 24, 2), sparse_rows(rng, 12, 12)])
     limits = np.vstack([limits, -limits[-12:]])
     slack = rng.uniform(0.0, 1.0, len(limits)) * (1.0 - tight)
@@ -51,8 +55,9 @@ def stack_like_levels(rng: np.random.Generator, tight: float) -> list[Level]:
 
 @pytest.mark.parametrize("seed", range(20))
 @pytest.mark.parametrize("tight", [0.0, 0.9])
-def test_strict_solve_equals_the_python_reference(seed, tight):
-    levels = stack_like_levels(np.random.default_rng(seed), tight)
+@pytest.mark.parametrize("redundant", [0, 2])
+def test_strict_solve_equals_the_python_reference(seed, tight, redundant):
+    levels = stack_like_levels(np.random.default_rng(seed), tight, redundant)
     expected = solve_hqp(levels, N, SETTINGS)
     status, x, residuals = compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, N), SETTINGS)
     assert status == compiled_hqp.STATUS_OK
@@ -94,3 +99,22 @@ def test_infeasible_hard_rows_are_reported():
         solve_hqp(levels, N, SETTINGS)
     status, _, _ = compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, N), SETTINGS)
     assert status == compiled_hqp.STATUS_INFEASIBLE
+
+
+def test_the_pivoted_split_finds_the_rank_and_the_null_space():
+    rng = np.random.default_rng(11)
+    for m, deficiency in ((6, 1), (18, 1), (21, 3), (24, 24)):
+        A = rng.normal(size=(m - deficiency, N))
+        A = np.vstack([A, rng.normal(size=(deficiency, m - deficiency)) @ A]) if m > deficiency else np.zeros((m, N))
+        Y, Nb, R = np.empty((N, N)), np.empty((N, N)), np.empty((N, N))
+        order = np.empty(N, dtype=np.int64)
+        rank, kind = compiled_hqp._row_space_split(A, 1e-9, Y, Nb, R, order)
+        assert rank == m - deficiency and kind == compiled_hqp.SPLIT_PIVOTED
+        np.testing.assert_allclose(A @ Nb[:, : N - rank], 0.0, atol=1e-12 * max(1.0, np.abs(A).max()))
+        basis = np.hstack([Y[:, :rank], Nb[:, : N - rank]])
+        np.testing.assert_allclose(basis.T @ basis, np.eye(N), atol=1e-12)
+        # The least-norm least-squares step, against numpy's (an SVD).
+        r = rng.normal(size=m)
+        z = np.empty(N)
+        compiled_hqp._min_norm_least_squares(A, r, Y, rank, R, order, kind, z)
+        np.testing.assert_allclose(z, np.linalg.lstsq(A, r, rcond=None)[0], atol=1e-9)

@@ -106,31 +106,50 @@ class RowTable:
 # Row space and null space of a level's rows (hqp._row_space_split).
 
 
+# How a level's rows were split: full row rank (A = R^T Y^T), rank-deficient with m <= n (a QR
+# of A^T with pivoting, A^T P = Q R), or an SVD (more rows than columns).
+SPLIT_FULL_RANK, SPLIT_PIVOTED, SPLIT_SVD = 0, 1, 2
+
+
 @kernel
-def _row_space_split(A: np.ndarray, tolerance: float, Y: np.ndarray, N: np.ndarray, R: np.ndarray) -> tuple:
-    """Row-space basis Y (n, r), null-space basis N (n, n - r) and, when A (m, n) has full row
-    rank r = m <= n, R (m, m) with A = R^T Y^T. Writes Y, N and R into the leading blocks of the
-    given buffers (Y, N: (n, n); R: (n, n)) and returns (rank, has_R, ok)."""
+def _row_space_split(A: np.ndarray, tolerance: float, Y: np.ndarray, N: np.ndarray, R: np.ndarray, order: np.ndarray):
+    """Row-space basis Y (n, r), null-space basis N (n, n - r) of A (m, n) of rank r: writes Y, N
+    and, unless by SVD, the triangular factor R (m, m) and the row order into the leading blocks
+    of the given buffers (Y, N, R: (n, n); order: (n,)) and returns (rank, SPLIT_* kind).
+
+    A Householder QR of A^T first; when its diagonal says A is rank-deficient, the same QR with
+    pivoting, which reveals the rank in its diagonal (hqp.py takes an SVD there: the two agree
+    on the rank when A's singular values are clearly above or below the tolerance, as the
+    stack's are: a stance's redundant contact rows give singular values of 1e-18 of the
+    largest, the others 1e-2 and more). An SVD only when A has more rows than columns."""
     m, n = A.shape
     if m == 0:
         for i in range(n):
             for j in range(n):
                 N[i, j] = 1.0 if i == j else 0.0
-        return 0, True, True
+        return 0, SPLIT_FULL_RANK
     if m <= n:
         Q = np.empty((n, n))
         Rm = np.empty((m, m))
-        householder_rows(A, Q, Rm)
+        householder_rows(A, Q, Rm, order, False)
         largest, smallest = 0.0, np.inf
         for i in range(m):
             d = abs(Rm[i, i])
             largest = max(largest, d)
             smallest = min(smallest, d)
-        if smallest > tolerance * max(1.0, largest):
-            Y[:n, :m] = Q[:, :m]
-            N[:n, : n - m] = Q[:, m:]
-            R[:m, :m] = Rm
-            return m, True, True
+        kind = SPLIT_FULL_RANK
+        rank = m
+        if not smallest > tolerance * max(1.0, largest):
+            householder_rows(A, Q, Rm, order, True)
+            kind = SPLIT_PIVOTED
+            top = abs(Rm[0, 0])
+            rank = 0
+            while rank < m and abs(Rm[rank, rank]) > tolerance * max(1.0, top):
+                rank += 1
+        Y[:n, :rank] = Q[:, :rank]
+        N[:n, : n - rank] = Q[:, rank:]
+        R[:m, :m] = Rm
+        return rank, kind
     U, sigma, Vt = np.linalg.svd(A)
     top = sigma[0] if len(sigma) else 0.0
     rank = 0
@@ -139,16 +158,37 @@ def _row_space_split(A: np.ndarray, tolerance: float, Y: np.ndarray, N: np.ndarr
             rank += 1
     Y[:n, :rank] = Vt[:rank].T
     N[:n, : n - rank] = Vt[rank:].T
-    return rank, False, True
+    return rank, SPLIT_SVD
 
 
 @kernel
-def _min_norm_least_squares(A, r, Y, rank, R, has_R, z) -> None:
-    """argmin ||z|| among the minimisers of ||A z - r|| (hqp._min_norm_least_squares)."""
+def _min_norm_least_squares(A, r, Y, rank, R, order, kind, z) -> None:
+    """argmin ||z|| among the minimisers of ||A z - r|| (hqp._min_norm_least_squares), from the
+    `_row_space_split` of A (its rank, R, row order and kind)."""
     m, n = A.shape
-    if has_R:
+    if kind == SPLIT_FULL_RANK:
         w = np.empty(rank)
         if forward_substitute_transposed(R[:rank, :rank], r, w):
+            z[:] = np.ascontiguousarray(Y[:n, :rank]) @ w
+            return
+    elif kind == SPLIT_PIVOTED and rank > 0:
+        # A = P [R1^T 0] Q^T with R1 = R[:rank] (rank, m) in pivoted column order, so the
+        # minimiser of least norm is z = Y w, w the least-squares solution of R1^T w = P^T r:
+        # by its normal equations R1 R1^T w = R1 P^T r (R1's leading block is well conditioned).
+        S = np.empty((rank, rank))
+        rhs = np.empty(rank)
+        for i in range(rank):
+            for j in range(rank):
+                s = 0.0
+                for k in range(m):
+                    s += R[i, k] * R[j, k]
+                S[i, j] = s
+            s = 0.0
+            for k in range(m):
+                s += R[i, k] * r[order[k]]
+            rhs[i] = s
+        w = np.empty(rank)
+        if cholesky_solve(S, rhs, w):
             z[:] = np.ascontiguousarray(Y[:n, :rank]) @ w
             return
     z[:] = np.linalg.lstsq(A, r, rcond=np.finfo(np.float64).eps * max(m, n))[0]
@@ -259,6 +299,7 @@ def solve_strict(
     Y = np.empty((n, n))
     N = np.empty((n, n))
     R = np.empty((n, n))
+    order = np.empty(n, dtype=np.int64)
     for level in range(num_levels):
         e0, e1 = eq_start[level], eq_start[level + 1]
         s0, s1 = soft_start[level], soft_start[level + 1]
@@ -280,13 +321,13 @@ def solve_strict(
         for i in range(m):
             rz[i] = eq_b[e0 + i] - _row_dot(eq_A, e0 + i, x)
         have_split = False
-        rank, has_R = 0, False
+        rank, kind = 0, SPLIT_FULL_RANK
         z = np.zeros(nz)
         if mh == 0 and ms == 0:
             if m:
-                rank, has_R, ok = _row_space_split(Az, rank_tolerance, Y, N, R)
+                rank, kind = _row_space_split(Az, rank_tolerance, Y, N, R, order)
                 have_split = True
-                _min_norm_least_squares(Az, rz, Y, rank, R, has_R, z)
+                _min_norm_least_squares(Az, rz, Y, rank, R, order, kind, z)
             solved = True
         else:
             if gz_rows < mh:
@@ -306,9 +347,9 @@ def solve_strict(
             solved = True
             if m and nz:
                 if m <= nz:
-                    rank, has_R, ok = _row_space_split(Az, rank_tolerance, Y, N, R)
+                    rank, kind = _row_space_split(Az, rank_tolerance, Y, N, R, order)
                     have_split = True
-                    _min_norm_least_squares(Az, rz, Y, rank, R, has_R, z)
+                    _min_norm_least_squares(Az, rz, Y, rank, R, order, kind, z)
                 else:
                     S = Az.T @ Az
                     solved = cholesky_solve(S, Az.T @ rz, z)
@@ -356,7 +397,7 @@ def solve_strict(
                 mh += 1
         if m and nz and level + 1 < num_levels:
             if not have_split:
-                rank, has_R, ok = _row_space_split(Az, rank_tolerance, Y, N, R)
+                rank, kind = _row_space_split(Az, rank_tolerance, Y, N, R, order)
             kept = nz - rank
             if identity:
                 Z[:, :kept] = N[:n, :kept]

@@ -6,10 +6,14 @@ tick. At these sizes a LAPACK call from Python costs more in call overhead than 
 the compiled controller does the same factorisations here, in the same algorithms as LAPACK's
 unblocked routines (so results agree to rounding):
 
-* `householder_rows(A, Q, R)`: the QR factorisation of A^T (A is m x n with m <= n, read as its
-  m rows), A^T = Q [R; 0] with Q (n x n) orthogonal and R (m x m) upper triangular: the first m
-  columns of Q span the row space of A, the last n - m its null space (LAPACK's dgeqr2 followed
-  by dorg2r on the complete Q: reflectors H_k = I - tau_k v_k v_k^T, v_k[k] = 1).
+* `householder_rows(A, Q, R, order, pivot)`: the QR factorisation of A^T (A is m x n with m <= n,
+  read as its m rows), A^T P = Q [R; 0] with Q (n x n) orthogonal, R (m x m) upper triangular
+  and P the permutation of A's rows in `order`: the first m columns of Q span the row space of
+  A, the last n - m its null space (LAPACK's dgeqr2 followed by dorg2r on the complete Q:
+  reflectors H_k = I - tau_k v_k v_k^T, v_k[k] = 1). Without pivoting P is the identity; with it,
+  each step takes the remaining row of largest norm first (as LAPACK's dgeqp3), so |R[k, k]|
+  does not increase with k and a rank-deficient A shows its rank r in R's diagonal: then the
+  first r columns of Q span its row space and the last n - r its null space.
 * `forward_substitute_transposed(R, r, w)`: R^T w = r for upper-triangular R.
 * `cholesky_in_place(A, n)`: the Cholesky factor of A's leading n x n block, in place (the dense
   QP solver factors its Hessian with it).
@@ -25,12 +29,28 @@ from pedi_drake.jit import kernel
 
 
 @kernel
-def householder_rows(A: np.ndarray, Q: np.ndarray, R: np.ndarray) -> None:
-    """A^T = Q [R; 0] for A (m, n), m <= n: fills Q (n, n) and R (m, m). A is not modified."""
+def householder_rows(A: np.ndarray, Q: np.ndarray, R: np.ndarray, order: np.ndarray, pivot: bool) -> None:
+    """A^T P = Q [R; 0] for A (m, n), m <= n: fills Q (n, n), R (m, m) and order (m,): row order[k]
+    of A was factorised k-th (always k without `pivot`). A is not modified."""
     m, n = A.shape
     W = A.copy()  # row k of W is column k of the factorised matrix
     tau = np.zeros(m)
     for k in range(m):
+        order[k] = k
+    for k in range(m):
+        if pivot:
+            # The row with the largest norm in the coordinates not yet factorised goes next.
+            best, largest = k, -1.0
+            for j in range(k, m):
+                norm = 0.0
+                for i in range(k, n):
+                    norm += W[j, i] * W[j, i]
+                if norm > largest:
+                    best, largest = j, norm
+            if best != k:
+                for i in range(n):
+                    W[k, i], W[best, i] = W[best, i], W[k, i]
+                order[k], order[best] = order[best], order[k]
         alpha = W[k, k]
         scale = 0.0
         for i in range(k + 1, n):
