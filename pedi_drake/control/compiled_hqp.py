@@ -29,7 +29,7 @@ import numpy as np
 
 from pedi_drake.control import dense_qp
 from pedi_drake.control.hqp import HqpSettings, Level
-from pedi_drake.control.small_linalg import cholesky_solve, forward_substitute_transposed, householder_rows
+from pedi_drake.control.small_linalg import cholesky_solve, forward_substitute_transposed, householder_rows, multiply
 from pedi_drake.jit import kernel
 
 STATUS_OK, STATUS_INFEASIBLE, STATUS_NUMERICAL = 0, 1, 2
@@ -227,23 +227,15 @@ def _solve_level_qp(H, f, C, upper, eps_prox, y, workspace) -> int:
 @kernel
 def _rows_times(M: np.ndarray, Z: np.ndarray, nz: int, identity: bool, out: np.ndarray) -> None:
     """out[i, :nz] = M[i] @ Z[:, :nz] for every row i of M (m, n); Z is the identity when
-    `identity`. M's zero entries are skipped: the stack's rows are sparse (a joint limit touches
-    one variable, a force limit two, a torque limit about a dozen of 30), so this costs a fifth
-    of a dense product here."""
+    `identity`. M's zero entries are skipped (small_linalg.multiply): the stack's rows are sparse
+    (a joint limit touches one variable, a force limit two, a torque limit about a dozen of 30)."""
     m, n = M.shape
     if identity:
         for i in range(m):
             for c in range(n):
                 out[i, c] = M[i, c]
         return
-    for i in range(m):
-        for c in range(nz):
-            out[i, c] = 0.0
-        for j in range(n):
-            v = M[i, j]
-            if v != 0.0:
-                for c in range(nz):
-                    out[i, c] += v * Z[j, c]
+    multiply(M, Z[:, :nz], out)
 
 
 @kernel
@@ -402,14 +394,7 @@ def solve_strict(
             if identity:
                 Z[:, :kept] = N[:n, :kept]
             else:
-                for i in range(n):
-                    for c in range(kept):
-                        Z_next[i, c] = 0.0
-                    for j in range(nz):
-                        v = Z[i, j]
-                        if v != 0.0:
-                            for c in range(kept):
-                                Z_next[i, c] += v * N[j, c]
+                multiply(Z[:, :nz], N[:nz, :kept], Z_next)
                 Z, Z_next = Z_next, Z
             identity = False
             gz_rows = 0  # GZ_all is recomputed for the new Z, from the sparse rows

@@ -19,6 +19,7 @@ import numpy as np
 
 from pedi_drake.control import dense_qp
 from pedi_drake.control.small_decompositions import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
+from pedi_drake.control.small_linalg import multiply
 from pedi_drake.jit import kernel
 
 # Status of `contact_forces`.
@@ -33,21 +34,6 @@ _INFINITY = 1e30
 
 # ------------------------------------------------------------------------------------------------
 # Products (row-major loops: the innermost index runs along contiguous memory).
-
-
-@kernel
-def _multiply(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
-    """out = A B."""
-    m, k = A.shape
-    n = B.shape[1]
-    for i in range(m):
-        for j in range(n):
-            out[i, j] = 0.0
-        for p in range(k):
-            a = A[i, p]
-            if a != 0.0:
-                for j in range(n):
-                    out[i, j] += a * B[p, j]
 
 
 @kernel
@@ -148,7 +134,7 @@ def constrained_dynamics(
         return -1
     Jc_pinv = np.empty((nv, rows))
     _transposed_multiply(Jc, gram_pinv, Jc_pinv)
-    _multiply(Jc_pinv, Jc, P)
+    multiply(Jc_pinv, Jc, P)
     for i in range(nv):
         for j in range(nv):
             P[i, j] = -P[i, j]
@@ -156,7 +142,7 @@ def constrained_dynamics(
     _symmetrize(P)
     # M_c = P M + I - P, and the right-hand sides [P, -(P h) - Jc^+ (Jcdot v + kd Jc v)].
     M_c = np.empty((nv, nv))
-    _multiply(P, M, M_c)
+    multiply(P, M, M_c)
     for i in range(nv):
         for j in range(nv):
             M_c[i, j] -= P[i, j]
@@ -213,7 +199,7 @@ def _remove_from_null_space(N, JA, Lambda, J) -> None:
     """N -= (A J^T Lambda) J, with JA = J A (A symmetric) and Lambda symmetric."""
     m, nv = JA.shape
     Y = np.empty((m, nv))  # Lambda J A = (A J^T Lambda)^T
-    _multiply(Lambda, JA, Y)
+    multiply(Lambda, JA, Y)
     for p in range(m):
         for i in range(nv):
             y = Y[p, i]
@@ -261,7 +247,7 @@ def prioritized_force(
     impedance_force[:] = 0.0
     if m:
         JA = np.empty((m, nv))
-        _multiply(J, A, JA)
+        multiply(J, A, JA)
         inertia = np.empty((m, m))
         _multiply_transposed(JA, J, inertia)
         used = symmetric_pseudo_inverse(inertia, rank_tolerance, _LARGEST, impedance_inertia)
@@ -302,10 +288,10 @@ def prioritized_force(
             count += 1
             continue
         J_prec = np.empty((rows, nv))
-        _multiply(Jt, N, J_prec)
+        multiply(Jt, N, J_prec)
         # The unprojected task's inverse inertia sets the scale of the rank decision.
         JtA = np.empty((rows, nv))
-        _multiply(Jt, A, JtA)
+        multiply(Jt, A, JtA)
         unprojected = np.empty((rows, rows))
         _multiply_transposed(JtA, Jt, unprojected)
         scale = 0.0
@@ -314,7 +300,7 @@ def prioritized_force(
                 scale += unprojected[i, j] * unprojected[i, j]
         scale = math.sqrt(scale)
         JpA = np.empty((rows, nv))
-        _multiply(J_prec, A, JpA)
+        multiply(J_prec, A, JpA)
         inertia = np.empty((rows, rows))
         _multiply_transposed(JpA, J_prec, inertia)
         Lambda = np.empty((rows, rows))
@@ -517,7 +503,7 @@ def contact_forces(
         for i in range(n):
             f_lam[i] = torque_weight * f_lam[i] - force_weight * force_share[i]
         HZ = np.empty((n, nz))
-        _multiply(H_lam, Z, HZ)
+        multiply(H_lam, Z, HZ)
         H = np.empty((nz, nz))
         _transposed_multiply(Z, HZ, H)
         linear = np.empty(n)
@@ -527,7 +513,7 @@ def contact_forces(
         f = np.empty(nz)
         _transposed_times(Z, linear, f)
         C = np.empty((rows, nz))
-        _multiply(G, Z, C)
+        multiply(G, Z, C)
         upper = np.empty(rows)
         _times(G, lam_0, upper)
         for i in range(rows):

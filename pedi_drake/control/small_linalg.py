@@ -14,6 +14,8 @@ unblocked routines (so results agree to rounding):
   each step takes the remaining row of largest norm first (as LAPACK's dgeqp3), so |R[k, k]|
   does not increase with k and a rank-deficient A shows its rank r in R's diagonal: then the
   first r columns of Q span its row space and the last n - r its null space.
+* `multiply(A, B, out)`: out = A B, skipping A's zero entries (the controllers' Jacobians and
+  task rows are mostly zeros); writes out's leading (rows of A, columns of B) block.
 * `forward_substitute_transposed(R, r, w)`: R^T w = r for upper-triangular R.
 * `cholesky_in_place(A, n)`: the Cholesky factor of A's leading n x n block, in place (the dense
   QP solver factors its Hessian with it).
@@ -100,6 +102,22 @@ def householder_rows(A: np.ndarray, Q: np.ndarray, R: np.ndarray, order: np.ndar
             v = W[k, i]
             for j in range(k, n):
                 Q[i, j] -= v * w[j]
+
+
+@kernel
+def multiply(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
+    """out = A B (into out's leading block), skipping A's zero entries; the innermost loop runs
+    along B's and out's rows."""
+    m, k = A.shape
+    n = B.shape[1]
+    for i in range(m):
+        for j in range(n):
+            out[i, j] = 0.0
+        for p in range(k):
+            a = A[i, p]
+            if a != 0.0:
+                for j in range(n):
+                    out[i, j] += a * B[p, j]
 
 
 @kernel
