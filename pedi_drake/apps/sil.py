@@ -47,6 +47,7 @@ GROUP = "239.255.76.67"
 # The README's controller program, beside the package in a source checkout.
 RUN_SIM = Path(__file__).resolve().parents[2] / "run_sim.py"
 BRIDGE_START_TIMEOUT = 60.0  # [s] for the bridge to build its diagram and start publishing
+START_WINDOW = 0.1  # [s] of the loop's start judged by `start_transient`
 # [s] for the operator to finish its log after the controller side ended (then it is stopped).
 OPERATOR_END_TIMEOUT = 30.0
 
@@ -84,6 +85,35 @@ def estimator_error(controller_logs: dict, truth: dict) -> dict:
     p_true = np.array([np.interp(wall[inside], truth["wall_time"], truth["p_WB"][:, k]) for k in range(3)])
     error = np.linalg.norm(base.data[4:7, :n][:, inside] - p_true, axis=0)
     return {"max_m": float(np.max(error)), "final_m": float(error[-1])}
+
+
+def start_transient(controller_logs: dict, truth: dict, window: float = START_WINDOW) -> dict:
+    """What the robot did before the loop and in its first `window` [s]: the bridge's true trunk
+    height at its first sample and at the loop's first tick [m] (the bridge holds its first pose
+    with stiffness alone, no feed-forward, so a robot on its feet sags under that hold), the
+    largest change of a measured joint from one tick to the next in the window [rad] (the status
+    as the controller received it), and how far the true trunk sank in the window below its height
+    at the first tick [m] (the legs settling when the controller's commands replace the hold)."""
+    q = controller_logs["go1.position_measured"]
+    clock = controller_logs["wall_clock"]
+    in_window = q.times <= q.times[0] + window
+    steps = np.abs(np.diff(q.data[:, in_window], axis=1))
+    largest = np.unravel_index(np.argmax(steps), steps.shape) if steps.size else (0, 0)
+    wall_start = float(clock.data[0, 0])
+    wall_end = float(np.interp(clock.times[0] + window, clock.times, clock.data[0]))
+    z = truth["p_WB"][:, 2]
+    z_start = float(np.interp(wall_start, truth["wall_time"], z))
+    during = (truth["wall_time"] >= wall_start) & (truth["wall_time"] <= wall_end)
+    lowest = float(z[during].min()) if np.any(during) else z_start
+    return {
+        "true_trunk_height_bridge_start_m": float(z[0]),
+        "true_trunk_height_loop_start_m": z_start,
+        "window_s": window,
+        "largest_joint_step_rad": float(steps[largest]) if steps.size else 0.0,
+        "largest_joint_step_joint": robot.JOINT_NAMES[largest[0]] if steps.size else None,
+        "largest_joint_step_t": float(q.times[largest[1] + 1]) if steps.size else None,
+        "true_trunk_sink_m": z_start - lowest,
+    }
 
 
 def run_sil(
@@ -181,6 +211,7 @@ def run_sil(
     result["sil"] = {
         "foot_errors": true_foot_errors(result, logs, truth),
         "estimator_trunk_position_error": estimator_error(logs, truth),
+        "start": start_transient(logs, truth),
         "lcm_url": url,
         "realtime_rate": realtime_rate,
         "bridge_scheduling": bridge_scheduling,
@@ -247,6 +278,14 @@ def main() -> int:
     trunk = result["sil"]["estimator_trunk_position_error"]
     print(
         f"estimated trunk position vs truth: max {1000 * trunk['max_m']:.1f} mm, final {1000 * trunk['final_m']:.1f} mm"
+    )
+    start = result["sil"]["start"]
+    print(
+        f"first {1000 * start['window_s']:.0f} ms: largest step of a measured joint "
+        f"{1000 * start['largest_joint_step_rad']:.1f} mrad ({start['largest_joint_step_joint']}), "
+        f"true trunk sank {1000 * start['true_trunk_sink_m']:.1f} mm; under the bridge's hold before, from "
+        f"{1000 * start['true_trunk_height_bridge_start_m']:.1f} to "
+        f"{1000 * start['true_trunk_height_loop_start_m']:.1f} mm"
     )
     loop = result["driver"]["loop"]
     lateness = loop["lateness_ms"] or {}

@@ -51,6 +51,7 @@ def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str 
         "latched": driver["latched"],
         "max_true_foot_error_mm": 1e3 * max(errors) if errors else None,
         "estimator_trunk_error_max_mm": 1e3 * sil["estimator_trunk_position_error"]["max_m"],
+        "start": sil["start"],
         "ticks": loop["ticks"],
         "deadline_misses_per_1000": loop["deadline_misses_per_1000"],
         "longest_miss_ms": loop["longest_miss_ms"],
