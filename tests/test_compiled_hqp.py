@@ -11,6 +11,7 @@ import pytest
 
 from pedi_drake.control import compiled_hqp
 from pedi_drake.control.hqp import EqualityTask, HqpSettings, InequalityTask, Level, solve_hqp
+from pedi_drake.control.small_linalg import householder_q_columns
 from pedi_drake.exceptions import QpInfeasible
 
 N = 30
@@ -106,15 +107,17 @@ def test_the_pivoted_split_finds_the_rank_and_the_null_space():
     for m, deficiency in ((6, 1), (18, 1), (21, 3), (24, 24)):
         A = rng.normal(size=(m - deficiency, N))
         A = np.vstack([A, rng.normal(size=(deficiency, m - deficiency)) @ A]) if m > deficiency else np.zeros((m, N))
-        Y, Nb, R = np.empty((N, N)), np.empty((N, N)), np.empty((N, N))
-        order = np.empty(N, dtype=np.int64)
-        rank, kind = compiled_hqp._row_space_split(A, 1e-9, Y, Nb, R, order)
+        W, Nb, R = np.empty((N, N)), np.empty((N, N)), np.empty((N, N))
+        tau, order = np.empty(N), np.empty(N, dtype=np.int64)
+        rank, kind = compiled_hqp._row_space_split(A, 1e-9, W, tau, Nb, R, order)
         assert rank == m - deficiency and kind == compiled_hqp.SPLIT_PIVOTED
         np.testing.assert_allclose(A @ Nb[:, : N - rank], 0.0, atol=1e-12 * max(1.0, np.abs(A).max()))
-        basis = np.hstack([Y[:, :rank], Nb[:, : N - rank]])
-        np.testing.assert_allclose(basis.T @ basis, np.eye(N), atol=1e-12)
+        Q = np.empty((N, N))
+        householder_q_columns(W, tau, m, N, 0, Q)
+        np.testing.assert_array_equal(Q[:, rank:], Nb[:, : N - rank])  # the same columns, bit for bit
+        np.testing.assert_allclose(Q.T @ Q, np.eye(N), atol=1e-12)
         # The least-norm least-squares step, against numpy's (an SVD).
         r = rng.normal(size=m)
         z = np.empty(N)
-        compiled_hqp._min_norm_least_squares(A, r, Y, rank, R, order, kind, z)
+        compiled_hqp._min_norm_least_squares(A, r, W, tau, rank, R, order, kind, z)
         np.testing.assert_allclose(z, np.linalg.lstsq(A, r, rcond=None)[0], atol=1e-9)

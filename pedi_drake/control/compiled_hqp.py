@@ -29,7 +29,14 @@ import numpy as np
 
 from pedi_drake.control import dense_qp
 from pedi_drake.control.hqp import HqpSettings, Level
-from pedi_drake.control.small_linalg import cholesky_solve, forward_substitute_transposed, householder_rows, multiply
+from pedi_drake.control.small_linalg import (
+    cholesky_solve,
+    forward_substitute_transposed,
+    householder_factor,
+    householder_q_columns,
+    householder_q_times,
+    multiply,
+)
 from pedi_drake.jit import kernel
 
 STATUS_OK, STATUS_INFEASIBLE, STATUS_NUMERICAL = 0, 1, 2
@@ -106,16 +113,19 @@ class RowTable:
 # Row space and null space of a level's rows (hqp._row_space_split).
 
 
-# How a level's rows were split: full row rank (A = R^T Y^T), rank-deficient with m <= n (a QR
+# How a level's rows were split: full row rank (A = R^T Q[:, :m]^T), rank-deficient with m <= n (a QR
 # of A^T with pivoting, A^T P = Q R), or an SVD (more rows than columns).
 SPLIT_FULL_RANK, SPLIT_PIVOTED, SPLIT_SVD = 0, 1, 2
 
 
 @kernel
-def _row_space_split(A: np.ndarray, tolerance: float, Y: np.ndarray, N: np.ndarray, R: np.ndarray, order: np.ndarray):
-    """Row-space basis Y (n, r), null-space basis N (n, n - r) of A (m, n) of rank r: writes Y, N
-    and, unless by SVD, the triangular factor R (m, m) and the row order into the leading blocks
-    of the given buffers (Y, N, R: (n, n); order: (n,)) and returns (rank, SPLIT_* kind).
+def _row_space_split(
+    A: np.ndarray, tolerance: float, W: np.ndarray, tau: np.ndarray, N: np.ndarray, R: np.ndarray, order: np.ndarray
+):
+    """Null-space basis N (n, n - r) of A (m, n) of rank r, and its row space kept as Householder
+    reflectors: writes N, and unless by SVD the reflectors (W, tau), the triangular factor R
+    (m, m) and the row order (small_linalg.householder_factor) into the leading blocks of the
+    given buffers (W, N, R: (n, n); tau, order: (n,)) and returns (rank, SPLIT_* kind).
 
     A Householder QR of A^T first; when its diagonal says A is rank-deficient, the same QR with
     pivoting, which reveals the rank in its diagonal (hqp.py takes an SVD there: the two agree
@@ -129,9 +139,8 @@ def _row_space_split(A: np.ndarray, tolerance: float, Y: np.ndarray, N: np.ndarr
                 N[i, j] = 1.0 if i == j else 0.0
         return 0, SPLIT_FULL_RANK
     if m <= n:
-        Q = np.empty((n, n))
         Rm = np.empty((m, m))
-        householder_rows(A, Q, Rm, order, False)
+        householder_factor(A, W, tau, Rm, order, False)
         largest, smallest = 0.0, np.inf
         for i in range(m):
             d = abs(Rm[i, i])
@@ -140,14 +149,13 @@ def _row_space_split(A: np.ndarray, tolerance: float, Y: np.ndarray, N: np.ndarr
         kind = SPLIT_FULL_RANK
         rank = m
         if not smallest > tolerance * max(1.0, largest):
-            householder_rows(A, Q, Rm, order, True)
+            householder_factor(A, W, tau, Rm, order, True)
             kind = SPLIT_PIVOTED
             top = abs(Rm[0, 0])
             rank = 0
             while rank < m and abs(Rm[rank, rank]) > tolerance * max(1.0, top):
                 rank += 1
-        Y[:n, :rank] = Q[:, :rank]
-        N[:n, : n - rank] = Q[:, rank:]
+        householder_q_columns(W, tau, m, n, rank, N)
         R[:m, :m] = Rm
         return rank, kind
     U, sigma, Vt = np.linalg.svd(A)
@@ -156,25 +164,25 @@ def _row_space_split(A: np.ndarray, tolerance: float, Y: np.ndarray, N: np.ndarr
     for s in sigma:
         if s > tolerance * max(1.0, top):
             rank += 1
-    Y[:n, :rank] = Vt[:rank].T
     N[:n, : n - rank] = Vt[rank:].T
     return rank, SPLIT_SVD
 
 
 @kernel
-def _min_norm_least_squares(A, r, Y, rank, R, order, kind, z) -> None:
+def _min_norm_least_squares(A, r, W, tau, rank, R, order, kind, z) -> None:
     """argmin ||z|| among the minimisers of ||A z - r|| (hqp._min_norm_least_squares), from the
-    `_row_space_split` of A (its rank, R, row order and kind)."""
+    `_row_space_split` of A (its reflectors, rank, R, row order and kind)."""
     m, n = A.shape
     if kind == SPLIT_FULL_RANK:
         w = np.empty(rank)
         if forward_substitute_transposed(R[:rank, :rank], r, w):
-            z[:] = np.ascontiguousarray(Y[:n, :rank]) @ w
+            householder_q_times(W, tau, m, n, w, rank, z)
             return
     elif kind == SPLIT_PIVOTED and rank > 0:
         # A = P [R1^T 0] Q^T with R1 = R[:rank] (rank, m) in pivoted column order, so the
-        # minimiser of least norm is z = Y w, w the least-squares solution of R1^T w = P^T r:
-        # by its normal equations R1 R1^T w = R1 P^T r (R1's leading block is well conditioned).
+        # minimiser of least norm is z = Q[:, :rank] w, w the least-squares solution of
+        # R1^T w = P^T r: by its normal equations R1 R1^T w = R1 P^T r (R1's leading block is
+        # well conditioned).
         S = np.empty((rank, rank))
         rhs = np.empty(rank)
         for i in range(rank):
@@ -189,7 +197,7 @@ def _min_norm_least_squares(A, r, Y, rank, R, order, kind, z) -> None:
             rhs[i] = s
         w = np.empty(rank)
         if cholesky_solve(S, rhs, w):
-            z[:] = np.ascontiguousarray(Y[:n, :rank]) @ w
+            householder_q_times(W, tau, m, n, w, rank, z)
             return
     z[:] = np.linalg.lstsq(A, r, rcond=np.finfo(np.float64).eps * max(m, n))[0]
 
@@ -288,7 +296,8 @@ def solve_strict(
     # G_all Z for the first `gz_rows` carried rows, kept from level to level while Z stays.
     GZ_all = np.empty((capacity, n))
     gz_rows = 0
-    Y = np.empty((n, n))
+    W = np.empty((n, n))  # a level's row space as Householder reflectors (with tau)
+    tau = np.empty(n)
     N = np.empty((n, n))
     R = np.empty((n, n))
     order = np.empty(n, dtype=np.int64)
@@ -317,9 +326,9 @@ def solve_strict(
         z = np.zeros(nz)
         if mh == 0 and ms == 0:
             if m:
-                rank, kind = _row_space_split(Az, rank_tolerance, Y, N, R, order)
+                rank, kind = _row_space_split(Az, rank_tolerance, W, tau, N, R, order)
                 have_split = True
-                _min_norm_least_squares(Az, rz, Y, rank, R, order, kind, z)
+                _min_norm_least_squares(Az, rz, W, tau, rank, R, order, kind, z)
             solved = True
         else:
             if gz_rows < mh:
@@ -339,9 +348,9 @@ def solve_strict(
             solved = True
             if m and nz:
                 if m <= nz:
-                    rank, kind = _row_space_split(Az, rank_tolerance, Y, N, R, order)
+                    rank, kind = _row_space_split(Az, rank_tolerance, W, tau, N, R, order)
                     have_split = True
-                    _min_norm_least_squares(Az, rz, Y, rank, R, order, kind, z)
+                    _min_norm_least_squares(Az, rz, W, tau, rank, R, order, kind, z)
                 else:
                     S = Az.T @ Az
                     solved = cholesky_solve(S, Az.T @ rz, z)
@@ -389,7 +398,7 @@ def solve_strict(
                 mh += 1
         if m and nz and level + 1 < num_levels:
             if not have_split:
-                rank, kind = _row_space_split(Az, rank_tolerance, Y, N, R, order)
+                rank, kind = _row_space_split(Az, rank_tolerance, W, tau, N, R, order)
             kept = nz - rank
             if identity:
                 Z[:, :kept] = N[:n, :kept]

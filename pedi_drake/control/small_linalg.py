@@ -6,14 +6,17 @@ tick. At these sizes a LAPACK call from Python costs more in call overhead than 
 the compiled controller does the same factorisations here, in the same algorithms as LAPACK's
 unblocked routines (so results agree to rounding):
 
-* `householder_rows(A, Q, R, order, pivot)`: the QR factorisation of A^T (A is m x n with m <= n,
-  read as its m rows), A^T P = Q [R; 0] with Q (n x n) orthogonal, R (m x m) upper triangular
-  and P the permutation of A's rows in `order`: the first m columns of Q span the row space of
-  A, the last n - m its null space (LAPACK's dgeqr2 followed by dorg2r on the complete Q:
-  reflectors H_k = I - tau_k v_k v_k^T, v_k[k] = 1). Without pivoting P is the identity; with it,
-  each step takes the remaining row of largest norm first (as LAPACK's dgeqp3), so |R[k, k]|
-  does not increase with k and a rank-deficient A shows its rank r in R's diagonal: then the
-  first r columns of Q span its row space and the last n - r its null space.
+* `householder_factor(A, W, tau, R, order, pivot)`: the QR factorisation of A^T (A is m x n
+  with m <= n, read as its m rows), A^T P = Q [R; 0] with Q (n x n) orthogonal, R (m x m) upper
+  triangular and P the permutation of A's rows in `order`: the first m columns of Q span the row
+  space of A, the last n - m its null space (LAPACK's dgeqr2: reflectors H_k = I - tau_k v_k
+  v_k^T, v_k[k] = 1, kept in W and tau). Without pivoting P is the identity; with it, each step
+  takes the remaining row of largest norm first (as LAPACK's dgeqp3), so |R[k, k]| does not
+  increase with k and a rank-deficient A shows its rank r in R's diagonal: then the first r
+  columns of Q span its row space and the last n - r its null space. Q is never formed whole:
+  `householder_q_columns` forms the null-space columns (as dorg2r would, for those columns only)
+  and `householder_q_times` applies Q's row-space columns to a vector (as dormqr would), which
+  halves the work of a split at the stack's sizes.
 * `multiply(A, B, out)`: out = A B, skipping A's zero entries (the controllers' Jacobians and
   task rows are mostly zeros); writes out's leading (rows of A, columns of B) block.
 * `forward_substitute_transposed(R, r, w)`: R^T w = r for upper-triangular R.
@@ -31,13 +34,19 @@ from pedi_drake.jit import kernel
 
 
 @kernel
-def householder_rows(A: np.ndarray, Q: np.ndarray, R: np.ndarray, order: np.ndarray, pivot: bool) -> None:
-    """A^T P = Q [R; 0] for A (m, n), m <= n: fills Q (n, n), R (m, m) and order (m,): row order[k]
-    of A was factorised k-th (always k without `pivot`). A is not modified."""
+def householder_factor(
+    A: np.ndarray, W: np.ndarray, tau: np.ndarray, R: np.ndarray, order: np.ndarray, pivot: bool
+) -> None:
+    """A^T P = Q [R; 0] for A (m, n), m <= n, with Q kept as its reflectors: fills R (m, m), order
+    (m,) (row order[k] of A was factorised k-th; always k without `pivot`), and W (at least m x n)
+    and tau (at least m), where H_k = I - tau[k] v_k v_k^T with v_k[:k] = 0, v_k[k] = 1 and
+    v_k[k + 1 : n] = W[k, k + 1 : n]. `householder_q_columns` and `householder_q_times` apply Q.
+    A is not modified."""
     m, n = A.shape
-    W = A.copy()  # row k of W is column k of the factorised matrix
-    tau = np.zeros(m)
-    for k in range(m):
+    for k in range(m):  # row k of W is column k of the factorised matrix
+        for i in range(n):
+            W[k, i] = A[k, i]
+        tau[k] = 0.0
         order[k] = k
     for k in range(m):
         if pivot:
@@ -79,29 +88,59 @@ def householder_rows(A: np.ndarray, Q: np.ndarray, R: np.ndarray, order: np.ndar
     for i in range(m):
         for j in range(m):
             R[i, j] = W[j, i] if j >= i else 0.0
-    # Q = H_0 H_1 ... H_{m-1}, accumulated from the last reflector back (each touches rows k..):
-    # Q <- Q - tau v (v^T Q), with v^T Q summed row by row so every inner loop runs along a row.
+
+
+@kernel
+def householder_q_columns(W: np.ndarray, tau: np.ndarray, m: int, n: int, first: int, out: np.ndarray) -> None:
+    """out[:n, :n - first] = Q[:, first:] of a `householder_factor` of an (m, n) matrix: the null
+    space when `first` is its rank. Only these columns are formed: Q = H_0 ... H_{m-1} applied to
+    the identity's columns `first`.., accumulated from the last reflector back (each touches rows
+    k..; column c is still e_c in those rows while k > c, so it is skipped), with v^T Q summed row
+    by row so every inner loop runs along a row."""
+    columns = n - first
     for i in range(n):
-        for j in range(n):
-            Q[i, j] = 1.0 if i == j else 0.0
-    w = np.empty(n)
+        for j in range(columns):
+            out[i, j] = 1.0 if i == j + first else 0.0
+    w = np.empty(max(columns, 1))
     for k in range(m - 1, -1, -1):
         t = tau[k]
         if t == 0.0:
             continue
-        for j in range(k, n):
-            w[j] = Q[k, j]
+        j0 = max(k - first, 0)
+        for j in range(j0, columns):
+            w[j] = out[k, j]
         for i in range(k + 1, n):
             v = W[k, i]
-            for j in range(k, n):
-                w[j] += v * Q[i, j]
-        for j in range(k, n):
+            for j in range(j0, columns):
+                w[j] += v * out[i, j]
+        for j in range(j0, columns):
             w[j] *= t
-            Q[k, j] -= w[j]
+            out[k, j] -= w[j]
         for i in range(k + 1, n):
             v = W[k, i]
-            for j in range(k, n):
-                Q[i, j] -= v * w[j]
+            for j in range(j0, columns):
+                out[i, j] -= v * w[j]
+
+
+@kernel
+def householder_q_times(
+    W: np.ndarray, tau: np.ndarray, m: int, n: int, w: np.ndarray, count: int, z: np.ndarray
+) -> None:
+    """z (n,) = Q [w[:count]; 0] of a `householder_factor` of an (m, n) matrix: Q's first `count`
+    columns times w, by the reflectors (H_{m-1} first), without forming Q."""
+    for i in range(n):
+        z[i] = w[i] if i < count else 0.0
+    for k in range(m - 1, -1, -1):
+        t = tau[k]
+        if t == 0.0:
+            continue
+        s = z[k]
+        for i in range(k + 1, n):
+            s += W[k, i] * z[i]
+        s *= t
+        z[k] -= s
+        for i in range(k + 1, n):
+            z[i] -= s * W[k, i]
 
 
 @kernel
