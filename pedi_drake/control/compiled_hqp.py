@@ -36,6 +36,7 @@ from pedi_drake.control.small_linalg import (
     householder_q_columns,
     householder_q_times,
     multiply,
+    multiply_transposed,
 )
 from pedi_drake.jit import kernel
 
@@ -184,13 +185,9 @@ def _min_norm_least_squares(A, r, W, tau, rank, R, order, kind, z) -> None:
         # R1^T w = P^T r: by its normal equations R1 R1^T w = R1 P^T r (R1's leading block is
         # well conditioned).
         S = np.empty((rank, rank))
+        multiply_transposed(R[:rank, :m], R[:rank, :m], S)
         rhs = np.empty(rank)
         for i in range(rank):
-            for j in range(rank):
-                s = 0.0
-                for k in range(m):
-                    s += R[i, k] * R[j, k]
-                S[i, j] = s
             s = 0.0
             for k in range(m):
                 s += R[i, k] * r[order[k]]

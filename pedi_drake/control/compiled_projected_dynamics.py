@@ -19,7 +19,7 @@ import numpy as np
 
 from pedi_drake.control import dense_qp
 from pedi_drake.control.small_decompositions import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
-from pedi_drake.control.small_linalg import multiply
+from pedi_drake.control.small_linalg import multiply, multiply_transposed
 from pedi_drake.jit import kernel
 
 # Status of `contact_forces`.
@@ -34,19 +34,6 @@ _INFINITY = 1e30
 
 # ------------------------------------------------------------------------------------------------
 # Products (row-major loops: the innermost index runs along contiguous memory).
-
-
-@kernel
-def _multiply_transposed(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
-    """out = A B^T."""
-    m, k = A.shape
-    n = B.shape[0]
-    for i in range(m):
-        for j in range(n):
-            s = 0.0
-            for p in range(k):
-                s += A[i, p] * B[j, p]
-            out[i, j] = s
 
 
 @kernel
@@ -127,7 +114,7 @@ def constrained_dynamics(
     rows = Jc.shape[0]
     # Jc^+ = Jc^T (Jc Jc^T)^+; the eigenvalues of Jc Jc^T are the squared singular values of Jc.
     gram = np.empty((rows, rows))
-    _multiply_transposed(Jc, Jc, gram)
+    multiply_transposed(Jc, Jc, gram)
     gram_pinv = np.empty((rows, rows))
     rank = symmetric_pseudo_inverse(gram, rank_tolerance * rank_tolerance, _LARGEST, gram_pinv)
     if rank < 0:
@@ -249,7 +236,7 @@ def prioritized_force(
         JA = np.empty((m, nv))
         multiply(J, A, JA)
         inertia = np.empty((m, m))
-        _multiply_transposed(JA, J, inertia)
+        multiply_transposed(JA, J, inertia)
         used = symmetric_pseudo_inverse(inertia, rank_tolerance, _LARGEST, impedance_inertia)
         if used < 0:
             return -1
@@ -293,7 +280,7 @@ def prioritized_force(
         JtA = np.empty((rows, nv))
         multiply(Jt, A, JtA)
         unprojected = np.empty((rows, rows))
-        _multiply_transposed(JtA, Jt, unprojected)
+        multiply_transposed(JtA, Jt, unprojected)
         scale = 0.0
         for i in range(rows):
             for j in range(rows):
@@ -302,7 +289,7 @@ def prioritized_force(
         JpA = np.empty((rows, nv))
         multiply(J_prec, A, JpA)
         inertia = np.empty((rows, rows))
-        _multiply_transposed(JpA, J_prec, inertia)
+        multiply_transposed(JpA, J_prec, inertia)
         Lambda = np.empty((rows, rows))
         rank = symmetric_pseudo_inverse(inertia, rank_tolerance, scale, Lambda)
         if rank < 0:

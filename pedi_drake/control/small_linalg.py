@@ -19,6 +19,7 @@ unblocked routines (so results agree to rounding):
   halves the work of a split at the stack's sizes.
 * `multiply(A, B, out)`: out = A B, skipping A's zero entries (the controllers' Jacobians and
   task rows are mostly zeros); writes out's leading (rows of A, columns of B) block.
+* `multiply_transposed(A, B, out)`: out = A B^T (Gram matrices, normal equations).
 * `forward_substitute_transposed(R, r, w)`: R^T w = r for upper-triangular R.
 * `cholesky_in_place(A, n)`: the Cholesky factor of A's leading n x n block, in place (the dense
   QP solver factors its Hessian with it).
@@ -157,6 +158,19 @@ def multiply(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
             if a != 0.0:
                 for j in range(n):
                     out[i, j] += a * B[p, j]
+
+
+@kernel
+def multiply_transposed(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
+    """out = A B^T (into out's leading block); every inner loop runs along a row of A and of B."""
+    m, k = A.shape
+    n = B.shape[0]
+    for i in range(m):
+        for j in range(n):
+            s = 0.0
+            for p in range(k):
+                s += A[i, p] * B[j, p]
+            out[i, j] = s
 
 
 @kernel
