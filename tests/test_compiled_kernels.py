@@ -107,8 +107,8 @@ def test_safety_filter_step_kernel_equals_its_python_source_bit_for_bit():
 
 def test_foot_kinematics_kernel_equals_its_python_source_bit_for_bit():
     rng = np.random.default_rng(RNG_SEED)
-    offsets = leg_odometry._offsets()
-    kernel = leg_odometry._foot_kinematics_kernel
+    offsets = leg_odometry.leg_offsets()
+    kernel = leg_odometry.foot_kinematics_kernel
     for _ in range(2000):
         q = rng.uniform(-3.0, 3.0, 12)
         for compiled, reference in zip(kernel(q, offsets), kernel.py_func(q, offsets), strict=True):

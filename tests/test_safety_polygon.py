@@ -3,19 +3,21 @@ capture point's margin to it as result.json reports it."""
 
 import numpy as np
 import pytest
-from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
-from pedi_drake.control.references import safety_polygon_vector, safety_polygon_vertices_W
+from pedi_drake.control.references import SAFETY_POLYGON_SIZE, safety_polygon_vector, safety_polygon_vertices_W
 from pedi_drake.control.whole_body_controller import diagnostics_layout
 from pedi_drake.estimation.base_state import BaseState
+from pedi_drake.estimation.leg_odometry import leg_offsets
 from pedi_drake.evaluation.capture_point import polygon_margin, three_leg_margin
 from pedi_drake.mission.mission_manager import MissionManager
-from pedi_drake.mission.phases import MissionEnvironment, stance_safety_polygon
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.spec import MissionSpec, StandUp
+from pedi_drake.mission.stance_polygon import prong_tips_B, stance_polygon_kernel, stance_safety_polygon
 from pedi_drake.polygon import polygon_halfplanes, shrink_polygon
+from pedi_drake.prongs import ProngDesign
 from pedi_drake.run import run
 from pedi_drake.scenario import load_scenario
 
@@ -28,6 +30,12 @@ def _standing_view(X: RigidTransform = X_WB) -> RobotView:
     base = BaseState(quaternion, X.translation(), np.zeros(3), np.zeros(3))
     zeros = np.zeros(12)
     return RobotView(0.0, base, robot.STANDING_Q.copy(), zeros, zeros, np.full(4, 30.0))
+
+
+def _stance_polygon(view: RobotView, contacts: np.ndarray, tips_B: np.ndarray | None = None) -> np.ndarray:
+    tips_B = prong_tips_B(None) if tips_B is None else tips_B
+    base = view.base
+    return stance_safety_polygon(base.quaternion_wxyz, base.p_WB, view.q, contacts, tips_B, MARGIN)
 
 
 def test_shrunk_triangle_has_every_edge_moved_in_by_the_margin():
@@ -46,7 +54,7 @@ def test_a_margin_beyond_the_inradius_leaves_no_polygon():
 def test_three_foot_stance_polygon_is_the_feet_triangle_shrunk_and_turned_with_the_trunk():
     view = _standing_view()
     contacts = np.array([0.0, 1.0, 1.0, 1.0])  # FR lifted
-    x = stance_safety_polygon(view, MissionEnvironment(None), contacts, MARGIN)
+    x = _stance_polygon(view, contacts)
     assert x[0] == 3
     np.testing.assert_allclose(x[3], 0.6, atol=1e-12)  # the trunk's yaw
     vertices_W = safety_polygon_vertices_W(x)
@@ -62,15 +70,67 @@ def test_three_foot_stance_polygon_is_the_feet_triangle_shrunk_and_turned_with_t
 
 def test_four_foot_stance_polygon_is_the_support_rectangle_shrunk_by_the_margin():
     view = _standing_view()
-    x = stance_safety_polygon(view, MissionEnvironment(None), np.ones(4), MARGIN)
+    x = _stance_polygon(view, np.ones(4))
     assert x[0] == 4
     feet_xy = np.array([view.foot_W(leg)[:2] for leg in robot.LEG_NAMES])
     np.testing.assert_allclose(safety_polygon_vertices_W(x), shrink_polygon(feet_xy, MARGIN), atol=1e-12)
 
 
 def test_fewer_than_three_supports_select_the_controllers_default():
-    x = stance_safety_polygon(_standing_view(), MissionEnvironment(None), np.array([0.0, 1.0, 1.0, 0.0]), MARGIN)
+    x = _stance_polygon(_standing_view(), np.array([0.0, 1.0, 1.0, 0.0]))
     np.testing.assert_array_equal(x, safety_polygon_vector())
+
+
+def _stance_polygon_through_drake(view: RobotView, contacts: np.ndarray, tips_B: np.ndarray) -> np.ndarray:
+    """The same polygon made the slow way, as the manager once made it: the feet and tips through
+    the RobotView's pydrake pose, the shrink, Drake's yaw, the vertices turned by a numpy product."""
+    X_WB = view.X_WB
+    points = [view.foot_W(leg) for k, leg in enumerate(robot.LEG_NAMES) if contacts[k] > 0.5]
+    points += [X_WB @ tip for k, tip in enumerate(tips_B) if contacts[4 + k] > 0.5]
+    if len(points) < 3:
+        return safety_polygon_vector()
+    vertices_W = shrink_polygon(np.array(points)[:, :2], MARGIN)
+    if len(vertices_W) < 3:
+        return safety_polygon_vector()
+    origin = vertices_W.mean(axis=0)
+    yaw = RollPitchYaw(X_WB.rotation()).yaw_angle()
+    c, s = np.cos(yaw), np.sin(yaw)
+    return safety_polygon_vector((vertices_W - origin) @ np.array([[c, -s], [s, c]]), origin, yaw)
+
+
+@pytest.mark.parametrize("prongs", [None, ProngDesign()], ids=["feet", "prongs"])
+def test_compiled_stance_polygon_equals_the_one_made_through_drake(prongs):
+    rng = np.random.default_rng(7)
+    tips_B = prong_tips_B(prongs)
+    defaults = 0
+    for _ in range(300):
+        rpy = RollPitchYaw(rng.uniform(-0.3, 0.3), rng.uniform(-0.3, 0.3), rng.uniform(-np.pi, np.pi))
+        X = RigidTransform(RotationMatrix(rpy), rng.uniform(-1.0, 1.0, 3))
+        view = _standing_view(X)
+        q = robot.STANDING_Q + rng.uniform(-0.3, 0.3, 12)
+        view = RobotView(0.0, view.base, q, view.qd, view.tau, view.foot_force)
+        contacts = (rng.uniform(size=4 + len(tips_B)) < 0.75).astype(float)
+        x = _stance_polygon(view, contacts, tips_B)
+        np.testing.assert_allclose(x, _stance_polygon_through_drake(view, contacts, tips_B), rtol=0, atol=1e-12)
+        defaults += x[0] == 0
+    assert 0 < defaults < 150  # both the default and real polygons were compared
+
+
+def test_compiled_stance_polygon_equals_its_python_source_bit_for_bit():
+    rng = np.random.default_rng(8)
+    tips_B = prong_tips_B(ProngDesign())
+    kernel = stance_polygon_kernel
+    for _ in range(200):
+        quaternion = rng.normal(size=4)
+        p_WB, q = rng.uniform(-1.0, 1.0, 3), robot.STANDING_Q + rng.uniform(-0.5, 0.5, 12)
+        contacts = (rng.uniform(size=8) < 0.8).astype(float)
+        outs = [np.empty(SAFETY_POLYGON_SIZE), np.empty(SAFETY_POLYGON_SIZE)]
+        counts = [
+            k(quaternion, p_WB, q, leg_offsets(), contacts, tips_B, MARGIN, out)
+            for k, out in zip((kernel, kernel.py_func), outs, strict=True)
+        ]
+        assert counts[0] == counts[1]
+        np.testing.assert_array_equal(outs[0], outs[1])
 
 
 def test_the_managers_safety_polygon_output_is_the_measured_stance_shrunk():
@@ -84,7 +144,7 @@ def test_the_managers_safety_polygon_output_is_the_measured_stance_shrunk():
         manager.GetInputPort(name).FixValue(context, np.zeros(12))
     manager.GetInputPort("foot_contact").FixValue(context, view.foot_force)
     simulator.AdvanceTo(0.02)
-    expected = stance_safety_polygon(view, MissionEnvironment(None), np.ones(4), MARGIN)
+    expected = _stance_polygon(view, np.ones(4))
     np.testing.assert_allclose(manager.GetOutputPort("safety_polygon").Eval(context), expected, atol=1e-12)
 
 

@@ -31,7 +31,7 @@ from pedi_drake.control.compiled_stack import (
 from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.tasks import GRAVITY
 from pedi_drake.control.whole_body_tick import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED, held_command
-from pedi_drake.estimation.leg_odometry import _foot_kinematics_kernel, _offsets
+from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
 from pedi_drake.jit import kernel, new_record
 from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rotation_matrix_kernel
 
@@ -150,7 +150,7 @@ def tick_params(
     r["force_weight"] = config.force_regularization_weight
     r["total_weight"] = total_mass * GRAVITY
     r["qp_proximal_weight"] = CONTACT_QP_PROXIMAL_WEIGHT
-    r["leg_offsets"] = _offsets()
+    r["leg_offsets"] = leg_offsets()
     r["diagnostics"] = [diagnostics_layout[name].start for name in DIAGNOSTICS_FIELDS]
     levels = diagnostics_layout["level_residuals"]
     r["max_residuals"] = levels.stop - levels.start
@@ -218,7 +218,7 @@ def _impedance_tasks(tp, s, leg_x, held, foot_row, J, Jdot_v, error, error_rate,
             for k in range(3):
                 joints_ref[3 * i + k] = leg_x[12 * i + 1 + k]
     if any_joints:
-        p_B, J_B = _foot_kinematics_kernel(joints_ref, tp.leg_offsets)
+        p_B, J_B = foot_kinematics_kernel(joints_ref, tp.leg_offsets)
     else:
         p_B, J_B = np.zeros((4, 3)), np.zeros((4, 3, 3))
     row = 0

@@ -37,7 +37,7 @@ from pydrake.systems.framework import Context, DiscreteValues
 from pedi_drake import robot
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.estimation.config import KalmanEstimatorConfig
-from pedi_drake.estimation.leg_odometry import _foot_kinematics_kernel, _offsets
+from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
 from pedi_drake.jit import kernel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
@@ -344,7 +344,7 @@ def _correct_kernel(x, P, columns, coefficients, noise, y):
 @kernel
 def _initial_state_kernel(R_WB, q, xy, offsets, foot_radius):
     """`FloatingBaseKalmanFilter.initial_state` on plain arrays: (x, P)."""
-    p_BF, _ = _foot_kinematics_kernel(q, offsets)
+    p_BF, _ = foot_kinematics_kernel(q, offsets)
     feet_W = np.empty((4, 3))
     lowest = np.inf
     for i in range(4):
@@ -373,7 +373,7 @@ def _update_kernel(
 
     `tips_B` (k, 4): the loaded prong tips' positions in the trunk frame [m] and radii [m].
     """
-    p_BF, J = _foot_kinematics_kernel(q, offsets)
+    p_BF, J = foot_kinematics_kernel(q, offsets)
     columns, coefficients, noise = _measurement_rows(in_contact, tips_B.shape[0], use_height, noise_std)
     y = _measurements_kernel(
         R_WB, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, use_height, foot_radius, tips_B, noise.shape[0]
@@ -506,7 +506,7 @@ class FloatingBaseKalmanFilter:
         # The constants of every tick, as the kernels take them (writable: numba checks a
         # read-only array's type on every call, several microseconds).
         self._tips = np.column_stack([self.prong_tips_B, np.full(len(self.prong_tips_B), self.prong_tip_radius)])
-        self._offsets = np.array(_offsets())
+        self._leg_offsets = np.array(leg_offsets())
         c = config
         self._process_noise_std = np.array(
             [c.position_process_noise, c.accelerometer_noise, c.stance_foot_process_noise, c.swing_foot_process_noise]
@@ -521,7 +521,7 @@ class FloatingBaseKalmanFilter:
             float(c.period),
             float(c.foot_contact_threshold),
             self.p_BI,
-            self._offsets,
+            self._leg_offsets,
             self._tips,
             self.foot_radius,
             self._use_height,
@@ -555,7 +555,7 @@ class FloatingBaseKalmanFilter:
             np.asarray(imu.R_WB, dtype=float),
             np.asarray(q, dtype=float),
             np.asarray(xy, dtype=float),
-            self._offsets,
+            self._leg_offsets,
             self.foot_radius,
         )
 
@@ -610,7 +610,7 @@ class FloatingBaseKalmanFilter:
             np.zeros((4, 3)) if rolling is None else np.asarray(rolling, dtype=float),
             rolling is not None,
             np.ascontiguousarray(tips),
-            self._offsets,
+            self._leg_offsets,
             self._use_height,
             self.foot_radius,
             self._measurement_noise_std,

@@ -20,7 +20,7 @@ from pedi_drake.leg_kinematics import leg_geometry
 
 
 @functools.lru_cache(maxsize=1)
-def _offsets() -> np.ndarray:
+def leg_offsets() -> np.ndarray:
     """(4, 4, 3) per leg (Unitree order): p_BH, p_HT, p_TC, p_CF [m] (read-only)."""
     legs = []
     for leg in robot.LEG_NAMES:
@@ -35,8 +35,8 @@ def _offsets() -> np.ndarray:
 
 
 @kernel
-def _foot_kinematics_kernel(q, offsets):
-    """`foot_kinematics_B` on plain arrays: q (12,) [rad], offsets (4, 4, 3) from `_offsets`."""
+def foot_kinematics_kernel(q, offsets):
+    """`foot_kinematics_B` on plain arrays: q (12,) [rad], offsets (4, 4, 3) from `leg_offsets`."""
     positions = np.empty((4, 3))
     jacobians = np.empty((4, 3, 3))
     for i in range(4):
@@ -67,4 +67,4 @@ def foot_kinematics_B(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
     `q` holds the 12 joint angles in Unitree order [rad].
     """
-    return _foot_kinematics_kernel(np.asarray(q, dtype=float), _offsets())
+    return foot_kinematics_kernel(np.asarray(q, dtype=float), leg_offsets())

@@ -22,7 +22,7 @@ manager tick (the IK updates between the manager's ticks): a phase asks, holds i
 plans its motion when the answers are in (a path of waypoints takes one tick a waypoint).
 
 `safety_polygon` is the capture-point polygon of the current stance (see
-`phases.stance_safety_polygon`), recomputed at every update from the estimated support points.
+`stance_polygon.stance_safety_polygon`), recomputed at every update from the estimated support points.
 
 The live SUF (pedi_drake.suf.live_suf_system) is asked about on `suf_request` (the lifted foot:
 the one a teleop_foot or press phase drives, else the first lifted leg; and the direction of
@@ -59,7 +59,6 @@ from pedi_drake.mission.phases import (
     ReachRunner,
     kind_name,
     receive_ik_answers,
-    stance_safety_polygon,
 )
 from pedi_drake.mission.posture_planner import shared_planner
 from pedi_drake.mission.progress import (
@@ -82,6 +81,7 @@ from pedi_drake.mission.reference_table import (
     warm_up,
 )
 from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.mission.stance_polygon import prong_tips_B, stance_safety_polygon
 from pedi_drake.operator.command import (
     MODE_AUTONOMOUS,
     MODE_SEMI_AUTONOMOUS,
@@ -90,7 +90,6 @@ from pedi_drake.operator.command import (
     OperatorCommand,
 )
 from pedi_drake.operator.feedback import feedback_vector
-from pedi_drake.polygon import shrink_polygon
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.suf.live import SUF_SIZE, LiveSufReading
 from pedi_drake.suf.live_suf_system import suf_request_vector
@@ -150,6 +149,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
         # The posture planner's worker starts here, not in an update (pedi_drake.mission.posture_planner).
         planner = shared_planner() if needs_posture_planner(mission) else None
         self._env = MissionEnvironment(prongs, force_estimate, planner, wait_for_plans)
+        self._prong_tips_B = prong_tips_B(prongs)
         self._friction = friction
         self._safety_margin = float(safety_margin)
         num_contacts = 4 + self._env.num_prongs
@@ -221,9 +221,16 @@ class MissionManager(LeafSystemWithoutWitnesses):
         self.DeclareStateOutputPort("suf_request", self._suf_request)
         self.DeclareStateOutputPort("operator_feedback", self._feedback)
         warm_up(holding)
-        # The stance's safety polygon is shrunk at every update: its kernel is compiled here, not
+        # The stance's safety polygon is made at every update: its kernel is compiled here, not
         # in the first update (on hardware, a first tick late by the compile latches the driver).
-        shrink_polygon(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]), self._safety_margin)
+        stance_safety_polygon(
+            np.array([1.0, 0.0, 0.0, 0.0]),
+            np.zeros(3),
+            np.array(robot.STANDING_Q),
+            np.ones(4 + self._env.num_prongs),
+            self._prong_tips_B,
+            self._safety_margin,
+        )
         # So are the feet's kinematics every RobotView computes.
         foot_kinematics_B(robot.STANDING_Q)
 
@@ -289,7 +296,15 @@ class MissionManager(LeafSystemWithoutWitnesses):
 
     def _set_polygon(self, state, view: RobotView, progress: MissionProgress) -> None:
         """The safety polygon of the stance, and the operator's feedback (both read the view)."""
-        polygon = stance_safety_polygon(view, self._env, progress.references.contacts, self._safety_margin)
+        base = view.base
+        polygon = stance_safety_polygon(
+            base.quaternion_wxyz,
+            base.p_WB,
+            view.q,
+            progress.references.contacts,
+            self._prong_tips_B,
+            self._safety_margin,
+        )
         state.get_mutable_discrete_state(self._polygon).SetFromVector(polygon)
         push, suf = progress.push, view.suf
         feedback = feedback_vector(

@@ -13,7 +13,6 @@ import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
-from pedi_drake.control.references import safety_polygon_vector
 from pedi_drake.exceptions import UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
@@ -41,7 +40,6 @@ from pedi_drake.mission.progress import (
 from pedi_drake.mission.reference_start import foot_reference_start, joint_reference_start
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_foot import TeleopFootRunner
-from pedi_drake.polygon import shrink_polygon
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.suf.posture import Posture, PostureCase
 from pedi_drake.trajectory import (
@@ -113,27 +111,6 @@ def _support_points_W(view: RobotView, env: MissionEnvironment, contacts: np.nda
         if tips:
             points = np.concatenate([points, tips])
     return points
-
-
-def stance_safety_polygon(view: RobotView, env: MissionEnvironment, contacts: np.ndarray, margin: float) -> np.ndarray:
-    """The controller's `safety_polygon` for the loaded contacts (three feet: a triangle).
-
-    Their support polygon (prong tips included) shrunk by `margin` [m], in a frame at the shrunk
-    polygon's vertex centroid turned to the trunk's heading. With fewer than three supports, or
-    nothing left after the shrink, the controller's default (an empty polygon vector).
-    """
-    points = _support_points_W(view, env, contacts)
-    if len(points) < 3:
-        return safety_polygon_vector()
-    vertices_W = shrink_polygon(points[:, :2], margin)
-    if len(vertices_W) < 3:
-        return safety_polygon_vector()
-    origin = vertices_W.sum(axis=0) / len(vertices_W)  # the mean, without np.mean's overhead
-    yaw = RollPitchYaw(view.X_WB.rotation()).yaw_angle()
-    c, s = math.cos(yaw), math.sin(yaw)
-    # Rows are vertices: (v - origin) R_WP, i.e. R_PW (v - origin) for each.
-    vertices_P = (vertices_W - origin) @ np.array([[c, -s], [s, c]])
-    return safety_polygon_vector(vertices_P, origin, yaw)
 
 
 def _trunk_target_for_com(view: RobotView, p_body_ref: np.ndarray, com_xy_goal: np.ndarray) -> np.ndarray:
