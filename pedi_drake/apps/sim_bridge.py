@@ -35,6 +35,7 @@ from pydrake.systems.lcm import LcmInterfaceSystem
 from pydrake.systems.primitives import VectorLogSink
 
 from pedi_drake import robot
+from pedi_drake.apps.status_encoder import StatusEncoder
 from pedi_drake.diagram import apply_mission
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.go1_command import COMMAND_SIZE, pack_command
@@ -123,6 +124,9 @@ class Go1BridgeStatusPublisher(LeafSystemWithoutWitnesses):
                 ("foot_contact", 4),
             )
         ]
+        sizes = [port.size() for port in self._inputs]
+        self._sample_slices = list(zip(np.cumsum([0] + sizes[:-1]).tolist(), sizes, strict=True))
+        self._encoder = StatusEncoder()
         # [ring of samples (depth x 50), newest slot index, tick]
         self._ring = self.DeclareDiscreteState(self._depth * _SAMPLE_SIZE + 2)
         self.DeclareInitializationDiscreteUpdateEvent(self._fill)
@@ -137,12 +141,14 @@ class Go1BridgeStatusPublisher(LeafSystemWithoutWitnesses):
         discrete_state.set_value(self._ring, np.concatenate([np.tile(sample, self._depth), [0.0, 0.0]]))
 
     def _push(self, context, discrete_state: DiscreteValues) -> None:
-        x = context.get_discrete_state(self._ring).get_value().copy()
+        # The update's state starts as a copy of the current one: written in place.
+        x = discrete_state.get_mutable_value(self._ring)
         newest = (int(x[-2]) + 1) % self._depth
-        x[newest * _SAMPLE_SIZE : (newest + 1) * _SAMPLE_SIZE] = self._sample(context)
+        start = newest * _SAMPLE_SIZE
+        for port, (offset, size) in zip(self._inputs, self._sample_slices, strict=True):
+            x[start + offset : start + offset + size] = port.Eval(context)
         x[-2] = newest
         x[-1] += 1
-        discrete_state.set_value(self._ring, x)
 
     def _publish(self, context) -> None:
         x = context.get_discrete_state(self._ring).get_value()
@@ -153,9 +159,9 @@ class Go1BridgeStatusPublisher(LeafSystemWithoutWitnesses):
         oldest = (int(x[-2]) + 1) % self._depth
         sample = x[oldest * _SAMPLE_SIZE : (oldest + 1) * _SAMPLE_SIZE]
         t = context.get_time()
-        leg, estimator = status_messages(sample, tick)
-        self._lcm.Publish(c.LEG_CONTROL_CHANNEL, leg.encode(), t)
-        self._lcm.Publish(c.STATE_ESTIMATOR_CHANNEL, estimator.encode(), t)
+        leg, estimator = self._encoder.encode(sample, tick)
+        self._lcm.Publish(c.LEG_CONTROL_CHANNEL, leg, t)
+        self._lcm.Publish(c.STATE_ESTIMATOR_CHANNEL, estimator, t)
 
 
 def status_messages(sample: np.ndarray, tick: int) -> tuple[leg_control_data_lcmt, state_estimator_lcmt]:
@@ -278,7 +284,7 @@ def main(argv: list[str] | None = None) -> int:
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
     simulator.Initialize()
     try:
-        with realtime_priority(scenario.go1_driver.realtime_priority, who="go1_sim_bridge") as scheduling:
+        with realtime_priority(config.realtime_priority, who="go1_sim_bridge") as scheduling:
             print(f"go1_sim_bridge: running on {lcm.get_lcm_url()} ({scheduling})", flush=True)
             # AdvanceTo needs a finite time: advance in 1 s chunks until the duration (or forever).
             while simulator.get_context().get_time() < args.duration:
