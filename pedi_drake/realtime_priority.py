@@ -8,9 +8,15 @@ the OS refuses). What it did to this project's loop, measured, is in go1_driver/
 
 Every thread of the process is raised, not only the caller: the driver's receive thread must
 stamp status messages promptly, and the threads share the GIL, so a normal-priority thread
-holding it would stall the loop behind the machine's other work. Linux's real-time throttling
-(`/proc/sys/kernel/sched_rt_runtime_us`, by default 95 % of each second) still leaves the rest of
-the machine a share should the loop ever spin.
+holding it would stall the loop behind the machine's other work.
+
+Linux's real-time throttling (`kernel.sched_rt_runtime_us` of every `kernel.sched_rt_period_us`,
+by default 0.95 s of each second) leaves the rest of the machine a share should a loop spin, but
+it also stops, for the rest of the second, real-time threads that need more than that: on a
+slow machine the simulator bridge, which needs most of a core, was stopped for 50 to 70 ms once a
+second, and the driver's status watchdog latched (docs/real_time.md). `rt_throttling()` reads the
+limit; raising a thread warns once while it is on. `sysctl -w kernel.sched_rt_runtime_us=-1`
+lifts it, which a robot computer dedicated to its loops can afford and a shared desktop cannot.
 
 It needs the right to raise priority (root, CAP_SYS_NICE, or an RLIMIT_RTPRIO of at least the
 priority: `ulimit -r`). Without it the loop runs at normal priority and says so; nothing fails.
@@ -25,6 +31,18 @@ _log = logging.getLogger(__name__)
 
 # Highest SCHED_FIFO priority Linux accepts.
 MAX_PRIORITY = 99
+
+
+def rt_throttling(kernel_settings: Path = Path("/proc/sys/kernel")) -> float | None:
+    """The share of each period that Linux lets real-time threads run (0.95 by default), or None
+    when the kernel does not throttle them (or does not say); `kernel_settings`: where the
+    kernel's sched_rt_runtime_us and sched_rt_period_us are read."""
+    try:
+        runtime = int((kernel_settings / "sched_rt_runtime_us").read_text())
+        period = int((kernel_settings / "sched_rt_period_us").read_text())
+    except (OSError, ValueError):
+        return None
+    return None if runtime < 0 or period <= 0 else runtime / period
 
 
 def priority_problem(priority: object) -> str | None:
@@ -71,6 +89,15 @@ def realtime_priority(priority: int, *, who: str):
             _restore(raised)  # all or none: a thread left at normal priority would hold up the others
             raised.clear()
             break
+    share = rt_throttling()
+    if raised and share is not None:
+        _log.warning(
+            "%s: SCHED_FIFO %d; Linux stops real-time threads for the rest of each second once they ran %.2f of it"
+            " (kernel.sched_rt_runtime_us): a loop that needs more is stopped for tens of ms",
+            who,
+            priority,
+            share,
+        )
     try:
         yield granted
     finally:

@@ -327,8 +327,12 @@ class Scenario:
                 "whole_body.period",
                 f"the control period must be the same everywhere, got {periods}",
             )
-        problem = priority_problem(self.go1_driver.realtime_priority)
-        need(problem is None, "go1_driver.realtime_priority", problem or "")
+        for field, priority in (
+            ("go1_driver.realtime_priority", self.go1_driver.realtime_priority),
+            ("go1_driver.bridge.realtime_priority", self.go1_driver.bridge.realtime_priority),
+        ):
+            problem = priority_problem(priority)
+            need(problem is None, field, problem or "")
         for problem in self.kalman.validate(where="kalman"):
             raise ScenarioError(f"{where}: {problem}")
         need(

@@ -7,7 +7,7 @@ import threading
 import pytest
 
 from pedi_drake.exceptions import ScenarioError
-from pedi_drake.realtime_priority import priority_problem, realtime_priority
+from pedi_drake.realtime_priority import priority_problem, realtime_priority, rt_throttling
 from pedi_drake.scenario import load_scenario
 
 # CAP_SYS_NICE's bit in /proc/self/status's CapEff.
@@ -42,6 +42,22 @@ def test_a_bad_priority_in_a_scenario_names_the_field():
     with pytest.raises(ScenarioError, match=r"go1_driver\.realtime_priority: must be an integer from 0"):
         load_scenario(scenario_text="{go1_driver: {realtime_priority: 120}}")
     assert load_scenario(scenario_text="{go1_driver: {realtime_priority: 0}}").go1_driver.realtime_priority == 0
+
+
+def test_the_bridges_own_priority_is_checked_and_defaults_to_normal_scheduling():
+    with pytest.raises(ScenarioError, match=r"go1_driver\.bridge\.realtime_priority: must be an integer from 0"):
+        load_scenario(scenario_text="{go1_driver: {bridge: {realtime_priority: -1}}}")
+    scenario = load_scenario(scenario_text="{go1_driver: {realtime_priority: 50}}")
+    assert scenario.go1_driver.bridge.realtime_priority == 0
+
+
+def test_rt_throttling_reads_the_kernels_share(tmp_path):
+    (tmp_path / "sched_rt_period_us").write_text("1000000\n")
+    (tmp_path / "sched_rt_runtime_us").write_text("950000\n")
+    assert rt_throttling(tmp_path) == pytest.approx(0.95)
+    (tmp_path / "sched_rt_runtime_us").write_text("-1\n")  # throttling off
+    assert rt_throttling(tmp_path) is None
+    assert rt_throttling(tmp_path / "missing") is None
 
 
 def test_priority_zero_leaves_scheduling_alone():

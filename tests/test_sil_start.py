@@ -1,8 +1,8 @@
-"""apps.sil's account of the loop's start, on synthetic logs of the two processes."""
+"""apps.sil's account of the loop's start and of the bridge's pace, on synthetic logs of the two processes."""
 
 import numpy as np
 
-from pedi_drake.apps.sil import start_transient
+from pedi_drake.apps.sil import bridge_pace, start_transient
 from pedi_drake.evaluation.run_logs import SignalLog
 
 PERIOD = 0.002  # [s]
@@ -44,3 +44,20 @@ def test_a_still_robot_has_a_quiet_start():
     start = start_transient(_logs(q, 5.0), _truth(wall, np.full(100, 0.3)), window=0.1)
     assert start["largest_joint_step_rad"] == 0.0
     assert start["true_trunk_sink_m"] == 0.0
+
+
+def test_the_bridges_pace_counts_its_stops():
+    wall = 100.0 + 0.01 * np.arange(300)
+    wall[150:] += 0.055  # stopped for 55 ms, as the kernel's real-time throttling stops it
+    wall[250:] += 0.015  # 25 ms between two samples: behind, but not two samples' worth more
+    pace = bridge_pace({"wall_time": wall})
+    assert pace["gaps"] == 2
+    assert np.isclose(pace["longest_gap_ms"], 65.0)
+    assert np.isclose(pace["median_spacing_ms"], 10.0)
+    assert pace["sample_period_ms"] == 10.0
+
+
+def test_the_bridges_pace_on_time_has_no_gaps():
+    pace = bridge_pace({"wall_time": 100.0 + 0.01 * np.arange(100)})
+    assert pace["gaps"] == 0
+    assert np.isclose(pace["longest_gap_ms"], 10.0)

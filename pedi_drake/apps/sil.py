@@ -36,6 +36,7 @@ import numpy as np
 from pydrake.common.yaml import yaml_load
 
 from pedi_drake import robot
+from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD
 from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.mission.spec import load_mission
@@ -48,6 +49,9 @@ GROUP = "239.255.76.67"
 RUN_SIM = Path(__file__).resolve().parents[2] / "run_sim.py"
 BRIDGE_START_TIMEOUT = 60.0  # [s] for the bridge to build its diagram and start publishing
 START_WINDOW = 0.1  # [s] of the loop's start judged by `start_transient`
+# [s] between two ground-truth samples of the bridge (TRUTH_LOG_PERIOD apart in simulated time)
+# that `bridge_pace` counts as the robot side falling behind: two samples' worth.
+BRIDGE_GAP = 0.02
 # [s] for the operator to finish its log after the controller side ended (then it is stopped).
 OPERATOR_END_TIMEOUT = 30.0
 
@@ -113,6 +117,23 @@ def start_transient(controller_logs: dict, truth: dict, window: float = START_WI
         "largest_joint_step_joint": robot.JOINT_NAMES[largest[0]] if steps.size else None,
         "largest_joint_step_t": float(q.times[largest[1] + 1]) if steps.size else None,
         "true_trunk_sink_m": z_start - lowest,
+    }
+
+
+def bridge_pace(truth: dict, sample_period: float = TRUTH_LOG_PERIOD, gap: float = BRIDGE_GAP) -> dict:
+    """How the robot side kept to real time, from its ground-truth log: a sample every
+    `sample_period` [s] of simulated time, stamped with the host's clock. The median wall time
+    between samples [ms] (the sample period when the bridge keeps up), and the gaps of more than
+    `gap` [s] (the bridge stopped or fell behind: its status messages came late), with the longest
+    [ms]."""
+    spacing = np.diff(truth["wall_time"])
+    if len(spacing) == 0:
+        return {"sample_period_ms": 1000 * sample_period, "median_spacing_ms": None, "gaps": 0, "longest_gap_ms": None}
+    return {
+        "sample_period_ms": 1000 * sample_period,
+        "median_spacing_ms": 1000 * float(np.median(spacing)),
+        "gaps": int(np.count_nonzero(spacing > gap)),
+        "longest_gap_ms": 1000 * float(spacing.max()),
     }
 
 
@@ -212,6 +233,7 @@ def run_sil(
         "foot_errors": true_foot_errors(result, logs, truth),
         "estimator_trunk_position_error": estimator_error(logs, truth),
         "start": start_transient(logs, truth),
+        "bridge_pace": bridge_pace(truth),
         "lcm_url": url,
         "realtime_rate": realtime_rate,
         "bridge_scheduling": bridge_scheduling,
@@ -287,6 +309,13 @@ def main() -> int:
         f"{1000 * start['true_trunk_height_bridge_start_m']:.1f} to "
         f"{1000 * start['true_trunk_height_loop_start_m']:.1f} mm"
     )
+    pace = result["sil"]["bridge_pace"]
+    if pace["median_spacing_ms"] is not None:
+        print(
+            f"bridge: a truth sample every {pace['median_spacing_ms']:.1f} ms of wall time (median; every "
+            f"{pace['sample_period_ms']:.0f} ms when on time), {pace['gaps']} gaps over {1000 * BRIDGE_GAP:.0f} ms, "
+            f"the longest {pace['longest_gap_ms']:.0f} ms"
+        )
     loop = result["driver"]["loop"]
     lateness = loop["lateness_ms"] or {}
     print(

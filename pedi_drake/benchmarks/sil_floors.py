@@ -8,8 +8,10 @@ the controller here, both at real time), judged by the bridge's ground truth. Wi
 the controller is its own program too, `run_sim.py --hardware`, as the README's two terminals run it. Per run: success,
 the driver's latch, the largest true foot error, the loop's deadline misses per 1000 ticks and
 the longest, its lateness, its stalls (gaps of more than two periods between commands: computing
-or waiting, see docs/results.md), and the load average before and after (this machine may be
-shared).
+or waiting, see docs/results.md), the robot side's pace (gaps of its ground-truth log: the bridge
+stopped or fell behind, `apps.sil.bridge_pace`), and the load average before and after (this
+machine may be shared). The JSON's `machine.rt_throttling` is the share of each second Linux
+lets real-time threads run (None: not throttled; see pedi_drake.realtime_priority).
 """
 
 import argparse
@@ -20,6 +22,7 @@ import time
 from pathlib import Path
 
 from pedi_drake.apps.sil import run_sil
+from pedi_drake.realtime_priority import rt_throttling
 
 DEFAULT_MISSIONS = ("hit_target_front", "open_door", "prong_push_box")
 
@@ -52,6 +55,7 @@ def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str 
         "max_true_foot_error_mm": 1e3 * max(errors) if errors else None,
         "estimator_trunk_error_max_mm": 1e3 * sil["estimator_trunk_position_error"]["max_m"],
         "start": sil["start"],
+        "bridge_pace": sil["bridge_pace"],
         "ticks": loop["ticks"],
         "deadline_misses_per_1000": loop["deadline_misses_per_1000"],
         "longest_miss_ms": loop["longest_miss_ms"],
@@ -95,6 +99,7 @@ def main() -> None:
                 f"true foot error {error if error is None else round(error, 1)} mm, "
                 f"misses {row['deadline_misses_per_1000']:.2f}/1000 (longest {row['longest_miss_ms']:.1f} ms), "
                 f"stalls {row['stalls']['computing']} computing / {row['stalls']['waiting']} waiting, "
+                f"bridge gaps {row['bridge_pace']['gaps']}, "
                 f"load {row['load_before']} -> {row['load_after']}",
                 flush=True,
             )
@@ -120,7 +125,12 @@ def main() -> None:
         print(f"{mission:<18}{f'{ok}/{len(mine)}':>10}{worst_rate:21.2f}{longest:19.1f}{worst_error:30.1f}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    machine = {"processor": platform.processor() or platform.machine(), "cpus": os.cpu_count()}
+    machine = {
+        "processor": platform.processor() or platform.machine(),
+        "cpus": os.cpu_count(),
+        # The share of each second Linux lets real-time threads run (None: not throttled).
+        "rt_throttling": rt_throttling(),
+    }
     out.write_text(
         json.dumps(
             {

@@ -15,8 +15,9 @@ against the bridge's ground truth, on the controller's logs, as the lock-step te
 Prints a table (square tracking error max and RMS, violations, fuzz messages sent and rejected by
 reason, switches done, falls, the controller loop's deadline misses per 1000 ticks, the load
 average before and after) and writes the figures as JSON. This machine may be shared: the load
-average says how quiet it was. `--realtime_priority N` runs the controller and the bridge under
-SCHED_FIFO at priority N (the driver's `realtime_priority`), as a robot's computer would.
+average says how quiet it was. `--realtime_priority N` runs the controller's loop under SCHED_FIFO at
+priority N (the driver's `realtime_priority`), as a robot's computer would; the simulator bridge
+keeps its own setting (normal scheduling by default, see Go1BridgeConfig).
 """
 
 import argparse
@@ -60,7 +61,7 @@ def _stream(name: str, seed: int | None, fuzz_count: int):
 
 def one_scenario(name: str, seed: int | None, fuzz_count: int, work: Path, realtime_priority: int = 0) -> dict:
     """Runs scenario `name` at real time over UDP and judges it (module docstring); with
-    `realtime_priority` > 0 the controller and the bridge run under SCHED_FIFO at that priority."""
+    `realtime_priority` > 0 the controller's loop runs under SCHED_FIFO at that priority."""
     mission_name, messages, duration, stream = _stream(name, seed, fuzz_count)
     out_dir = work / name
     log = write_lcm_log(messages, work / f"{name}_operator.lcmlog")

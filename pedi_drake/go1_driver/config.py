@@ -48,6 +48,14 @@ class Go1BridgeConfig:
     latency: float = 0.0
     # Probability that a status tick is not published [-].
     drop_probability: float = 0.0
+    # SCHED_FIFO priority [1-99] of the bridge's threads; 0 (the default): the OS's normal
+    # scheduling. The simulated robot needs most of a core on a slow machine of this project's
+    # kind, and Linux lets real-time threads have at most 0.95 s of every second by default
+    # (/proc/sys/kernel/sched_rt_runtime_us): a bridge under SCHED_FIFO that needs more is stopped
+    # for the rest of each second, 50 to 70 ms, and the driver's status watchdog latches. At
+    # normal scheduling the bridge is never stopped so, and the driver's loop, if it runs under
+    # SCHED_FIFO, still comes first (docs/real_time.md).
+    realtime_priority: int = 0
 
 
 @dataclasses.dataclass
@@ -60,8 +68,8 @@ class Go1DriverConfig:
     # wire for this long before the process leaves [s]: the bridge holds the last command it
     # received, so the last one must be damping, repeated in case a datagram is lost.
     shutdown_damping_duration: float = 0.3
-    # SCHED_FIFO priority [1-99] of every thread of a wall-clock loop: the driver's (controller
-    # side) and the simulator bridge's (robot side); 0: the OS's normal scheduling. Where the OS
+    # SCHED_FIFO priority [1-99] of every thread of the driver's wall-clock loop (controller
+    # side; the simulator bridge has its own, `bridge.realtime_priority`); 0: the OS's normal scheduling. Where the OS
     # refuses (no root, CAP_SYS_NICE or `ulimit -r`), the loop runs at normal priority with a
     # warning, and result.json says which it got (see pedi_drake.realtime_priority). Off by
     # default: with it the semi-autonomous mode's posture plans, computed at normal priority,
@@ -69,5 +77,5 @@ class Go1DriverConfig:
     realtime_priority: int = 0
     # Safety layer bounds and watchdogs.
     safety: Go1SafetyConfig = dataclasses.field(default_factory=Go1SafetyConfig)
-    # The simulator bridge's latency and message drops.
+    # The simulator bridge's latency, message drops and scheduling.
     bridge: Go1BridgeConfig = dataclasses.field(default_factory=Go1BridgeConfig)
