@@ -12,6 +12,7 @@ from pedi_drake.control.whole_body_controller import diagnostics_layout
 from pedi_drake.estimation.base_state import BaseState
 from pedi_drake.estimation.leg_odometry import leg_offsets
 from pedi_drake.evaluation.capture_point import polygon_margin, three_leg_margin
+from pedi_drake.exceptions import PediError
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.spec import MissionSpec, StandUp
@@ -114,6 +115,11 @@ def test_compiled_stance_polygon_equals_the_one_made_through_drake(prongs):
         np.testing.assert_allclose(x, _stance_polygon_through_drake(view, contacts, tips_B), rtol=0, atol=1e-12)
         defaults += x[0] == 0
     assert 0 < defaults < 150  # both the default and real polygons were compared
+
+
+def test_a_contact_vector_of_the_wrong_length_is_refused():
+    with pytest.raises(PediError, match="5 contact flags expected"):
+        _stance_polygon(_standing_view(), np.ones(4), prong_tips_B(ProngDesign())[:1])
 
 
 def test_compiled_stance_polygon_equals_its_python_source_bit_for_bit():

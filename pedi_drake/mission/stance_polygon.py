@@ -100,10 +100,12 @@ def stance_safety_polygon(
     trunk pose estimate (`quaternion_wxyz`, `p_WB` [m]) and the joints `q` [rad]. With fewer than
     three supports, or nothing left after the shrink, the controller's default (zeros).
     """
+    contacts = np.asarray(contacts, dtype=float)
+    if contacts.shape != (4 + len(tips_B),):
+        # The kernel reads one contact flag per foot and prong tip, unchecked.
+        raise PediError(f"stance_safety_polygon: {4 + len(tips_B)} contact flags expected, got shape {contacts.shape}")
     out = np.empty(SAFETY_POLYGON_SIZE)
-    count = stance_polygon_kernel(
-        quaternion_wxyz, p_WB, q, leg_offsets(), np.asarray(contacts, dtype=float), tips_B, float(margin), out
-    )
+    count = stance_polygon_kernel(quaternion_wxyz, p_WB, q, leg_offsets(), contacts, tips_B, float(margin), out)
     if count > SAFETY_POLYGON_MAX_VERTICES:
         raise PediError(f"safety_polygon: {count} vertices; at most {SAFETY_POLYGON_MAX_VERTICES}")
     return out
