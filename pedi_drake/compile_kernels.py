@@ -8,24 +8,33 @@ fills the cache for this version of the package (see `pedi_drake.jit`): a few mi
 a 2-core machine. Processes started afterwards load the kernels in milliseconds.
 
 Run it before starting several processes on an empty cache: test workers, or the workers of a
-batch study (`pedi_drake.batch` does it in its own process before the first task). Otherwise
-every one of them compiles the same kernels at the same time, each paying the minutes, and
-numba's cache is not made for concurrent writers: a worker that loads a kernel while another
-writes it can fail with "no compiled object yet for <Library ...>" (seen with two study workers
-beside two test workers on one fresh cache).
+batch study (`pedi_drake.batch` does it before the first task). Otherwise every one of them
+compiles the same kernels at the same time, each paying the minutes.
+
+It builds the diagrams in two worker processes (`--jobs`, at most the machine's cores), which
+write one cache (`jit` locks its writes). Each kernel's signature is compiled once per worker
+that needs it before the other has saved it, so the work divides only where the variants need
+different kernels: a robot with prongs has six contact points where the plain Go1 has four,
+which gives every controller's tick a second signature, and the two whole-body ticks are the
+largest compiles of all. The workers start on those (`schedule`), then take the next variant as
+each finishes.
 
     python -m pedi_drake.compile_kernels --profile
 
 also prints what the time went to: every kernel compiled at the top level (called from Python,
 not from another kernel), with the signatures it was compiled for and the seconds they took,
 its callees' compilation included. Against an empty cache (`NUMBA_CACHE_DIR` set to a new
-folder) that is the whole compile; against a filled one, nothing.
+folder) that is the whole compile; against a filled one, nothing. The profile is of a compile in
+this one process (`--jobs 1`), where each kernel is compiled once.
 """
 
 import argparse
 import collections
+import concurrent.futures
 import dataclasses
 import logging
+import multiprocessing
+import os
 import sys
 import time
 from collections.abc import Callable
@@ -51,19 +60,66 @@ def variants() -> list[tuple[str, str, bool]]:
     return built + [(mission, "whole_body", True) for mission in HARDWARE_MISSIONS]
 
 
-def compile_kernels() -> float:
-    """Builds every `variants` diagram (compiling what the cache lacks); returns the wall time [s]."""
+def uses_prongs(mission: str) -> bool:
+    """Whether the shipped `mission` runs the robot variant with prongs (more contact points)."""
+    from pedi_drake.mission.spec import load_mission
+
+    robot = load_mission(mission).robot
+    return robot is not None and robot.prongs is not None
+
+
+def schedule(built: list[tuple[str, str, bool]]) -> list[tuple[str, str, bool]]:
+    """`built` (`variants`) in the order the workers take them: first one simulated variant of each
+    controller and robot (each compiles that controller's tick for its contact count), the
+    whole-body controller's first as its ticks take longest to compile; then the rest as listed."""
+    firsts: dict[tuple[int, bool], tuple[str, str, bool]] = {}
+    for variant in built:
+        mission, controller, hardware = variant
+        if not hardware:
+            firsts.setdefault((CONTROLLERS.index(controller), uses_prongs(mission)), variant)
+    leading = [firsts[key] for key in sorted(firsts)]
+    return leading + [variant for variant in built if variant not in leading]
+
+
+def build_variant(mission: str, controller: str, hardware: bool) -> float:
+    """Builds one diagram of `variants`, compiling what the cache lacks; returns the wall time [s]."""
     from pedi_drake.diagram import MakePedipulationDiagram
 
     start = time.perf_counter()
+    scenario = load_scenario()
+    scenario.mission, scenario.controller = mission, controller
+    if hardware:
+        scenario.lcm_buses["go1"].lcm_url = "memq://"  # in-process: nothing goes on the network
+    MakePedipulationDiagram(scenario, hardware=hardware)
+    return time.perf_counter() - start
+
+
+def default_jobs() -> int:
+    """Worker processes for `compile_kernels`: two where there are two cores (see the module)."""
+    return max(1, min(2, os.cpu_count() or 1))
+
+
+def compile_kernels(jobs: int = 1) -> float:
+    """Builds every `variants` diagram (compiling what the cache lacks) in `jobs` processes, this
+    one if 1; returns the wall time [s]."""
+    start = time.perf_counter()
     if not jit.ENABLED:
         return 0.0
-    for mission, controller, hardware in variants():
-        scenario = load_scenario()
-        scenario.mission, scenario.controller = mission, controller
-        if hardware:
-            scenario.lcm_buses["go1"].lcm_url = "memq://"  # in-process: nothing goes on the network
-        MakePedipulationDiagram(scenario, hardware=hardware)
+    if jobs < 1:
+        raise ValueError(f"jobs: expected at least 1 worker process, got {jobs}")
+    if jobs == 1 or not jit.CACHE_WRITES_LOCKED:
+        for variant in variants():
+            build_variant(*variant)
+        return time.perf_counter() - start
+    # Fresh interpreters: a forked copy of a process that has already compiled would share its
+    # numba and LLVM state.
+    context = multiprocessing.get_context("spawn")
+    with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
+        # One variant at a time (futures are taken in the order submitted), so a worker that
+        # finishes early takes the next instead of waiting behind a share fixed in advance.
+        futures = [pool.submit(build_variant, *variant) for variant in schedule(variants())]
+        for future in futures:
+            future.result()
     return time.perf_counter() - start
 
 
@@ -112,8 +168,21 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter, allow_abbrev=False
     )
-    parser.add_argument("--profile", action="store_true", help="print the compile time of every kernel")
+    parser.add_argument(
+        "--profile", action="store_true", help="print the compile time of every kernel (compiles in this process)"
+    )
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        default=None,
+        help=f"worker processes (default {default_jobs()} here; 1 with --profile): see above",
+    )
     args = parser.parse_args(argv)
+    jobs = args.jobs if args.jobs is not None else (1 if args.profile else default_jobs())
+    if jobs < 1:
+        parser.error(f"--jobs: expected at least 1, got {jobs}")
+    if args.profile and jobs != 1:
+        parser.error("--profile records the compile in this process: use it with --jobs 1")
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     state = "compiled" if jit.ENABLED else "not compiled (numba missing or PEDI_DRAKE_JIT=0)"
     if args.profile and jit.ENABLED:
@@ -121,8 +190,9 @@ def main(argv: list[str] | None = None) -> int:
         print_profile(compile_profile(lambda: wall.append(compile_kernels())))
         seconds = wall[0]
     else:
-        seconds = compile_kernels()
-    print(f"pedi_drake kernels {state} in {seconds:.1f} s, cache {jit.cache_folder()}")
+        seconds = compile_kernels(jobs)
+    workers = f"{jobs} processes" if jobs > 1 and jit.CACHE_WRITES_LOCKED else "1 process"
+    print(f"pedi_drake kernels {state} in {seconds:.1f} s ({workers}), cache {jit.cache_folder()}")
     return 0
 
 

@@ -81,6 +81,45 @@ if ENABLED:
     event.register("numba:compile", _CompileNotice())
 
 
+def _lock_cache_writes() -> bool:
+    """Makes numba's cache safe for processes adding entries to one kernel at the same time
+    (`compile_kernels`' workers, two test workers): returns whether the lock is in place.
+
+    numba keeps one index file per kernel that maps each compiled signature to a numbered data
+    file, and adds an entry by reading the index, taking the first free number, writing the index
+    and then the data. Two processes adding different signatures of one kernel at once read the
+    same index, take the same number, and each overwrites the other's data file and index: the
+    index can then name a data file holding another signature's machine code. With an exclusive
+    lock on a file beside the index held around that sequence, the second writer reads the
+    first's index and takes the next number. Readers need no lock: every file is written to a
+    temporary name and renamed into place, and a data file missing from under its index reads as
+    a cache miss."""
+    try:
+        import fcntl
+
+        from numba.core.caching import IndexDataCacheFile
+    except ImportError:  # pragma: no cover - not POSIX, or a numba without this class
+        return False
+    save = IndexDataCacheFile.save
+    if getattr(save, "pedi_drake_locked", False):
+        return True
+    if "_index_path" not in IndexDataCacheFile.__init__.__code__.co_names:
+        return False  # pragma: no cover - another layout of numba's cache files
+
+    def locked_save(self, key, data):
+        with open(f"{self._index_path}.lock", "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            save(self, key, data)
+
+    locked_save.pedi_drake_locked = True
+    locked_save.unlocked = save
+    IndexDataCacheFile.save = locked_save
+    return True
+
+
+CACHE_WRITES_LOCKED = ENABLED and _lock_cache_writes()
+
+
 # One dtype object per distinct structured dtype of the records (see `new_record`).
 _RECORD_DTYPES: dict[np.dtype, np.dtype] = {}
 
