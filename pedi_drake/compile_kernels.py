@@ -11,7 +11,7 @@ Run it before starting several processes on an empty cache: test workers, or the
 batch study (`pedi_drake.batch` does it before the first task). Otherwise every one of them
 compiles the same kernels at the same time, each paying the minutes.
 
-It builds the diagrams in two worker processes (`--jobs`, at most the machine's cores), which
+It builds the diagrams in two worker processes (`--jobs`; by default one per core, at most two), which
 write one cache (`jit` locks its writes). Each kernel's signature is compiled once per worker
 that needs it before the other has saved it, so the work divides only where the variants need
 different kernels: a robot with prongs has six contact points where the plain Go1 has four,
