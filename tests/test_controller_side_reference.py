@@ -11,7 +11,12 @@ commands is intended:
 Speed work on the estimator, mission manager, IK, whole-body controller or driver must leave
 every command within the solver's tolerance of the reference.
 
-It was last recorded when the controllers began to hold damping until their first tick
+It was last recorded when the driver's status receiver began to latch in an unrestricted update,
+so the estimator and the controller use the status of their own tick, a tick sooner than before
+(from tick 1 on the commands differ: up to 0.1 rad in q_des over the open-loop ticks, where the
+controller's joint reference runs against its bound around the measurement, a median of 6 mN m a
+tick in tau_ff). The recording before it was made when the controllers began to hold damping
+until their first tick
 (go1_command.initial_command: the second command on the wire, tick 1, went from kp = kd = 0, a
 limp motor, to kd = 1 N m s/rad; the other 4000 commands stayed within one float32 rounding of
 the recording before, 1.5e-8 rad/s in qd_des, from the recorded status's own last bits). The

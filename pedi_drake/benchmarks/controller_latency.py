@@ -80,7 +80,7 @@ from pedi_drake.wall_clock import WallClock
 # The controller side's stages in the order of a tick, each with the event handlers (and the
 # outputs computed every tick) of its systems.
 STAGES = (
-    ("receive", Go1LcmReceiver, ("_latch",)),
+    ("receive", Go1LcmReceiver, ("_latch_tick",)),
     ("estimate", KalmanEstimator, ("_update",)),
     ("mission", MissionManager, ("_update", "_calc_references", "_calc_body", "_calc_legs")),
     ("suf", LiveSufSystem, ("_on_tick",)),
@@ -110,7 +110,7 @@ PARTS = (
 _SUCCEEDED = EventStatus.Succeeded()
 # `--framework-floor`: every handler of the controller side, a no-op.
 NO_OPS = (
-    (Go1LcmReceiver, "_latch", lambda self, context, state: None),
+    (Go1LcmReceiver, "_latch_tick", lambda self, context, state: None),
     (KalmanEstimator, "_update", lambda self, context, state: None),
     (MissionManager, "_update", lambda self, context, state: None),
     (MissionManager, "_calc_references", lambda self, context, output: None),

@@ -2,9 +2,10 @@
 
 `Go1LcmReceiver` reads one or more `Inbox`es (pedi_drake.go1_driver.link): on the driver the
 link's receive thread fills them, checking, decoding and time-stamping each message as it
-arrives; on the simulator bridge a DrakeLcm subscription does. A periodic update at the control
-rate copies every inbox into one discrete state vector, so outputs are functions of the Context
-only. Messages of the wrong size or fingerprint, that fail to decode or carry NaN, are dropped and
+arrives; on the simulator bridge a DrakeLcm subscription does. A periodic unrestricted update at
+the control rate copies every inbox into one discrete state vector, so outputs are functions of
+the Context only, and the systems that read them at the same tick see that tick's status.
+Messages of the wrong size or fingerprint, that fail to decode or carry NaN, are dropped and
 counted by reason: a foreign publisher on the channel can never crash the driver.
 
 `MakeLcmReceiver` puts a Selector (Drake's, compiled) behind the receiver that splits the latched
@@ -94,11 +95,14 @@ class Go1LcmReceiver(LeafSystemWithoutWitnesses):
         self._selections["message_counts"] = list(range(num_values + k, num_values + 3 * k))
         initial = np.concatenate([*(c.initial_values for c in self._channels), np.full(k, math.inf), np.zeros(2 * k)])
         self._state = self.DeclareDiscreteState(initial)
-        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._latch)
-        # An unrestricted update: the Simulator applies those before any system's discrete
-        # initialisation, so the state estimator's own initialisation already sees the robot's
-        # first status (with a discrete one it would see the receiver's zeros, start from an
-        # unset estimate, and the mission's first update would plan from a trunk at z = 0).
+        # Unrestricted updates: at an instant the Simulator applies those before any system's
+        # discrete update, so the systems that read the receiver (the state estimator, the
+        # controller's joint measurements) use the status latched at the same tick, not the one
+        # a tick older, as they would beside a discrete latch. The same holds at initialisation:
+        # the estimator's own initialisation sees the robot's first status (with a discrete latch
+        # it saw the receiver's zeros, started from an unset estimate, and the mission's first
+        # update planned from a trunk at z = 0).
+        self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._latch_tick)
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.latched = self.DeclareStateOutputPort("latched", self._state)
 
@@ -124,6 +128,9 @@ class Go1LcmReceiver(LeafSystemWithoutWitnesses):
             x[silence] = link.silence(inbox) if link is not None else time.monotonic() - receipt_time
             x[counts] = received
             x[counts + 1] = dropped
+
+    def _latch_tick(self, context, state: State) -> None:
+        self._latch(context, state.get_mutable_discrete_state())
 
     def _initialize(self, context, state: State) -> None:
         if self._wait_timeout > 0.0 and self._link is not None:
