@@ -24,10 +24,16 @@ def _may_raise_priority(priority: int) -> bool:
 
 
 def _policies() -> dict[int, tuple[int, int]]:
-    return {
-        int(tid): (os.sched_getscheduler(int(tid)), os.sched_getparam(int(tid)).sched_priority)
-        for tid in os.listdir("/proc/self/task")
-    }
+    """{thread id: (policy, priority)} of the process's threads that are still alive when asked:
+    a thread listed in /proc can end before its policy is read (the test's own waiting thread,
+    released just before, or a library's worker)."""
+    policies = {}
+    for tid in os.listdir("/proc/self/task"):
+        try:
+            policies[int(tid)] = (os.sched_getscheduler(int(tid)), os.sched_getparam(int(tid)).sched_priority)
+        except ProcessLookupError:
+            continue
+    return policies
 
 
 @pytest.mark.parametrize("value", [-1, 100, 2.5, "50", True, None])
