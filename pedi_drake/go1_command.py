@@ -29,9 +29,8 @@ def pack_command(q_des, qd_des, kp, kd, tau_ff) -> np.ndarray:
 
 def initial_command(kd: float) -> np.ndarray:
     """The command a controller holds before its first tick: no position gain, no torque and `kd`
-    [N m s/rad] of joint damping. On hardware the driver sends its own damping first, then the
-    controller's command of the tick before: starting here, that is damping too, not a limp motor
-    (kp, kd and tau all 0)."""
+    [N m s/rad] of joint damping. A simulated plant applies it in its first step (the controller's
+    first command from the next tick on): damping, not a limp motor (kp, kd and tau all 0)."""
     return pack_command(0.0, 0.0, 0.0, kd, 0.0)
 
 

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.framework import DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import ConstantVectorSource
 
 from pedi_drake import robot
@@ -68,11 +68,14 @@ class LockStep:
         self.driver_simulator.Initialize()
 
     def advance(self, duration: float, period: float = c.BRIDGE_PERIOD) -> None:
-        t = self.driver_context.get_time()
-        for _ in range(int(round(duration / period))):
-            t += period
-            self.bridge_simulator.AdvanceTo(t)
-            self.driver_simulator.AdvanceTo(t)
+        """Runs `duration` [s] of ticks; both stop at the next tick's instant (tick times from an
+        integer count: a sum of periods drifts off them)."""
+        done = int(round(self.driver_context.get_time() / period))
+        for k in range(done + 1, done + 1 + int(round(duration / period))):
+            self.bridge_simulator.AdvanceTo(k * period)
+            self.driver_simulator.AdvanceTo(k * period)
+        # The last tick's command is on the bus, taken in by the next tick's receive: into the log now.
+        self.lcm.HandleSubscriptions(0)
 
     def output(self, name: str) -> np.ndarray:
         return self.driver.GetOutputPort(name).Eval(self.driver_context)
@@ -115,9 +118,12 @@ def test_round_trip_stands_the_robot_up(scenario):
     q = run.output("go1.position_measured")
     np.testing.assert_allclose(q[1::3], 0.9, atol=0.06)  # thighs
     np.testing.assert_allclose(q[2::3], -1.8, atol=0.06)  # calves
-    # Every driver tick reached the bridge, none was malformed, and the bridge applies the latest.
+    # One command a tick on the wire; the bridge took in all but the last two (in lock-step it
+    # receives a command at the end of its step and applies it in the next), none was malformed,
+    # and it applies the latest it took in.
     counts = run.bridge.GetOutputPort("bridge.command_counts").Eval(run.bridge_simulator.get_context())
-    assert counts[1] == 0 and counts[0] >= len(run.wire) - 1 >= 1249
+    assert len(run.wire) == 1250
+    assert counts[1] == 0 and counts[0] >= len(run.wire) - 2
     applied = run.bridge.GetOutputPort("bridge.applied_command").Eval(run.bridge_simulator.get_context())
     np.testing.assert_array_equal(applied, run.wire_commands()[int(counts[0]) - 1])
     # The driver's status stays clean: nothing latched, no malformed status messages.
@@ -157,6 +163,38 @@ def test_malformed_and_foreign_messages_are_dropped_and_counted(scenario):
     assert counts[3] == 1  # state_estimator_data dropped
     assert np.all(np.isfinite(run.output("go1.position_measured")))
     assert run.output("driver.status")[0] == 0
+
+
+class _TickCounter(LeafSystem):
+    """A controller whose command names the tick that computed it: kp = 10 + 0.01 n on every joint
+    at its n-th update (n from 0, one update a tick), kd 1, no torque."""
+
+    def __init__(self, period: float = c.BRIDGE_PERIOD):
+        super().__init__()
+        self._updates = self.DeclareDiscreteState(1)
+        self._command = self.DeclareDiscreteState(pack_command(robot.STANDING_Q, 0.0, 0.0, 1.0, 0.0))
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
+        self.DeclareStateOutputPort("command", self._command)
+
+    def _update(self, context, discrete_state) -> None:
+        n = context.get_discrete_state(self._updates).get_value()[0]
+        discrete_state.get_mutable_vector(self._updates).SetAtIndex(0, n + 1)
+        discrete_state.get_mutable_vector(self._command).SetFromVector(
+            pack_command(robot.STANDING_Q, 0.0, 10.0 + 0.01 * n, 1.0, 0.0)
+        )
+
+
+def test_each_tick_sends_the_command_computed_in_it(scenario):
+    run = LockStep(scenario, _TickCounter())
+    run.advance(0.1)
+    messages = [pd_tau_targets_lcmt.decode(data) for data in run.wire]
+    # One message a tick, stamped with its tick's time, carrying that tick's command (the safety
+    # filter and the sender run after the controller in the same tick).
+    assert len(messages) == 50
+    ticks = np.arange(50)
+    np.testing.assert_array_equal([m.timestamp_us for m in messages], 2000 * ticks)
+    kp = run.wire_commands()[:, 24:36]
+    np.testing.assert_allclose(kp, np.repeat(10.0 + 0.01 * ticks, 12).reshape(50, 12), atol=1e-5)
 
 
 def _last_status(run: LockStep) -> bytes:

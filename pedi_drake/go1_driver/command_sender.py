@@ -1,4 +1,5 @@
-"""Publishes the (already bounded) `go1.command` to the Go1 bridge on `pd_plustau_targets` at 500 Hz.
+"""Publishes the (already bounded) `go1.command` to the Go1 bridge on `pd_plustau_targets` at 500 Hz,
+in the same tick as the controller computed it (after the safety filter: c.COMMAND_SEND_OFFSET).
 
 The 60-vector (q_des, qd_des, kp, kd, tau_ff; Unitree order) becomes a `pd_tau_targets_lcmt`
 in the wire order (q_des, qd_des, tau_ff, kp, kd) via constants.CommandEncoder, through the
@@ -19,7 +20,7 @@ from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 class Go1CommandSender(LeafSystemWithoutWitnesses):
     """command (60) -> pd_plustau_targets, published every `period` [s] (and not at initialisation).
 
-    timestamp_us is the diagram time [us]; id counts the messages, so a log shows gaps.
+    timestamp_us is the diagram time of the tick [us]; id counts the messages, so a log shows gaps.
     """
 
     def __init__(self, link: Go1Link, *, period: float = c.BRIDGE_PERIOD):
@@ -29,9 +30,10 @@ class Go1CommandSender(LeafSystemWithoutWitnesses):
         self._command = self.DeclareVectorInputPort("command", COMMAND_SIZE)
         # Made once: Drake copies the status a handler returns.
         self._succeeded = EventStatus.Succeeded()
-        self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
+        self.DeclarePeriodicPublishEvent(period, c.COMMAND_SEND_OFFSET, self._publish)
 
     def _publish(self, context) -> EventStatus:
-        if not self.link.publish_command(self._command.Eval(context), context.get_time()):
+        tick_time = context.get_time() - c.COMMAND_SEND_OFFSET
+        if not self.link.publish_command(self._command.Eval(context), tick_time):
             return EventStatus.Failed(self, "refusing to publish a non-finite go1.command")
         return self._succeeded

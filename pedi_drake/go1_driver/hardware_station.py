@@ -15,6 +15,12 @@ messages as they arrive and its guard damps a loop that went silent; `hardware_l
 finds it, for `hold_damping` at shutdown and for `report()` (rejected messages by reason, the
 loop's lateness). Run the diagram in real time (Simulator target_realtime_rate = 1): the
 watchdogs use the wall clock.
+
+Within a tick: the receiver latches the newest status (an unrestricted update, before the
+estimator and the controller update from it); then, a few microseconds of diagram time later, the
+safety filter bounds the command the controller computed in this tick, and the sender publishes
+it (constants.SAFETY_FILTER_OFFSET, COMMAND_SEND_OFFSET). A status's joint angles reach the wire
+in the tick that latched them.
 """
 
 from pydrake.lcm import DrakeLcmParams

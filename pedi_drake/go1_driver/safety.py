@@ -27,7 +27,7 @@ from pydrake.systems.framework import BasicVector, DiscreteValues
 from pedi_drake import robot
 from pedi_drake.go1_command import COMMAND_SIZE
 from pedi_drake.go1_driver.config import Go1SafetyConfig
-from pedi_drake.go1_driver.constants import STATUS_CHANNELS
+from pedi_drake.go1_driver.constants import SAFETY_FILTER_OFFSET, STATUS_CHANNELS
 from pedi_drake.jit import kernel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
@@ -514,7 +514,8 @@ class Go1SafetyFilter(LeafSystemWithoutWitnesses):
             _filter_step_kernel(
                 initial.copy(), memory, command, robot_status, self._no_estop, 0.0, 0.0, self._bounds, self._settings
             )
-        self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
+        # After the controller's update of the same tick (see SAFETY_FILTER_OFFSET).
+        self.DeclarePeriodicDiscreteUpdateEvent(config.period, SAFETY_FILTER_OFFSET, self._update)
         self.DeclareStateOutputPort("command", self._published)
         self.DeclareVectorOutputPort("status", _STATUS_SIZE, self._calc_status, {self.xd_ticket()})
 
