@@ -15,6 +15,7 @@ import numpy as np
 from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RollPitchYaw, RotationMatrix
 
+from pedi_drake.apps.status_sample import IMU_QUATERNION
 from pedi_drake.benchmarks.controller_latency import Replay
 
 FIXTURE = Path(__file__).parent / "fixtures" / "controller_side_reference.npz"
@@ -35,18 +36,13 @@ def test_first_mission_update_plans_from_an_estimated_trunk():
     assert abs(body_reference[2] - trunk_height) < 0.005
 
 
-# Columns of a replayed status sample (controller_latency.record_status): q, qd, tau_est (12
-# each), then the IMU (quaternion w, x, y, z; gyro; accelerometer) and the foot sensors.
-_IMU_QUATERNION = slice(36, 40)
-
-
 def test_each_tick_estimates_from_the_status_it_latched():
     reference = np.load(FIXTURE)
     status = reference["status"].astype(float)[:40].copy()
     # Every sample's IMU says a different yaw (1 mrad steps), so the estimate names its sample.
     for k in range(len(status)):
         rotation = RotationMatrix(RollPitchYaw(0.0, 0.0, 0.3 + 1e-3 * k))
-        status[k, _IMU_QUATERNION] = rotation.ToQuaternion().wxyz()
+        status[k, IMU_QUATERNION] = rotation.ToQuaternion().wxyz()
     replay = Replay(str(reference["mission"]), float(reference["period"]), status)
     ticks = 10
     # The replay publishes sample k + 1 before tick k (sample 0 is the start's status), so the

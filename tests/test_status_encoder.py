@@ -5,6 +5,7 @@ import pytest
 
 from pedi_drake.apps.sim_bridge import status_messages
 from pedi_drake.apps.status_encoder import StatusEncoder, field_offsets
+from pedi_drake.apps.status_sample import IMU_QUATERNION, SAMPLE_SIZE
 from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, rc_command_lcmt, state_estimator_lcmt
 
 
@@ -12,8 +13,8 @@ def test_encoded_status_equals_the_generated_messages_bytes():
     rng = np.random.default_rng(3)
     encoder = StatusEncoder()
     for tick in [0, 1, 7, 2**40] + rng.integers(0, 10**6, 200).tolist():
-        sample = rng.normal(scale=5.0, size=50)
-        sample[36:40] = rng.normal(size=4)  # any quaternion: both normalise it
+        sample = rng.normal(scale=5.0, size=SAMPLE_SIZE)
+        sample[IMU_QUATERNION] = rng.normal(size=4)  # any quaternion: both normalise it
         leg, estimator = status_messages(sample, tick)
         assert encoder.encode(sample, tick) == (leg.encode(), estimator.encode())
 

@@ -36,6 +36,14 @@ from pydrake.systems.primitives import VectorLogSink
 
 from pedi_drake import robot
 from pedi_drake.apps.status_encoder import StatusEncoder
+from pedi_drake.apps.status_sample import (
+    IMU_ACCELEROMETER,
+    IMU_GYRO,
+    IMU_QUATERNION,
+    SAMPLE,
+    SAMPLE_SIZE,
+    STATUS_SIGNALS,
+)
 from pedi_drake.diagram import apply_mission
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.go1_command import COMMAND_SIZE, pack_command
@@ -58,9 +66,6 @@ TRUTH_LOG_PERIOD = 0.01
 # Gains with which the bridge holds the initial pose until the first command [N m/rad], [N m s/rad].
 HOLD_KP = 60.0
 HOLD_KD = 2.0
-
-# One status sample: q, qd, tau_est (12 each), imu (10), foot_contact (4).
-_SAMPLE_SIZE = 50
 
 
 class Go1BridgeCommandHold(LeafSystemWithoutWitnesses):
@@ -114,21 +119,15 @@ class Go1BridgeStatusPublisher(LeafSystemWithoutWitnesses):
         self._seed = seed
         self._period = period
         self._depth = int(math.ceil(config.latency / period - 1e-9)) + 1
+        # One input per station output of the sample, named without the "go1." prefix.
         self._inputs = [
-            self.DeclareVectorInputPort(name, size)
-            for name, size in (
-                ("position_measured", 12),
-                ("velocity_measured", 12),
-                ("torque_estimated", 12),
-                ("imu", 10),
-                ("foot_contact", 4),
-            )
+            self.DeclareVectorInputPort(name.removeprefix("go1."), SAMPLE[name].stop - SAMPLE[name].start)
+            for name in STATUS_SIGNALS
         ]
-        sizes = [port.size() for port in self._inputs]
-        self._sample_slices = list(zip(np.cumsum([0] + sizes[:-1]).tolist(), sizes, strict=True))
+        self._sample_slices = [SAMPLE[name] for name in STATUS_SIGNALS]
         self._encoder = StatusEncoder()
         # [ring of samples (depth x 50), newest slot index, tick]
-        self._ring = self.DeclareDiscreteState(self._depth * _SAMPLE_SIZE + 2)
+        self._ring = self.DeclareDiscreteState(self._depth * SAMPLE_SIZE + 2)
         self.DeclareInitializationDiscreteUpdateEvent(self._fill)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._push)
         self.DeclarePeriodicPublishEvent(period, 0.0, self._publish)
@@ -144,9 +143,9 @@ class Go1BridgeStatusPublisher(LeafSystemWithoutWitnesses):
         # The update's state starts as a copy of the current one: written in place.
         x = discrete_state.get_mutable_value(self._ring)
         newest = (int(x[-2]) + 1) % self._depth
-        start = newest * _SAMPLE_SIZE
-        for port, (offset, size) in zip(self._inputs, self._sample_slices, strict=True):
-            x[start + offset : start + offset + size] = port.Eval(context)
+        start = newest * SAMPLE_SIZE
+        for port, rows in zip(self._inputs, self._sample_slices, strict=True):
+            x[start + rows.start : start + rows.stop] = port.Eval(context)
         x[-2] = newest
         x[-1] += 1
 
@@ -157,7 +156,7 @@ class Go1BridgeStatusPublisher(LeafSystemWithoutWitnesses):
         if p > 0.0 and np.random.default_rng([self._seed, tick]).random() < p:
             return
         oldest = (int(x[-2]) + 1) % self._depth
-        sample = x[oldest * _SAMPLE_SIZE : (oldest + 1) * _SAMPLE_SIZE]
+        sample = x[oldest * SAMPLE_SIZE : (oldest + 1) * SAMPLE_SIZE]
         t = context.get_time()
         leg, estimator = self._encoder.encode(sample, tick)
         self._lcm.Publish(c.LEG_CONTROL_CHANNEL, leg, t)
@@ -165,20 +164,19 @@ class Go1BridgeStatusPublisher(LeafSystemWithoutWitnesses):
 
 
 def status_messages(sample: np.ndarray, tick: int) -> tuple[leg_control_data_lcmt, state_estimator_lcmt]:
-    """The two status messages of one 50-value sample, filled as the real bridge fills them."""
+    """The two status messages of one status sample (`status_sample`), filled as the real bridge fills them."""
     leg = leg_control_data_lcmt()
-    leg.q = sample[0:12].tolist()
-    leg.qd = sample[12:24].tolist()
-    leg.tau_est = sample[24:36].tolist()
+    leg.q = sample[SAMPLE["go1.position_measured"]].tolist()
+    leg.qd = sample[SAMPLE["go1.velocity_measured"]].tolist()
+    leg.tau_est = sample[SAMPLE["go1.torque_estimated"]].tolist()
     leg.id = tick
-    imu = sample[36:46]
     estimator = state_estimator_lcmt()
-    quaternion = imu[0:4] / np.linalg.norm(imu[0:4])
+    quaternion = sample[IMU_QUATERNION] / np.linalg.norm(sample[IMU_QUATERNION])
     estimator.quat = quaternion.tolist()
     estimator.rpy = RollPitchYaw(Quaternion(quaternion)).vector().tolist()
-    estimator.omegaBody = imu[4:7].tolist()
-    estimator.aBody = imu[7:10].tolist()
-    estimator.contact_estimate = sample[46:50].tolist()
+    estimator.omegaBody = sample[IMU_GYRO].tolist()
+    estimator.aBody = sample[IMU_ACCELEROMETER].tolist()
+    estimator.contact_estimate = sample[SAMPLE["go1.foot_contact"]].tolist()
     estimator.id = tick
     return leg, estimator
 
@@ -206,8 +204,8 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
     publisher = builder.AddNamedSystem(
         "status_publisher", Go1BridgeStatusPublisher(lcm, config, seed=scenario.random_seed)
     )
-    for name in ("position_measured", "velocity_measured", "torque_estimated", "imu", "foot_contact"):
-        builder.Connect(station.GetOutputPort(f"go1.{name}"), publisher.GetInputPort(name))
+    for name in STATUS_SIGNALS:
+        builder.Connect(station.GetOutputPort(name), publisher.GetInputPort(name.removeprefix("go1.")))
     builder.ExportOutput(hold.GetOutputPort("command"), "bridge.applied_command")
     builder.ExportOutput(receiver.GetOutputPort("message_counts"), "bridge.command_counts")
     builder.ExportOutput(station.GetOutputPort("sim.plant_state"), "sim.plant_state")

@@ -15,6 +15,7 @@ import numpy as np
 from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RollPitchYaw
 
+from pedi_drake.apps.status_sample import IMU_ACCELEROMETER, IMU_GYRO, IMU_QUATERNION, SAMPLE
 from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimator_lcmt
 
 _FINGERPRINT_BYTES = 8
@@ -47,9 +48,9 @@ class _Buffer:
 
 
 class StatusEncoder:
-    """Encodes the bridge's 50-value status sample (q, qd, tau_est, IMU quaternion w x y z, gyro,
-    accelerometer, foot sensors) and its tick into the two status messages' bytes, filled as the
-    real bridge fills them (`sim_bridge.status_messages`)."""
+    """Encodes the bridge's status sample (`status_sample`: q, qd, tau_est, IMU quaternion w x y z,
+    gyro, accelerometer, foot sensors) and its tick into the two status messages' bytes, filled as
+    the real bridge fills them (`sim_bridge.status_messages`)."""
 
     def __init__(self):
         self._leg = _Buffer(leg_control_data_lcmt)
@@ -58,16 +59,16 @@ class StatusEncoder:
     def encode(self, sample: np.ndarray, tick: int) -> tuple[bytes, bytes]:
         """(leg_control_data bytes, state_estimator_data bytes) of `sample` (50,) at `tick`."""
         leg = self._leg.fields
-        leg["q"][:] = sample[0:12]
-        leg["qd"][:] = sample[12:24]
-        leg["tau_est"][:] = sample[24:36]
+        leg["q"][:] = sample[SAMPLE["go1.position_measured"]]
+        leg["qd"][:] = sample[SAMPLE["go1.velocity_measured"]]
+        leg["tau_est"][:] = sample[SAMPLE["go1.torque_estimated"]]
         leg["id"][0] = tick
         estimator = self._estimator.fields
-        quaternion = sample[36:40] / np.linalg.norm(sample[36:40])
+        quaternion = sample[IMU_QUATERNION] / np.linalg.norm(sample[IMU_QUATERNION])
         estimator["quat"][:] = quaternion
         estimator["rpy"][:] = RollPitchYaw(Quaternion(quaternion)).vector()
-        estimator["omegaBody"][:] = sample[40:43]
-        estimator["aBody"][:] = sample[43:46]
-        estimator["contact_estimate"][:] = sample[46:50]
+        estimator["omegaBody"][:] = sample[IMU_GYRO]
+        estimator["aBody"][:] = sample[IMU_ACCELEROMETER]
+        estimator["contact_estimate"][:] = sample[SAMPLE["go1.foot_contact"]]
         estimator["id"][0] = tick
         return bytes(self._leg.data), bytes(self._estimator.data)

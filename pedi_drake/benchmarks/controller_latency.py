@@ -56,6 +56,7 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from pedi_drake.apps.sim_bridge import status_messages
+from pedi_drake.apps.status_sample import STATUS_SIGNALS
 from pedi_drake.benchmarks.station import real_time_factor
 from pedi_drake.control import whole_body_tick
 from pedi_drake.control.whole_body_controller import WholeBodyController
@@ -141,7 +142,7 @@ def _scenario(mission: str, period: float, lcm_url: str = "", qp_backend: str | 
 
 
 def record_status(mission: str, period: float) -> tuple[np.ndarray, dict]:
-    """(samples (n, 50) of the robot's status at every control tick, the simulation's timing)."""
+    """(status samples (n, 50; apps.status_sample) at every control tick, the simulation's timing)."""
     scenario = _scenario(mission, period)
     scenario.simulation_duration = 60.0
     record = simulate(scenario=scenario, name=mission, quiet=True, replay=False)
@@ -150,8 +151,7 @@ def record_status(mission: str, period: float) -> tuple[np.ndarray, dict]:
     # The sample logged at t = 0 precedes the sensors' first update (all zeros): start a tick later.
     ticks = np.arange(period, times[-1], period)
     index = np.searchsorted(times, ticks - 1e-9)
-    parts = ["go1.position_measured", "go1.velocity_measured", "go1.torque_estimated", "go1.imu", "go1.foot_contact"]
-    samples = np.concatenate([logs[name].data[:, index] for name in parts], axis=0).T
+    samples = np.concatenate([logs[name].data[:, index] for name in STATUS_SIGNALS], axis=0).T
     tick_ms = 1e3 * logs["controller.diagnostics"].data[2]
     tick_ms = tick_ms[tick_ms > 0]
     sim = {
