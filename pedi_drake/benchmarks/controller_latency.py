@@ -13,8 +13,11 @@
    Two passes: with the garbage collector as Python leaves it, and as a hardware run runs
    (go1_driver.hardware_run: the heap frozen at the start). Each tick is attributed to what ran
    in it: a garbage collection (gc.callbacks), a mission phase transition, or nothing special.
-   Beside the loop's ticks, the CPU time of the link's receive thread per tick (it decodes the
-   status messages; here it also takes in the replay's own copy of every command sent).
+   A tick is the whole period's work; "to the wire" is the part of it from the status in the inbox
+   to the command's departure (the link's stamp), the latency a robot sees: the driver sends the
+   command within the tick, after the controller, and the period's other work (the log, updates
+   between ticks) comes after it. Beside the loop's ticks, the CPU time of the link's receive
+   thread per tick (it decodes the status messages; here it also takes in the replay's own copy of every command sent).
 3. A timed pass gives each stage's CPU time: the event handlers of every system of the
    controller side (status receivers, estimator, mission manager and its reference outputs, live
    SUF, leg IK, whole-body controller, safety filter, command sender) are wrapped, while that pass's
@@ -247,6 +250,8 @@ class Replay:
         # The loop thread's own CPU time in the tick: wall time far above it means the thread was
         # waiting (preempted by other processes), not computing.
         cpu_ms = np.zeros(ticks)
+        # Each tick's start on the link's clocks, for the time its command took to the wire.
+        start_monotonic, start_cpu = np.zeros(ticks), np.zeros(ticks)
         phase_index = np.zeros(ticks, dtype=int)
         gc_generation = np.full(ticks, -1)
         tick = {"k": 0, "start": 0.0, "cpu_start": 0.0}
@@ -257,6 +262,7 @@ class Replay:
             if stage_times is not None:
                 stage_times["tick"] = k
             tick["k"], tick["start"], tick["cpu_start"] = k, time.perf_counter(), time.thread_time()
+            start_monotonic[k], start_cpu[k] = time.monotonic(), tick["cpu_start"]
 
         def end_of_step(root_context) -> EventStatus:
             cpu_end, end = time.thread_time(), time.perf_counter()
@@ -290,13 +296,29 @@ class Replay:
             self.link.close()
         transition = np.zeros(ticks, dtype=bool)
         transition[1:] = phase_index[1:] != phase_index[:-1]
+        to_wire_ms, to_wire_cpu_ms = self._to_wire(start_monotonic, start_cpu)
         return {
             "tick_ms": tick_ms,
             "cpu_ms": cpu_ms,
+            "to_wire_ms": to_wire_ms,
+            "to_wire_cpu_ms": to_wire_cpu_ms,
             "gc_generation": gc_generation,
             "transition": transition,
             "receive_thread_cpu_ms_per_tick": 1e3 * receive_cpu_s / ticks,
         }
+
+    def _to_wire(self, start_monotonic: np.ndarray, start_cpu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each tick's time from its start (its status in the inbox) to its command's departure
+        (the link's stamp) [ms], in wall and in the loop thread's CPU time; NaN for a tick that
+        sent no command."""
+        timing = self.link.loop_timing
+        ticks = len(start_monotonic)
+        wall, cpu = np.full(ticks, np.nan), np.full(ticks, np.nan)
+        index = np.rint(np.asarray(timing.times) / self.period).astype(int)
+        inside = (index >= 0) & (index < ticks)
+        wall[index[inside]] = 1e3 * (np.asarray(timing.departures)[inside] - start_monotonic[index[inside]])
+        cpu[index[inside]] = 1e3 * (np.asarray(timing.loop_cpu)[inside] - start_cpu[index[inside]])
+        return wall, cpu
 
 
 def _max_or_none(x: np.ndarray) -> float | None:
@@ -312,6 +334,10 @@ def _summary(run: dict, period_ms: float) -> dict:
         "ticks": int(tick.size),
         "tick_ms": _distribution(tick),
         "tick_cpu_ms": _distribution(run["cpu_ms"]),
+        # From the status in the inbox to the command on the wire: the tick's latency.
+        "to_wire_ms": _distribution(run["to_wire_ms"][np.isfinite(run["to_wire_ms"])]),
+        "to_wire_cpu_ms": _distribution(run["to_wire_cpu_ms"][np.isfinite(run["to_wire_cpu_ms"])]),
+        "ticks_without_their_command": int(np.count_nonzero(~np.isfinite(run["to_wire_ms"]))),
         "receive_thread_cpu_ms_per_tick": run["receive_thread_cpu_ms_per_tick"],
         "deadline_misses_per_10000": float(1e4 * np.count_nonzero(late) / tick.size),
         "ticks_with_gc": {f"gen{g}": int(np.count_nonzero(run["gc_generation"] == g)) for g in range(3)},
@@ -651,6 +677,12 @@ def main() -> None:
         print(
             f"{'  CPU time':<18}{cpu['median']:8.3f}{cpu['p99']:8.3f}{cpu['p99_9']:8.3f}{cpu['max']:9.2f}"
             f"  (and the link's receive thread: {row['receive_thread_cpu_ms_per_tick']:.3f} ms a tick)"
+        )
+        wire = row["to_wire_ms"]
+        print(
+            f"{'  to the wire':<18}{wire['median']:8.3f}{wire['p99']:8.3f}{wire['p99_9']:8.3f}{wire['max']:9.2f}"
+            f"{'':10}{wire['median'] / baseline_ms:14.2f}  (status in, command out; "
+            f"{row['ticks_without_their_command']} ticks without)"
         )
     total = sum(stage["mean_ms"] for stage in stages.values())
     print("CPU time per tick by stage (timed pass) [ms]:")

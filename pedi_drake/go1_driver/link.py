@@ -383,6 +383,11 @@ class Go1Link:
         )
         self._thread.start()
 
+    @property
+    def loop_timing(self) -> LoopTiming:
+        """The loop's publications so far, as `report` summarises them (read, do not modify)."""
+        return self._timing
+
     def receive_cpu_time(self) -> float:
         """The CPU time the running receive thread has used so far [s]; 0 without one."""
         thread = self._thread
