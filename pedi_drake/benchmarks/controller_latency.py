@@ -17,7 +17,8 @@
    to the command's departure (the link's stamp), the latency a robot sees: the driver sends the
    command within the tick, after the controller, and the period's other work (the log, updates
    between ticks) comes after it. Beside the loop's ticks, the CPU time of the link's receive
-   thread per tick (it decodes the status messages; here it also takes in the replay's own copy of every command sent).
+   thread per tick (it decodes the status messages; here it also takes in the replay's own copy
+   of every command sent).
 3. A timed pass gives each stage's CPU time: the event handlers of every system of the
    controller side (status receivers, estimator, mission manager and its reference outputs, live
    SUF, leg IK, whole-body controller, safety filter, command sender) are wrapped, while that pass's
