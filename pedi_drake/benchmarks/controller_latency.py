@@ -123,7 +123,7 @@ NO_OPS = (
     (LegIkSystem, "_update", lambda self, context, state: _SUCCEEDED),
     (WholeBodyController, "_update", lambda self, context, state: None),
     (Go1SafetyFilter, "_update", lambda self, context, state: None),
-    (Go1CommandSender, "_publish", lambda self, context: _SUCCEEDED),
+    (Go1CommandSender, "_publish", lambda self, context, state: _SUCCEEDED),
     (WallClock, "_calc", lambda self, context, output: None),
 )
 

@@ -1,5 +1,5 @@
 """Publishes the (already bounded) `go1.command` to the Go1 bridge on `pd_plustau_targets` at 500 Hz,
-in the same tick as the controller computed it (after the safety filter: c.COMMAND_SEND_OFFSET).
+in the same tick as the controller computed it, right after the safety filter bounded it.
 
 The 60-vector (q_des, qd_des, kp, kd, tau_ff; Unitree order) becomes a `pd_tau_targets_lcmt`
 in the wire order (q_des, qd_des, tau_ff, kp, kd) via constants.CommandEncoder, through the
@@ -7,6 +7,12 @@ driver's Go1Link, which stamps each publication against its tick's wall-clock sc
 sender checks nothing: Go1SafetyFilter upstream guarantees the limits. As a last line of defence
 it refuses to publish a non-finite command (the encoder gives no bytes for one; the link's guard
 then damps when the loop stays silent).
+
+The publication is a discrete update with no state, not a publish event: at c.COMMAND_OFFSET
+after each tick the safety filter's unrestricted update bounds the command, and Drake computes the
+discrete updates of an instant after applying its unrestricted ones, so the sender reads the
+command bounded in this tick within the same simulator step. A publish event sees an instant's
+state before its updates, so it would need an instant (a simulator step) of its own.
 """
 
 from pydrake.systems.framework import EventStatus
@@ -27,13 +33,15 @@ class Go1CommandSender(LeafSystemWithoutWitnesses):
         super().__init__()
         # The I/O boundary, kept here so a run can reach it at shutdown (`hardware_link`).
         self.link = link
+        self._period = period
         self._command = self.DeclareVectorInputPort("command", COMMAND_SIZE)
         # Made once: Drake copies the status a handler returns.
         self._succeeded = EventStatus.Succeeded()
-        self.DeclarePeriodicPublishEvent(period, c.COMMAND_SEND_OFFSET, self._publish)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, c.COMMAND_OFFSET, self._publish)
 
-    def _publish(self, context) -> EventStatus:
-        tick_time = context.get_time() - c.COMMAND_SEND_OFFSET
+    def _publish(self, context, _discrete_state) -> EventStatus:
+        # The tick's own time, on the tick grid (the event's time less the offset rounds off it).
+        tick_time = round((context.get_time() - c.COMMAND_OFFSET) / self._period) * self._period
         if not self.link.publish_command(self._command.Eval(context), tick_time):
             return EventStatus.Failed(self, "refusing to publish a non-finite go1.command")
         return self._succeeded

@@ -30,11 +30,12 @@ BRIDGE_PERIOD = 0.002  # [s]
 # The driver's output stage runs within the control tick, after the controller. Drake handles the
 # publish events of an instant before that instant's updates, and computes every discrete update
 # of an instant from the same context: a safety filter and a sender at the tick's own instant
-# would put on the wire the controller's command of two ticks before. A few microseconds of
-# diagram time after the tick, the filter bounds the command computed from the tick's own status
-# and the sender publishes it, in the same period.
-SAFETY_FILTER_OFFSET = 1e-6  # [s] after each tick
-COMMAND_SEND_OFFSET = 2e-6  # [s] after each tick
+# would put on the wire the controller's command of two ticks before. One microsecond of diagram
+# time after the tick, the filter bounds the command computed from the tick's own status in an
+# unrestricted update, and the sender, a discrete update of the same instant (Drake computes those
+# after the unrestricted ones are applied), publishes it: one simulator step for both, where a
+# publish event of its own would take another step a tick.
+COMMAND_OFFSET = 1e-6  # [s] after each tick
 
 # Name of the LCM bus in Scenario.lcm_buses that carries the Go1 traffic, and its default URL
 # (ttl=0: the traffic stays on this host; a real Go1 needs ttl=255).

@@ -17,10 +17,11 @@ loop's lateness). Run the diagram in real time (Simulator target_realtime_rate =
 watchdogs use the wall clock.
 
 Within a tick: the receiver latches the newest status (an unrestricted update, before the
-estimator and the controller update from it); then, a few microseconds of diagram time later, the
-safety filter bounds the command the controller computed in this tick, and the sender publishes
-it (constants.SAFETY_FILTER_OFFSET, COMMAND_SEND_OFFSET). A status's joint angles reach the wire
-in the tick that latched them.
+estimator and the controller update from it); then, one microsecond of diagram time later
+(constants.COMMAND_OFFSET), the safety filter bounds the command the controller computed in this
+tick (an unrestricted update) and the sender publishes it (a discrete update of the same instant,
+which Drake computes after the unrestricted ones). A status's joint angles reach the wire in the
+tick that latched them; a tick takes two simulator steps.
 """
 
 from pydrake.lcm import DrakeLcmParams

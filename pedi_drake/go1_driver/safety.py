@@ -22,12 +22,12 @@ import time
 from collections.abc import Callable
 
 import numpy as np
-from pydrake.systems.framework import BasicVector, DiscreteValues
+from pydrake.systems.framework import BasicVector, State
 
 from pedi_drake import robot
 from pedi_drake.go1_command import COMMAND_SIZE
 from pedi_drake.go1_driver.config import Go1SafetyConfig
-from pedi_drake.go1_driver.constants import SAFETY_FILTER_OFFSET, STATUS_CHANNELS
+from pedi_drake.go1_driver.constants import COMMAND_OFFSET, STATUS_CHANNELS
 from pedi_drake.jit import kernel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 
@@ -514,8 +514,9 @@ class Go1SafetyFilter(LeafSystemWithoutWitnesses):
             _filter_step_kernel(
                 initial.copy(), memory, command, robot_status, self._no_estop, 0.0, 0.0, self._bounds, self._settings
             )
-        # After the controller's update of the same tick (see SAFETY_FILTER_OFFSET).
-        self.DeclarePeriodicDiscreteUpdateEvent(config.period, SAFETY_FILTER_OFFSET, self._update)
+        # After the controller's update of the same tick, and unrestricted so that the sender's
+        # discrete update at the same instant reads the command bounded here (see COMMAND_OFFSET).
+        self.DeclarePeriodicUnrestrictedUpdateEvent(config.period, COMMAND_OFFSET, self._update)
         self.DeclareStateOutputPort("command", self._published)
         self.DeclareVectorOutputPort("status", _STATUS_SIZE, self._calc_status, {self.xd_ticket()})
 
@@ -523,7 +524,8 @@ class Go1SafetyFilter(LeafSystemWithoutWitnesses):
     def limits(self) -> SafetyLimits:
         return self._limits
 
-    def _update(self, context, discrete_state: DiscreteValues) -> None:
+    def _update(self, context, state: State) -> None:
+        discrete_state = state.get_mutable_discrete_state()
         estop = self._estop
         log, latched = _filter_step_kernel(
             discrete_state.get_mutable_value(self._published),
