@@ -4,7 +4,7 @@ bridge in a second process, judged against the bridge's ground truth.
     python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_name NAME]
                                   [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
                                   [--separate]
-                                  [--operator_log FILE]
+                                  [--operator_log FILE] [--callbacks]
 
 Starts `python -m pedi_drake.apps.sim_bridge --mission M --truth_log ...` (the robot side,
 real time, 500 Hz), then runs the mission here exactly as `run_sim.py --hardware` does (driver,
@@ -21,9 +21,15 @@ This process then only starts, waits and judges.
 `--operator_log FILE` adds an operator in a third process, as a person would run one:
 `python -m pedi_drake.apps.teleop_lcm --lcm_log FILE --start_on_feedback` on the same bus, which
 plays the log's messages on the controller's clock (the scenario needs `operator: {source: lcm}`).
+
+`--callbacks` times the controller side's Python callbacks (pedi_drake.callback_profile) and keeps
+those over 1 ms of the loop's CPU time, and the garbage collections over 1 ms, each with its
+diagram time: beside the driver's stalls (their tick times and the loop's CPU time in each), what
+a late tick computed. The timers add about a microsecond to each call.
 """
 
 import argparse
+import contextlib
 import json
 import os
 import signal
@@ -37,6 +43,8 @@ from pydrake.common.yaml import yaml_load
 
 from pedi_drake import robot
 from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD
+from pedi_drake.callback_profile import slow_calls
+from pedi_drake.cpu_steal import steal_seconds
 from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.mission.spec import load_mission
@@ -54,6 +62,8 @@ START_WINDOW = 0.1  # [s] of the loop's start judged by `start_transient`
 BRIDGE_GAP = 0.02
 # [s] for the operator to finish its log after the controller side ended (then it is stopped).
 OPERATOR_END_TIMEOUT = 30.0
+# [s] of the loop's CPU time over which `--callbacks` keeps a call (a control period is 2 ms).
+SLOW_CALL = 0.001
 
 
 def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[dict]:
@@ -147,6 +157,7 @@ def run_sil(
     separate: bool = False,
     operator_log: Path | None = None,
     records: list | None = None,
+    callbacks: bool = False,
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
@@ -156,9 +167,14 @@ def run_sil(
     the module docstring) instead of in this one.
     `operator_log`: an LCM log of operator messages, played by an operator process (module docstring).
     `records`: the controller side's RunRecord is appended to it (pedi_drake.run.run).
+    `callbacks`: the controller side's Python callbacks that took more than SLOW_CALL of the loop's
+    CPU time, and the collections longer than it, go into the result (`sil.slow_calls`,
+    pedi_drake.callback_profile): what the late ticks computed.
     """
     if separate and not RUN_SIM.is_file():
         raise ConfigError(f"--separate: needs run_sim.py beside the package (a source checkout); no {RUN_SIM}")
+    if separate and callbacks:
+        raise ConfigError("--callbacks: times the controller side in this process; drop --separate")
     if separate and realtime_rate != 1.0:
         raise ConfigError("--separate: run_sim.py --hardware runs at real time only; drop --realtime_rate")
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
@@ -204,18 +220,21 @@ def run_sil(
                 stderr=subprocess.STDOUT,
                 text=True,
             )
+        steal_before = steal_seconds()
         if separate:
             result = _run_controller_program(mission, scenario_name, text, url, out_dir)
         else:
-            result = run(
-                scenario=scenario,
-                name=mission,
-                out_dir=out_dir,
-                quiet=True,
-                hardware=True,
-                realtime_rate=realtime_rate,
-                records=records,
-            )
+            with slow_calls(SLOW_CALL) if callbacks else contextlib.nullcontext() as calls:
+                result = run(
+                    scenario=scenario,
+                    name=mission,
+                    out_dir=out_dir,
+                    quiet=True,
+                    hardware=True,
+                    realtime_rate=realtime_rate,
+                    records=records,
+                )
+        steal_after = steal_seconds()
     finally:
         if bridge.poll() is None:
             bridge.send_signal(signal.SIGTERM)
@@ -239,10 +258,32 @@ def run_sil(
         "bridge_scheduling": bridge_scheduling,
         "controller": "run_sim.py --hardware (own process)" if separate else "in the sil process",
     }
+    if steal_before is not None and steal_after is not None:
+        # What the hypervisor took from this machine's CPUs while the controller side ran (both
+        # processes' cores): time a thread may have been charged as its own (pedi_drake.cpu_steal).
+        result["sil"]["cpu_steal_ms"] = 1e3 * (steal_after - steal_before)
+    if callbacks:
+        result["sil"]["slow_calls"] = calls.summary()
     if operator is not None:
         result["sil"]["operator"] = {"returncode": operator.returncode, "output": operator_output.strip()}
     (out_dir / "sil.json").write_text(json.dumps(result["sil"], indent=2))
     return result
+
+
+def slow_calls_text(summary: dict, count: int = 5) -> str:
+    """Lines for `sil.slow_calls` (SlowCalls.summary): the costliest calls and collections."""
+    lines = [
+        f"callbacks over {summary['threshold_ms']:.1f} ms of CPU: {summary['calls_over_threshold']}; "
+        f"collections over it: {summary['collections_over_threshold']}"
+    ]
+    for call in summary["costliest_calls"][:count]:
+        lines.append(
+            f"  t = {call['t']:.3f} s  {call['callback']}: {call['cpu_ms']:.2f} ms CPU, {call['wall_ms']:.2f} ms wall"
+        )
+    for collection in summary["longest_collections"][:count]:
+        when = "while building" if collection["t"] is None else f"t = {collection['t']:.3f} s"
+        lines.append(f"  {when}  collection of generation {collection['generation']}: {collection['wall_ms']:.2f} ms")
+    return "\n".join(lines)
 
 
 def _run_controller_program(mission: str, scenario_name: str, text: str, url: str, out_dir: Path) -> dict:
@@ -278,10 +319,18 @@ def main() -> int:
         "--separate", action="store_true", help="the controller as its own program, run_sim.py --hardware (README)"
     )
     parser.add_argument("--operator_log", default=None, help="LCM log of operator messages, played by an operator")
+    parser.add_argument(
+        "--callbacks", action="store_true", help="record the controller side's callbacks over 1 ms of CPU time"
+    )
     args = parser.parse_args()
     out_dir = Path(args.out or f"out/sil_{Path(args.mission).stem}")
     try:
-        options = {"scenario_name": args.scenario_name, "separate": args.separate, "operator_log": args.operator_log}
+        options = {
+            "scenario_name": args.scenario_name,
+            "separate": args.separate,
+            "operator_log": args.operator_log,
+            "callbacks": args.callbacks,
+        }
         result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate, **options)
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)
@@ -336,6 +385,10 @@ def main() -> int:
         )
     )
     print(f"scheduling: controller {loop['scheduling']}, bridge {result['sil']['bridge_scheduling']}")
+    if result["sil"].get("cpu_steal_ms") is not None:
+        print(f"CPU time the hypervisor took from this machine meanwhile: {result['sil']['cpu_steal_ms']:.0f} ms")
+    if "slow_calls" in result["sil"]:
+        print(slow_calls_text(result["sil"]["slow_calls"]))
     print(f"wrote {out_dir / 'sil.json'}")
     return 0 if result["success"] else 1
 

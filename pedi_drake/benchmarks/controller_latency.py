@@ -57,11 +57,12 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import EventStatus, LeafSystem
+from pydrake.systems.framework import EventStatus
 
 from pedi_drake.apps.sim_bridge import status_messages
 from pedi_drake.apps.status_sample import STATUS_SIGNALS
 from pedi_drake.benchmarks.station import real_time_factor
+from pedi_drake.callback_profile import wrapped_callbacks
 from pedi_drake.control import whole_body_tick
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.diagram import MakePedipulationDiagram
@@ -402,19 +403,9 @@ def stage_timers(ticks: int):
             setattr(cls, name, method)
 
 
-# LeafSystem declarations whose callback `callback_timers` wraps: (position, keyword) of the callback.
-_CALLBACK_ARGUMENTS = {
-    "DeclareVectorOutputPort": (2, "calc"),
-    "DeclareAbstractOutputPort": (2, "calc"),
-    "DeclarePeriodicDiscreteUpdateEvent": (2, "update"),
-    "DeclarePeriodicUnrestrictedUpdateEvent": (2, "update"),
-    "DeclarePeriodicPublishEvent": (2, "publish"),
-}
-
-
 @contextlib.contextmanager
 def callback_timers(ticks: int):
-    """While active, systems built get every Python callback declared through `_CALLBACK_ARGUMENTS`
+    """While active, systems built get every Python callback (pedi_drake.callback_profile.DECLARATIONS)
     timed: yields ({"System.port" or "System periodic ...": (ticks,) CPU ms}, the same of call
     counts), with "tick" to be set to the running tick (Replay.run does). A callback that
     evaluates another's output is charged its own time only. The timers add about a
@@ -445,29 +436,8 @@ def callback_timers(ticks: int):
 
         return wrapper
 
-    def declaring(method: str, declare):
-        position, keyword = _CALLBACK_ARGUMENTS[method]
-        what = method.removeprefix("Declare").removesuffix("Event")
-
-        def declare_timed(system, *args, **kwargs):
-            label = args[0] if method.endswith("OutputPort") else what
-            key = f"{type(system).__name__} {label}"
-            if len(args) > position and callable(args[position]):
-                args = (*args[:position], timed(key, args[position]), *args[position + 1 :])
-            elif callable(kwargs.get(keyword)):
-                kwargs[keyword] = timed(key, kwargs[keyword])
-            return declare(system, *args, **kwargs)
-
-        return declare_timed
-
-    originals = {method: getattr(LeafSystem, method) for method in _CALLBACK_ARGUMENTS}
-    for method, declare in originals.items():
-        setattr(LeafSystem, method, declaring(method, declare))
-    try:
+    with wrapped_callbacks(timed):
         yield times, calls
-    finally:
-        for method, declare in originals.items():
-            setattr(LeafSystem, method, declare)
 
 
 def _callback_table(times: dict, calls: dict, cpu_ms: np.ndarray) -> dict:

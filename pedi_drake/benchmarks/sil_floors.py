@@ -1,7 +1,7 @@
 """Software in the loop at real time, repeated: how often each mission succeeds over the wire.
 
     python -m pedi_drake.benchmarks.sil_floors [--missions hit_target_front open_door prong_push_box]
-        [--runs 5] [--scenario_name default] [--separate] [--out benchmarks/results/sil_floors.json]
+        [--runs 5] [--scenario_name default] [--separate | --callbacks] [--out benchmarks/results/sil_floors.json]
 
 Each run is `python -m pedi_drake.apps.sil --mission M` (the simulator bridge in its own process,
 the controller here, both at real time), judged by the bridge's ground truth. With `--separate`
@@ -12,6 +12,10 @@ or waiting, see docs/results.md), the robot side's pace (gaps of its ground-trut
 stopped or fell behind, `apps.sil.bridge_pace`), and the load average before and after (this
 machine may be shared). The JSON's `machine.rt_throttling` is the share of each second Linux
 lets real-time threads run (None: not throttled; see pedi_drake.realtime_priority).
+
+`--callbacks` runs each mission with `apps.sil --callbacks`: every run also keeps the controller
+side's callbacks and garbage collections over 1 ms (`slow_calls`), and the summary prints, per
+run, the costliest of them beside the longest stalls: what the late ticks computed.
 """
 
 import argparse
@@ -21,7 +25,7 @@ import platform
 import time
 from pathlib import Path
 
-from pedi_drake.apps.sil import run_sil
+from pedi_drake.apps.sil import run_sil, slow_calls_text
 from pedi_drake.realtime_priority import rt_throttling
 
 DEFAULT_MISSIONS = ("hit_target_front", "open_door", "prong_push_box")
@@ -40,10 +44,18 @@ def _live_suf_figures(summary: dict | None) -> dict | None:
     return {key: summary.get(key) for key in keys}
 
 
-def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str = "{}", separate: bool = False) -> dict:
+def one_run(
+    mission: str,
+    scenario_name: str,
+    out_dir: Path,
+    scenario_text: str = "{}",
+    separate: bool = False,
+    callbacks: bool = False,
+) -> dict:
     load_before = _load()
     start = time.monotonic()
-    result = run_sil(mission, out_dir, scenario_text=scenario_text, scenario_name=scenario_name, separate=separate)
+    options = {"scenario_name": scenario_name, "separate": separate, "callbacks": callbacks}
+    result = run_sil(mission, out_dir, scenario_text=scenario_text, **options)
     driver, sil = result["driver"], result["sil"]
     errors = [row["true_error_m"] for row in sil["foot_errors"]]
     loop = driver["loop"]
@@ -70,6 +82,8 @@ def one_run(mission: str, scenario_name: str, out_dir: Path, scenario_text: str 
         "wall_s": time.monotonic() - start,
         "load_before": load_before,
         "load_after": _load(),
+        "slow_calls": sil.get("slow_calls"),
+        "cpu_steal_ms": sil.get("cpu_steal_ms"),
     }
 
 
@@ -84,14 +98,19 @@ def main() -> None:
     parser.add_argument(
         "--separate", action="store_true", help="the controller as its own program, run_sim.py --hardware (README)"
     )
+    parser.add_argument(
+        "--callbacks", action="store_true", help="keep the controller side's callbacks over 1 ms (apps.sil --callbacks)"
+    )
     parser.add_argument("--work", default="out/sil_floors", help="folder of the runs' outputs")
     parser.add_argument("--out", default="benchmarks/results/sil_floors.json")
     args = parser.parse_args()
+    if args.separate and args.callbacks:
+        parser.error("--callbacks times the controller side in this process: not with --separate")
     rows = []
     for run in range(args.runs):  # interleaved, so machine load affects every mission alike
         for mission in args.missions:
             work = Path(args.work) / f"{mission}_{run}"
-            row = one_run(mission, args.scenario_name, work, args.scenario_text, args.separate)
+            row = one_run(mission, args.scenario_name, work, args.scenario_text, args.separate, args.callbacks)
             rows.append(row)
             error = row["max_true_foot_error_mm"]
             print(
@@ -100,9 +119,17 @@ def main() -> None:
                 f"misses {row['deadline_misses_per_1000']:.2f}/1000 (longest {row['longest_miss_ms']:.1f} ms), "
                 f"stalls {row['stalls']['computing']} computing / {row['stalls']['waiting']} waiting, "
                 f"bridge gaps {row['bridge_pace']['gaps']}, "
+                f"CPU stolen {row['cpu_steal_ms']} ms, "
                 f"load {row['load_before']} -> {row['load_after']}",
                 flush=True,
             )
+            if row["slow_calls"] is not None:
+                stalls = row["stalls"]["longest"][:3]
+                print(
+                    "  longest stalls: "
+                    + ", ".join(f"t = {x['t']:.3f} s {x['gap_ms']:.1f} ms ({x['loop_cpu_ms']:.1f} CPU)" for x in stalls)
+                )
+                print(slow_calls_text(row["slow_calls"], count=3), flush=True)
     print(
         f"{'mission':<18}{'successes':>10}{'misses/1000 (worst)':>21}{'longest miss [ms]':>19}"
         f"{'true foot error (worst) [mm]':>30}"
@@ -137,6 +164,7 @@ def main() -> None:
                 "scenario_name": args.scenario_name,
                 "scenario_text": args.scenario_text,
                 "separate": args.separate,
+                "callbacks": args.callbacks,
                 "machine": machine,
                 "summary": summary,
                 "runs": rows,
