@@ -4,7 +4,7 @@ bridge in a second process, judged against the bridge's ground truth.
     python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_name NAME]
                                   [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
                                   [--separate]
-                                  [--operator_log FILE] [--callbacks]
+                                  [--operator_log FILE] [--callbacks] [--pin]
 
 Starts `python -m pedi_drake.apps.sim_bridge --mission M --truth_log ...` (the robot side,
 real time, 500 Hz), then runs the mission here exactly as `run_sim.py --hardware` does (driver,
@@ -26,6 +26,10 @@ plays the log's messages on the controller's clock (the scenario needs `operator
 those over 1 ms of the loop's CPU time, and the garbage collections over 1 ms, each with its
 diagram time: beside the driver's stalls (their tick times and the loop's CPU time in each), what
 a late tick computed. The timers add about a microsecond to each call.
+
+`--pin` runs the bridge on the last CPU this process may use and the controller side on the
+others (Linux CPU affinity; `sil.json`'s `cpus` says which): on a 2-core machine each process
+keeps a core of its own instead of the kernel moving them between the two.
 """
 
 import argparse
@@ -158,6 +162,7 @@ def run_sil(
     operator_log: Path | None = None,
     records: list | None = None,
     callbacks: bool = False,
+    pin: bool = False,
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
@@ -170,11 +175,14 @@ def run_sil(
     `callbacks`: the controller side's Python callbacks that took more than SLOW_CALL of the loop's
     CPU time, and the collections longer than it, go into the result (`sil.slow_calls`,
     pedi_drake.callback_profile): what the late ticks computed.
+    `pin`: the bridge runs on this process's last CPU and the controller side on the others
+    (`pinned_cpus`), so that neither is moved onto the other's CPU.
     """
     if separate and not RUN_SIM.is_file():
         raise ConfigError(f"--separate: needs run_sim.py beside the package (a source checkout); no {RUN_SIM}")
     if separate and callbacks:
         raise ConfigError("--callbacks: times the controller side in this process; drop --separate")
+    cpus = pinned_cpus(sorted(os.sched_getaffinity(0))) if pin else None
     if separate and realtime_rate != 1.0:
         raise ConfigError("--separate: run_sim.py --hardware runs at real time only; drop --realtime_rate")
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
@@ -199,6 +207,12 @@ def run_sil(
         stderr=subprocess.STDOUT,
         text=True,
     )
+    own_cpus = os.sched_getaffinity(0)
+    if cpus is not None:
+        # Threads the bridge starts from now on inherit its CPU; so do those of the controller side
+        # (in this process, or its own program started from here).
+        os.sched_setaffinity(bridge.pid, cpus["bridge"])
+        os.sched_setaffinity(0, cpus["controller"])
     try:
         start = time.monotonic()
         line, said = "", []
@@ -236,6 +250,7 @@ def run_sil(
                 )
         steal_after = steal_seconds()
     finally:
+        os.sched_setaffinity(0, own_cpus)
         if bridge.poll() is None:
             bridge.send_signal(signal.SIGTERM)
         bridge.communicate(timeout=120)
@@ -257,6 +272,7 @@ def run_sil(
         "realtime_rate": realtime_rate,
         "bridge_scheduling": bridge_scheduling,
         "controller": "run_sim.py --hardware (own process)" if separate else "in the sil process",
+        "cpus": None if cpus is None else {side: sorted(ids) for side, ids in cpus.items()},
     }
     if steal_before is not None and steal_after is not None:
         # What the hypervisor took from this machine's CPUs while the controller side ran (both
@@ -268,6 +284,15 @@ def run_sil(
         result["sil"]["operator"] = {"returncode": operator.returncode, "output": operator_output.strip()}
     (out_dir / "sil.json").write_text(json.dumps(result["sil"], indent=2))
     return result
+
+
+def pinned_cpus(available: list[int]) -> dict[str, set[int]]:
+    """`--pin`: {"bridge": the last of the `available` CPUs, "controller": the others}."""
+    if len(available) < 2:
+        raise ConfigError(
+            f"--pin: needs two CPUs to put the bridge and the controller apart; this process may use {available}"
+        )
+    return {"bridge": {available[-1]}, "controller": set(available[:-1])}
 
 
 def slow_calls_text(summary: dict, count: int = 5) -> str:
@@ -322,6 +347,7 @@ def main() -> int:
     parser.add_argument(
         "--callbacks", action="store_true", help="record the controller side's callbacks over 1 ms of CPU time"
     )
+    parser.add_argument("--pin", action="store_true", help="the bridge on the last CPU, the controller on the others")
     args = parser.parse_args()
     out_dir = Path(args.out or f"out/sil_{Path(args.mission).stem}")
     try:
@@ -330,6 +356,7 @@ def main() -> int:
             "separate": args.separate,
             "operator_log": args.operator_log,
             "callbacks": args.callbacks,
+            "pin": args.pin,
         }
         result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate, **options)
     except ConfigError as error:

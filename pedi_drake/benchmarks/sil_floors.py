@@ -1,7 +1,8 @@
 """Software in the loop at real time, repeated: how often each mission succeeds over the wire.
 
     python -m pedi_drake.benchmarks.sil_floors [--missions hit_target_front open_door prong_push_box]
-        [--runs 5] [--scenario_name default] [--separate | --callbacks] [--out benchmarks/results/sil_floors.json]
+        [--runs 5] [--scenario_name default] [--separate | --callbacks] [--pin]
+        [--out benchmarks/results/sil_floors.json]
 
 Each run is `python -m pedi_drake.apps.sil --mission M` (the simulator bridge in its own process,
 the controller here, both at real time), judged by the bridge's ground truth. With `--separate`
@@ -16,6 +17,7 @@ lets real-time threads run (None: not throttled; see pedi_drake.realtime_priorit
 `--callbacks` runs each mission with `apps.sil --callbacks`: every run also keeps the controller
 side's callbacks and garbage collections over 1 ms (`slow_calls`), and the summary prints, per
 run, the costliest of them beside the longest stalls: what the late ticks computed.
+`--pin` runs them with `apps.sil --pin` (the bridge and the controller on CPUs of their own).
 """
 
 import argparse
@@ -51,10 +53,11 @@ def one_run(
     scenario_text: str = "{}",
     separate: bool = False,
     callbacks: bool = False,
+    pin: bool = False,
 ) -> dict:
     load_before = _load()
     start = time.monotonic()
-    options = {"scenario_name": scenario_name, "separate": separate, "callbacks": callbacks}
+    options = {"scenario_name": scenario_name, "separate": separate, "callbacks": callbacks, "pin": pin}
     result = run_sil(mission, out_dir, scenario_text=scenario_text, **options)
     driver, sil = result["driver"], result["sil"]
     errors = [row["true_error_m"] for row in sil["foot_errors"]]
@@ -84,6 +87,7 @@ def one_run(
         "load_after": _load(),
         "slow_calls": sil.get("slow_calls"),
         "cpu_steal_ms": sil.get("cpu_steal_ms"),
+        "cpus": sil.get("cpus"),
     }
 
 
@@ -101,6 +105,7 @@ def main() -> None:
     parser.add_argument(
         "--callbacks", action="store_true", help="keep the controller side's callbacks over 1 ms (apps.sil --callbacks)"
     )
+    parser.add_argument("--pin", action="store_true", help="the bridge and the controller on CPUs of their own")
     parser.add_argument("--work", default="out/sil_floors", help="folder of the runs' outputs")
     parser.add_argument("--out", default="benchmarks/results/sil_floors.json")
     args = parser.parse_args()
@@ -110,7 +115,9 @@ def main() -> None:
     for run in range(args.runs):  # interleaved, so machine load affects every mission alike
         for mission in args.missions:
             work = Path(args.work) / f"{mission}_{run}"
-            row = one_run(mission, args.scenario_name, work, args.scenario_text, args.separate, args.callbacks)
+            row = one_run(
+                mission, args.scenario_name, work, args.scenario_text, args.separate, args.callbacks, args.pin
+            )
             rows.append(row)
             error = row["max_true_foot_error_mm"]
             print(
@@ -165,6 +172,7 @@ def main() -> None:
                 "scenario_text": args.scenario_text,
                 "separate": args.separate,
                 "callbacks": args.callbacks,
+                "pin": args.pin,
                 "machine": machine,
                 "summary": summary,
                 "runs": rows,
