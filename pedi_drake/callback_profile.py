@@ -90,7 +90,7 @@ class SlowCalls:
 
 
 @contextlib.contextmanager
-def slow_calls(threshold: float = 1e-3):
+def slow_calls(threshold: float):
     """While active, systems built get their callbacks timed, and collections are watched: yields
     the SlowCalls that fills as the diagram runs. Build and run the diagram inside it. `threshold` [s]."""
     record = SlowCalls(threshold)
