@@ -8,14 +8,16 @@ references", "WholeBodyController PeriodicDiscreteUpdate"): build the diagram in
 
 `slow_calls(threshold)` uses it to keep only what a run at real time needs to explain its late
 ticks: every call that took more than `threshold` of the loop thread's CPU time, with the diagram
-time it ran at, and every garbage collection that took more than `threshold` of wall time. A call
-costs about a microsecond more timed; nothing is kept for the calls under the threshold.
+time it ran at and the page faults the loop thread took in it, and every garbage collection that
+took more than `threshold` of wall time. A call costs a microsecond or two more timed; nothing is
+kept for the calls under the threshold.
 (`pedi_drake.benchmarks.controller_latency --callbacks` times every call of a replay, tick by tick.)
 """
 
 import contextlib
 import dataclasses
 import gc
+import resource
 import time
 from collections.abc import Callable
 
@@ -62,11 +64,11 @@ def wrapped_callbacks(wrap: Callable[[str, Callable], Callable]):
 
 @dataclasses.dataclass
 class SlowCalls:
-    """What `slow_calls` kept: calls [(t [s], key, CPU ms, wall ms)] and collections
+    """What `slow_calls` kept: calls [(t [s], key, CPU ms, wall ms, page faults)] and collections
     [(t [s] of the last call before it, or None before any call, generation, wall ms)]."""
 
     threshold_s: float
-    calls: list[tuple[float, str, float, float]] = dataclasses.field(default_factory=list)
+    calls: list[tuple[float, str, float, float, int]] = dataclasses.field(default_factory=list)
     collections: list[tuple[float | None, int, float]] = dataclasses.field(default_factory=list)
     # The diagram time of the last call that started: when a collection ran (None: before any call,
     # while the diagram was built).
@@ -80,7 +82,8 @@ class SlowCalls:
             "threshold_ms": 1e3 * self.threshold_s,
             "calls_over_threshold": len(self.calls),
             "costliest_calls": [
-                {"t": t, "callback": key, "cpu_ms": cpu, "wall_ms": wall} for t, key, cpu, wall in calls
+                {"t": t, "callback": key, "cpu_ms": cpu, "wall_ms": wall, "page_faults": faults}
+                for t, key, cpu, wall, faults in calls
             ],
             "collections_over_threshold": len(self.collections),
             "longest_collections": [
@@ -96,17 +99,25 @@ def slow_calls(threshold: float):
     record = SlowCalls(threshold)
     clock, cpu_clock = time.perf_counter, time.thread_time
 
+    def thread_faults() -> int:
+        # Minor and major: a first touch of memory the hypervisor had taken back is a minor fault
+        # that can cost a loop more than its computation.
+        usage = resource.getrusage(resource.RUSAGE_THREAD)
+        return usage.ru_minflt + usage.ru_majflt
+
     def wrap(key: str, callback):
         def timed(*args, **kwargs):
             context = args[0]
             record.last_time = context.get_time()
-            cpu_start, wall_start = cpu_clock(), clock()
+            faults_start, cpu_start, wall_start = thread_faults(), cpu_clock(), clock()
             try:
                 return callback(*args, **kwargs)
             finally:
                 cpu = cpu_clock() - cpu_start
                 if cpu > threshold:
-                    record.calls.append((record.last_time, key, 1e3 * cpu, 1e3 * (clock() - wall_start)))
+                    wall = clock() - wall_start
+                    faults = thread_faults() - faults_start
+                    record.calls.append((record.last_time, key, 1e3 * cpu, 1e3 * wall, faults))
 
         return timed
 

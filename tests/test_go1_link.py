@@ -10,6 +10,7 @@ import threading
 import time
 from pathlib import Path
 
+import lcm
 import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
@@ -362,3 +363,20 @@ def test_every_exit_of_a_hardware_run_leaves_damping_on_the_wire(fake_robot, tmp
     # The last stiff command was followed by damping, repeated for the shutdown duration.
     tail = arrivals[np.flatnonzero(~damping)[-1] + 1 :]
     assert tail.size >= 50 and tail[-1] - tail[0] >= 0.25, "".join(lines)
+
+
+def test_a_link_keeps_what_it_published_only_when_asked_and_wakes_no_receiver():
+    bus = lcm.LCM("memq://")
+    link = Go1Link(bus, Go1DriverConfig(), url="memq://", threaded=False)
+    command = np.concatenate([np.full(12, 0.1), np.zeros(12), np.full(12, 20.0), np.full(12, 0.5), np.zeros(12)])
+    assert link.publish_command(command, 0.002)
+    assert link.sent_messages is None
+    link.keep_sent_messages()
+    assert link.publish_command(command, 0.004)
+    assert link.publish_command(2 * command, 0.006)
+    decode = c.CHANNEL_TYPES[c.COMMAND_CHANNEL].decode
+    kept = [c.message_to_command(decode(data)) for data in link.sent_messages]
+    np.testing.assert_array_equal(kept, [command, 2 * command])
+    assert [decode(data).timestamp_us for data in link.sent_messages] == [4000, 6000]
+    # Kept by the link, not by a subscriber: nothing waits on the bus to be handled.
+    assert bus.handle_timeout(0) == 0

@@ -303,7 +303,8 @@ def slow_calls_text(summary: dict, count: int = 5) -> str:
     ]
     for call in summary["costliest_calls"][:count]:
         lines.append(
-            f"  t = {call['t']:.3f} s  {call['callback']}: {call['cpu_ms']:.2f} ms CPU, {call['wall_ms']:.2f} ms wall"
+            f"  t = {call['t']:.3f} s  {call['callback']}: {call['cpu_ms']:.2f} ms CPU, {call['wall_ms']:.2f} ms wall, "
+            f"{call['page_faults']} page faults"
         )
     for collection in summary["longest_collections"][:count]:
         when = "while building" if collection["t"] is None else f"t = {collection['t']:.3f} s"

@@ -17,8 +17,9 @@
    to the command's departure (the link's stamp), the latency a robot sees: the driver sends the
    command within the tick, after the controller, and the period's other work (the log, updates
    between ticks) comes after it. Beside the loop's ticks, the CPU time of the link's receive
-   thread per tick (it decodes the status messages; here it also takes in the replay's own copy
-   of every command sent).
+   thread per tick (it decodes the status messages). The commands sent are kept by the link
+   (`Go1Link.keep_sent_messages`), not by a subscriber on its bus, which would wake the receive
+   thread in every tick as a hardware run's does not.
 3. A timed pass gives each stage's CPU time: the event handlers of every system of the
    controller side (status receivers, estimator, mission manager and its reference outputs, live
    SUF, leg IK, whole-body controller, safety filter, command sender) are wrapped, while that pass's
@@ -201,8 +202,9 @@ class Replay:
         # As a run does (pedi_drake.run): the log never grows in a tick.
         self.built.reserve_logs(self.simulator.get_mutable_context(), len(samples) * period)
         self.manager = self.diagram.GetSubsystemByName("mission")
-        self.commands: list[np.ndarray] = []
-        self.bus.subscribe(c.COMMAND_CHANNEL, lambda _c, data: self.commands.append(data))
+        # The commands are kept by the link, not taken from the bus: a subscriber there would wake
+        # the receive thread at every command, in the middle of the tick being timed.
+        self.link.keep_sent_messages()
 
     def _publish(self, k: int) -> None:
         leg, estimator = status_messages(self.samples[min(k, len(self.samples) - 1)], k)
@@ -226,7 +228,7 @@ class Replay:
     def sent_commands(self) -> np.ndarray:
         """(n, 60) the commands published so far, decoded from the wire."""
         decode = c.CHANNEL_TYPES[c.COMMAND_CHANNEL].decode
-        return np.array([c.message_to_command(decode(data)) for data in self.commands])
+        return np.array([c.message_to_command(decode(data)) for data in self.link.sent_messages])
 
     def run(self, ticks: int, stage_times: dict | None = None) -> dict:
         """Times `ticks` ticks; returns tick times [ms] and what happened in each.

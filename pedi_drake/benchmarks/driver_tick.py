@@ -14,8 +14,8 @@ what the tick costs beyond the stages is Drake's framework (event dispatch, port
 Without the whole-body controller between two ticks, the code and data of these stages stay in
 the processor's caches: the numbers are their cost when warm. `--evict-mb N` walks through N MB
 of memory before every tick, as a controller's tick would, to show the cost when cold.
-`--wake-on-command` subscribes to the command channel on the link's bus, as controller_latency's
-replay does to record what was sent: the link's receive thread then wakes at every publication
+`--wake-on-command` subscribes to the command channel on the link's bus, as a process that records
+what was sent on its own bus would: the link's receive thread then wakes at every publication
 of the loop (on a real bus nothing in the driver's process subscribes to it, and LCM does not
 wake the thread for a channel without a subscriber).
 """
@@ -122,7 +122,7 @@ def main() -> None:
     parser.add_argument("--ticks", type=int, default=4000)
     parser.add_argument("--evict-mb", type=float, default=0.0, help="memory walked through before each tick [MB]")
     parser.add_argument(
-        "--wake-on-command", action="store_true", help="subscribe to the command channel (as the replay does)"
+        "--wake-on-command", action="store_true", help="subscribe to the command channel (a recorder on the link's bus)"
     )
     parser.add_argument("--out", default="benchmarks/results/driver_tick.json")
     args = parser.parse_args()

@@ -343,6 +343,8 @@ class Go1Link:
         self._shutdown_published = 0
         self._message_id = 0
         self._encoder = c.CommandEncoder()
+        # Every message published, when a replay asked for them (keep_sent_messages).
+        self.sent_messages: list[bytes] | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -446,7 +448,17 @@ class Go1Link:
             return False
         self._message_id += 1
         self._transport.publish(c.COMMAND_CHANNEL, data)
+        if self.sent_messages is not None:
+            self.sent_messages.append(data)
         return True
+
+    def keep_sent_messages(self) -> None:
+        """From now on every message this link publishes (the loop's and the guard's) is also kept
+        in `sent_messages`, in order. For a replay that checks what went on the wire: a subscriber
+        to the command channel on the link's own bus would wake the receive thread at every
+        command, work a hardware run's driver does not do (nothing in its process subscribes)."""
+        if self.sent_messages is None:
+            self.sent_messages = []
 
     def _damping(self) -> np.ndarray:
         values = self.leg_control.snapshot()[0]
