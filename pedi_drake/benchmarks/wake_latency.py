@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pedi_drake.cpu_steal import steal_seconds
 from pedi_drake.go1_driver.link import distribution_ms, lateness_against_earliest
 from pedi_drake.realtime_priority import realtime_priority
 
@@ -42,15 +43,6 @@ LATE_REPORTED = 0.005  # [s] lateness counted per minute
 def _busy() -> None:
     while True:
         pass
-
-
-def _steal_seconds() -> float:
-    """Steal time of all cores so far [s] (/proc/stat; 0 where there is none)."""
-    path = Path("/proc/stat")
-    if not path.exists():
-        return 0.0
-    fields = path.read_text().splitlines()[0].split()
-    return int(fields[8]) / os.sysconf("SC_CLK_TCK") if len(fields) > 8 else 0.0
 
 
 def spin(iterations: int) -> int:
@@ -115,12 +107,12 @@ def condition(seconds: float, period: float, priority: int, load: int, work_iter
         process.start()
     try:
         time.sleep(0.5 if load else 0.0)  # the load running before the clock starts
-        steal = _steal_seconds()
+        steal = steal_seconds() or 0.0
         with realtime_priority(priority, who="wake_latency") as scheduling:
             if scheduling.startswith("refused"):
                 return {"priority": priority, "load": load, "scheduling": scheduling}
             ticks = paced_loop(seconds, period, work_iterations)
-        steal = _steal_seconds() - steal
+        steal = (steal_seconds() or 0.0) - steal
     finally:
         for process in busy:
             process.terminate()
