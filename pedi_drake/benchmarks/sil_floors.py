@@ -11,8 +11,12 @@ the driver's latch, the largest true foot error, the loop's deadline misses per 
 the longest, its lateness, its stalls (gaps of more than two periods between commands: computing
 or waiting, see docs/results.md), the robot side's pace (gaps of its ground-truth log: the bridge
 stopped or fell behind, `apps.sil.bridge_pace`), and the load average before and after (this
-machine may be shared). The JSON's `machine.rt_throttling` is the share of each second Linux
-lets real-time threads run (None: not throttled; see pedi_drake.realtime_priority).
+machine may be shared). Each run is judged against the floors a hardware swap is held to
+(`meets_floors`: succeeded, no damping latched, every true foot error under FOOT_ERROR_FLOOR_MM,
+fewer than MISSES_FLOOR_PER_1000 deadline misses per 1000 ticks and none longer than
+LONGEST_MISS_FLOOR_MS), and the summary counts the runs that met them. The JSON's
+`machine.rt_throttling` is the share of each second Linux lets real-time threads run (None: not
+throttled; see pedi_drake.realtime_priority).
 
 `--callbacks` runs each mission with `apps.sil --callbacks`: every run also keeps the controller
 side's callbacks and garbage collections over 1 ms (`slow_calls`), and the summary prints, per
@@ -31,6 +35,24 @@ from pedi_drake.apps.sil import run_sil, slow_calls_text
 from pedi_drake.realtime_priority import rt_throttling
 
 DEFAULT_MISSIONS = ("hit_target_front", "open_door", "prong_push_box")
+
+# The floors of a run at real time.
+FOOT_ERROR_FLOOR_MM = 5.0  # every true foot error under it [mm]
+MISSES_FLOOR_PER_1000 = 1.0  # deadline misses per 1000 ticks, under it
+LONGEST_MISS_FLOOR_MS = 10.0  # no miss longer [ms]
+
+
+def meets_floors(row: dict) -> bool:
+    """Whether a run (a row of `one_run`) met every floor (see the module docstring)."""
+    error = row["max_true_foot_error_mm"]
+    return (
+        row["success"]
+        and row["latched"] is None
+        and error is not None
+        and error < FOOT_ERROR_FLOOR_MM
+        and row["deadline_misses_per_1000"] < MISSES_FLOOR_PER_1000
+        and row["longest_miss_ms"] <= LONGEST_MISS_FLOOR_MS
+    )
 
 
 def _load() -> list[str] | None:
@@ -62,7 +84,7 @@ def one_run(
     driver, sil = result["driver"], result["sil"]
     errors = [row["true_error_m"] for row in sil["foot_errors"]]
     loop = driver["loop"]
-    return {
+    row = {
         "mission": mission,
         "success": bool(result["success"]),
         "reason": result["reason"],
@@ -89,6 +111,8 @@ def one_run(
         "cpu_steal_ms": sil.get("cpu_steal_ms"),
         "cpus": sil.get("cpus"),
     }
+    row["meets_floors"] = meets_floors(row)
+    return row
 
 
 def main() -> None:
@@ -127,7 +151,8 @@ def main() -> None:
                 f"stalls {row['stalls']['computing']} computing / {row['stalls']['waiting']} waiting, "
                 f"bridge gaps {row['bridge_pace']['gaps']}, "
                 f"CPU stolen {row['cpu_steal_ms']} ms, "
-                f"load {row['load_before']} -> {row['load_after']}",
+                f"load {row['load_before']} -> {row['load_after']}"
+                f"{', meets the floors' if row['meets_floors'] else ''}",
                 flush=True,
             )
             if row["slow_calls"] is not None:
@@ -139,7 +164,7 @@ def main() -> None:
                 print(slow_calls_text(row["slow_calls"], count=3), flush=True)
     print(
         f"{'mission':<18}{'successes':>10}{'misses/1000 (worst)':>21}{'longest miss [ms]':>19}"
-        f"{'true foot error (worst) [mm]':>30}"
+        f"{'true foot error (worst) [mm]':>30}{'met the floors':>16}"
     )
     summary = {}
     for mission in args.missions:
@@ -149,14 +174,19 @@ def main() -> None:
         longest = max(row["longest_miss_ms"] for row in mine)
         errors = [row["max_true_foot_error_mm"] for row in mine if row["max_true_foot_error_mm"] is not None]
         worst_error = max(errors) if errors else float("nan")
+        met = sum(row["meets_floors"] for row in mine)
         summary[mission] = {
             "successes": ok,
             "runs": len(mine),
             "worst_misses_per_1000": worst_rate,
             "longest_miss_ms": longest,
             "worst_true_foot_error_mm": worst_error,
+            "runs_meeting_floors": met,
         }
-        print(f"{mission:<18}{f'{ok}/{len(mine)}':>10}{worst_rate:21.2f}{longest:19.1f}{worst_error:30.1f}")
+        print(
+            f"{mission:<18}{f'{ok}/{len(mine)}':>10}{worst_rate:21.2f}{longest:19.1f}{worst_error:30.1f}"
+            f"{f'{met}/{len(mine)}':>16}"
+        )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     machine = {
