@@ -10,8 +10,8 @@ def test_a_pass_writes_every_page_of_the_buffer_once_without_faulting_it_in():
     assert [row["idle_s"] for row in rows] == [0.0, 0.01]
     for row in rows:
         assert row["pages"] == (4 << 20) // mmap.PAGESIZE
-        # The pages are the process's own before the pass: what faults remain is the pass's own
-        # array of times, not the buffer's pages.
-        assert row["page_faults"] < row["pages"] // 4
+        # The pages are the process's own before the pass, and so is the array of times: the few
+        # faults left are the interpreter's own first touches, not one per page of the buffer.
+        assert row["page_faults"] < row["pages"] // 8
         assert 0.0 < row["median_us"] <= 1e3 * row["longest_ms"]
         assert row["very_slow_per_100mb"] <= row["slow_per_100mb"]

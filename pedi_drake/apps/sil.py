@@ -25,7 +25,8 @@ plays the log's messages on the controller's clock (the scenario needs `operator
 `--callbacks` times the controller side's Python callbacks (pedi_drake.callback_profile) and keeps
 those over 1 ms of the loop's CPU time, and the garbage collections over 1 ms, each with its
 diagram time: beside the driver's stalls (their tick times and the loop's CPU time in each), what
-a late tick computed. The timers add about a microsecond to each call.
+a late tick computed, and the page faults the loop thread took in each call. The timers add a
+microsecond or two to each call.
 
 `--pin` runs the bridge on the last CPU this process may use and the controller side on the
 others (Linux CPU affinity; `sil.json`'s `cpus` says which): on a 2-core machine each process

@@ -33,15 +33,14 @@ def _faults() -> int:
     return usage.ru_minflt + usage.ru_majflt
 
 
-def timed_pass(pages: np.ndarray) -> np.ndarray:
-    """Writes one byte of each page of `pages` (a uint8 view, one row a page); each write's time [s]."""
-    times = np.empty(len(pages))
+def timed_pass(pages: np.ndarray, times: np.ndarray) -> None:
+    """Writes one byte of each page of `pages` (a uint8 view, one row a page), each write's time
+    [s] into `times` (made before the pass, so that the pass touches no memory new to it)."""
     clock = time.perf_counter
     for k in range(len(pages)):
         start = clock()
         pages[k, 0] += 1
         times[k] = clock() - start
-    return times
 
 
 def run(megabytes: int, idle_times: list[float], rounds: int) -> list[dict]:
@@ -51,13 +50,14 @@ def run(megabytes: int, idle_times: list[float], rounds: int) -> list[dict]:
     buffer = mmap.mmap(-1, megabytes << 20)
     pages = np.frombuffer(buffer, dtype=np.uint8).reshape(-1, mmap.PAGESIZE)
     pages[:, 0] = 1  # every page the process's own before any pass is timed
+    times = np.zeros(len(pages))
     per_100mb = 100 / megabytes
     rows = []
     for idle in idle_times:
         for round_index in range(rounds):
             time.sleep(idle)
             faults, cpu, wall = _faults(), time.process_time(), time.perf_counter()
-            times = timed_pass(pages)
+            timed_pass(pages, times)
             wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
             rows.append(
                 {

@@ -55,6 +55,10 @@ def meets_floors(row: dict) -> bool:
     )
 
 
+def _steal_text(steal_ms: float | None) -> str:
+    return "unknown" if steal_ms is None else f"{steal_ms:.0f} ms"
+
+
 def _load() -> list[str] | None:
     path = Path("/proc/loadavg")
     return path.read_text().split()[:3] if path.exists() else None
@@ -150,7 +154,7 @@ def main() -> None:
                 f"misses {row['deadline_misses_per_1000']:.2f}/1000 (longest {row['longest_miss_ms']:.1f} ms), "
                 f"stalls {row['stalls']['computing']} computing / {row['stalls']['waiting']} waiting, "
                 f"bridge gaps {row['bridge_pace']['gaps']}, "
-                f"CPU stolen {row['cpu_steal_ms']} ms, "
+                f"CPU stolen {_steal_text(row['cpu_steal_ms'])}, "
                 f"load {row['load_before']} -> {row['load_after']}"
                 f"{', meets the floors' if row['meets_floors'] else ''}",
                 flush=True,
