@@ -50,7 +50,7 @@ def run(megabytes: int, idle_times: list[float], rounds: int) -> list[dict]:
     buffer = mmap.mmap(-1, megabytes << 20)
     pages = np.frombuffer(buffer, dtype=np.uint8).reshape(-1, mmap.PAGESIZE)
     pages[:, 0] = 1  # every page the process's own before any pass is timed
-    times = np.zeros(len(pages))
+    times = np.full(len(pages), 0.0)  # written, so that its pages are the process's too
     per_100mb = 100 / megabytes
     rows = []
     for idle in idle_times:
