@@ -23,6 +23,7 @@ from pedi_drake.evaluation.judge import judge_run, write_run
 from pedi_drake.evaluation.out_dir import claim_out_dir
 from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.go1_driver.hardware_run import hardware_run
+from pedi_drake.go1_driver.pacing import SpinPacedMonitor
 from pedi_drake.interrupt import StopRequest
 from pedi_drake.mission.progress import FAILED, RUNNING, SUCCEEDED, MissionProgress
 from pedi_drake.operator.message_stream import TimedMessage
@@ -105,7 +106,12 @@ def simulate(
     monitor = _MissionMonitor(diagram, manager, built.mission, scenario.simulation_duration, quiet, stop)
     simulator.set_monitor(monitor)
     # On hardware every exit of the loop (its end, a stop request, an exception) leaves damping on the wire.
-    with hardware_run(diagram, realtime_rate=realtime_rate) if hardware else contextlib.nullcontext():
+    with hardware_run(diagram, realtime_rate=realtime_rate) if hardware else contextlib.nullcontext() as link:
+        if link is not None and link.config.wait == "spin":
+            # The loop busy-waits for its periods (pedi_drake.go1_driver.pacing) instead of the
+            # Simulator sleeping to them.
+            simulator.set_target_realtime_rate(0.0)
+            simulator.set_monitor(SpinPacedMonitor(monitor, realtime_rate, link))
         simulator.Initialize()
         recording = meshcat is not None and not hardware
         if recording:

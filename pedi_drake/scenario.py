@@ -29,6 +29,7 @@ from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.exceptions import ProngDesignError, ScenarioError
 from pedi_drake.go1_driver.config import Go1DriverConfig
 from pedi_drake.go1_driver.constants import DEFAULT_GO1_LCM_URL, GO1_BUS_NAME
+from pedi_drake.go1_driver.pacing import wait_problem
 from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.realtime_priority import priority_problem
@@ -333,6 +334,8 @@ class Scenario:
         ):
             problem = priority_problem(priority)
             need(problem is None, field, problem or "")
+        problem = wait_problem(self.go1_driver.wait)
+        need(problem is None, "go1_driver.wait", problem or "")
         for problem in self.kalman.validate(where="kalman"):
             raise ScenarioError(f"{where}: {problem}")
         need(

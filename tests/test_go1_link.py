@@ -33,6 +33,7 @@ from pedi_drake.go1_driver.link import (
     LoopTiming,
     loop_stalls,
 )
+from pedi_drake.go1_driver.pacing import SpinPacedMonitor
 from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.scenario import load_scenario
 
@@ -261,6 +262,28 @@ def test_the_guard_damps_a_hung_loop_within_command_timeout(fake_robot, tmp_path
     assert first_damping < stall.started + 0.3
     assert np.all(damping[arrivals >= first_damping])
     assert report["latched"] == "controller_silence"
+
+
+def test_a_loop_that_spins_for_its_periods_keeps_time_and_counts_its_waiting_apart(fake_robot, tmp_path):
+    robot = fake_robot()
+    diagram, simulator, link, _ = _driver(Go1DriverConfig(realtime_priority=0, wait="spin"))
+    with hardware_run(diagram, shutdown_damping_duration=0.05):
+        simulator.set_target_realtime_rate(0.0)
+        simulator.set_monitor(SpinPacedMonitor(lambda context: EventStatus.Succeeded(), 1.0, link))
+        simulator.Initialize()
+        start = time.monotonic()
+        simulator.AdvanceTo(1.0)
+        wall = time.monotonic() - start
+    report = _report(diagram, simulator, link)
+    robot.stop()
+    assert wall >= 0.998  # paced to the wall clock, not run as fast as it can
+    assert report["latched"] is None
+    loop = report["loop"]
+    assert loop["wait"] == "spin"
+    assert loop["command_interdeparture_ms"]["median"] == pytest.approx(2.0, abs=0.2)
+    # Most of each period went to the wait, and the report keeps it apart from the loop's work.
+    assert 0.5 < loop["busy_wait_cpu_s"] < wall
+    assert link._timing.loop_cpu[-1] - link._timing.loop_cpu[0] < 0.5
 
 
 def test_a_flood_of_malformed_messages_is_counted_by_channel_and_reason_and_latches_nothing(fake_robot, tmp_path):

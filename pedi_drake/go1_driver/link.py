@@ -264,8 +264,9 @@ def _estop_vector(fields: tuple[str, ...]) -> Callable[[object], np.ndarray]:
 class LoopTiming:
     """The loop's publications: the wall time of each [s], its offset from its tick's schedule
     (wall time - diagram time / realtime rate) [s], its diagram time [s] and the loop thread's CPU
-    time then [s]. Lateness follows in `report`: the offset less the earliest offset so far (the
-    Simulator never runs ahead of its schedule, so the earliest tick sets the schedule's anchor);
+    time then, less what it spent busy-waiting [s]. Lateness follows in `report`: the offset less
+    the earliest offset so far (the Simulator never runs ahead of its schedule, so the earliest
+    tick sets the schedule's anchor);
     inter-departure times are the differences of the times, and the loop's CPU time between two
     publications tells a stall in which the loop computed from one in which it waited."""
 
@@ -326,6 +327,9 @@ class Go1Link:
         self.realtime_rate = 1.0
         # The loop's scheduling while it ran (see pedi_drake.realtime_priority), for the report.
         self.scheduling = "normal scheduling"
+        # CPU time the loop spent busy-waiting for its periods (go1_driver.wait: spin) [s]: not
+        # counted as the loop's work in the report's stalls.
+        self.busy_wait_cpu = 0.0
         self.leg_control = self._add(
             c.LEG_CONTROL_CHANNEL, FloatFields(c.CHANNEL_TYPES[c.LEG_CONTROL_CHANNEL], LEG_CONTROL_FIELDS)
         )
@@ -485,7 +489,7 @@ class Go1Link:
         timing.departures.append(now)
         timing.offsets.append(now - t / self.realtime_rate)
         timing.times.append(t)
-        timing.loop_cpu.append(time.thread_time())
+        timing.loop_cpu.append(time.thread_time() - self.busy_wait_cpu)
         return True
 
     def _guard(self) -> None:
@@ -538,6 +542,8 @@ class Go1Link:
             "loop": {
                 "period_s": self._period,
                 "scheduling": self.scheduling,
+                "wait": self._config.wait,
+                "busy_wait_cpu_s": self.busy_wait_cpu,
                 "ticks": len(lateness),
                 "lateness_ms": distribution_ms(lateness),
                 "deadline_misses": misses,
