@@ -1,7 +1,8 @@
 """The teleoperation floors at real time over UDP: three processes, as on the robot.
 
     python -m pedi_drake.benchmarks.teleop [--scenarios square fuzz switches] [--fuzz_count 10000]
-        [--seed N] [--realtime_priority 0] [--work out/teleop_benchmark] [--out benchmarks/results/teleop.json]
+        [--seed N] [--realtime_priority 0] [--wait sleep] [--work out/teleop_benchmark]
+        [--out benchmarks/results/teleop.json]
 
 Each scenario (pedi_drake.evaluation.teleop_floors) is `pedi_drake.apps.sil` with an operator:
 the simulator bridge (the robot side, its own process, real time, 500 Hz, writing the ground
@@ -17,7 +18,8 @@ reason, switches done, falls, the controller loop's deadline misses per 1000 tic
 average before and after) and writes the figures as JSON. This machine may be shared: the load
 average says how quiet it was. `--realtime_priority N` runs the controller's loop under SCHED_FIFO at
 priority N (the driver's `realtime_priority`), as a robot's computer would; the simulator bridge
-keeps its own setting (normal scheduling by default, see Go1BridgeConfig).
+keeps its own setting (normal scheduling by default, see Go1BridgeConfig). `--wait spin` makes the
+controller's loop busy-wait for its periods (the driver's `wait`, pedi_drake/go1_driver/pacing.py).
 """
 
 import argparse
@@ -32,6 +34,7 @@ import numpy as np
 from pedi_drake.apps.sil import run_sil
 from pedi_drake.evaluation import command_fuzz, random_switches, teleop_square
 from pedi_drake.evaluation.teleop_floors import SCENARIO_TEXT, floor_figures, truth_from_bridge_log
+from pedi_drake.go1_driver.pacing import WAITS
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
 from pedi_drake.operator.message_stream import write_lcm_log
@@ -59,15 +62,18 @@ def _stream(name: str, seed: int | None, fuzz_count: int):
     return random_switches.MISSION, stream.messages, stream.simulation_duration, stream
 
 
-def one_scenario(name: str, seed: int | None, fuzz_count: int, work: Path, realtime_priority: int = 0) -> dict:
+def one_scenario(
+    name: str, seed: int | None, fuzz_count: int, work: Path, realtime_priority: int = 0, wait: str = "sleep"
+) -> dict:
     """Runs scenario `name` at real time over UDP and judges it (module docstring); with
-    `realtime_priority` > 0 the controller's loop runs under SCHED_FIFO at that priority."""
+    `realtime_priority` > 0 the controller's loop runs under SCHED_FIFO at that priority, and it
+    waits for its periods as `wait` says (the driver's setting)."""
     mission_name, messages, duration, stream = _stream(name, seed, fuzz_count)
     out_dir = work / name
     log = write_lcm_log(messages, work / f"{name}_operator.lcmlog")
     # The controller side's scenario: apps.sil adds the mission, the bus, the controller and estimator.
     scenario_text = f"{{operator: {{source: lcm}}, simulation_duration: {duration}"
-    scenario_text += f", go1_driver: {{realtime_priority: {realtime_priority}}}}}"
+    scenario_text += f", go1_driver: {{realtime_priority: {realtime_priority}, wait: {wait}}}}}"
     scenario = apply_scenario_text(load_scenario(scenario_text=SCENARIO_TEXT), scenario_text)
     load_before, start = _load(), time.monotonic()
     records = []
@@ -166,12 +172,15 @@ def main() -> None:
         default=0,
         help="SCHED_FIFO priority of the controller and the bridge (0: normal scheduling)",
     )
+    parser.add_argument(
+        "--wait", choices=WAITS, default="sleep", help="how the controller's loop waits for its periods"
+    )
     parser.add_argument("--work", default="out/teleop_benchmark", help="folder of the runs' outputs")
     parser.add_argument("--out", default="benchmarks/results/teleop.json")
     args = parser.parse_args()
     rows = []
     for name in args.scenarios:
-        row = one_scenario(name, args.seed, args.fuzz_count, Path(args.work), args.realtime_priority)
+        row = one_scenario(name, args.seed, args.fuzz_count, Path(args.work), args.realtime_priority, args.wait)
         rows.append(row)
         print(f"{name}: done in {row['wall_s']:.0f} s, load {row['load_before']} -> {row['load_after']}", flush=True)
     print_table(rows)
@@ -180,7 +189,13 @@ def main() -> None:
     machine = {"processor": platform.processor() or platform.machine(), "cpus": os.cpu_count()}
     out.write_text(
         json.dumps(
-            {"seed": args.seed, "realtime_priority": args.realtime_priority, "machine": machine, "scenarios": rows},
+            {
+                "seed": args.seed,
+                "realtime_priority": args.realtime_priority,
+                "wait": args.wait,
+                "machine": machine,
+                "scenarios": rows,
+            },
             indent=2,
             default=float,
         )
