@@ -121,3 +121,24 @@ def test_the_pivoted_split_finds_the_rank_and_the_null_space():
         z = np.empty(N)
         compiled_hqp._min_norm_least_squares(A, r, W, tau, rank, R, order, kind, z)
         np.testing.assert_allclose(z, np.linalg.lstsq(A, r, rcond=None)[0], atol=1e-9)
+
+
+def test_a_level_the_levels_above_already_fix_takes_no_step():
+    """A level whose rows lie in the span of the levels above (here, a combination of the top
+    level's rows asking for another value) has rank 0 in their null space: both solvers leave x
+    where the levels above put it, rather than solving for the rows' rounding noise."""
+    rng = np.random.default_rng(12)
+    top = rng.normal(size=(15, N))
+    combination = rng.normal(size=(3, 15)) @ top
+    levels = [
+        Level("physics", [EqualityTask("dynamics", top, rng.normal(size=15))], []),
+        Level("repeat", [EqualityTask("conflicting", combination, rng.normal(size=3))], []),
+        Level("pose", [EqualityTask("pose", rng.normal(size=(6, N)), rng.normal(size=6))], []),
+    ]
+    without = [levels[0], levels[2]]
+    expected = solve_hqp(without, N, SETTINGS)
+    for solution in (
+        solve_hqp(levels, N, SETTINGS).x,
+        compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, N), SETTINGS)[1],
+    ):
+        np.testing.assert_allclose(solution, expected.x, rtol=0, atol=1e-9)

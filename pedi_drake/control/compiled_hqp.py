@@ -174,6 +174,12 @@ def _min_norm_least_squares(A, r, W, tau, rank, R, order, kind, z) -> None:
     """argmin ||z|| among the minimisers of ||A z - r|| (hqp._min_norm_least_squares), from the
     `_row_space_split` of A (its reflectors, rank, R, row order and kind)."""
     m, n = A.shape
+    if rank == 0:
+        # Every row lies (within the rank tolerance) in the span of the levels above: any z gives
+        # the same residual, and the least norm is z = 0 (a least-squares solve would instead
+        # invert the rows' rounding noise).
+        z[:] = 0.0
+        return
     if kind == SPLIT_FULL_RANK:
         w = np.empty(rank)
         if forward_substitute_transposed(R[:rank, :rank], r, w):

@@ -285,6 +285,11 @@ def _least_squares_step(A: np.ndarray, r: np.ndarray, tolerance: float):
 def _min_norm_least_squares(A: np.ndarray, r: np.ndarray, split) -> np.ndarray:
     """argmin ||z|| among the minimisers of ||A z - r||, using a `_row_space_split` of A."""
     Y, _, rank, R = split
+    if rank == 0:
+        # Every row lies (within the rank tolerance) in the span of the levels above: any z gives
+        # the same residual, and the least norm is z = 0 (lstsq would invert the rows' rounding
+        # noise).
+        return np.zeros(A.shape[1])
     if R is not None:
         # R^T w = r by forward substitution (R is upper triangular).
         w, info = lapack.dtrtrs(R, r, lower=0, trans=1)

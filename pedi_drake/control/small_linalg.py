@@ -33,6 +33,10 @@ import numpy as np
 
 from pedi_drake.jit import kernel
 
+# A downdated row norm is recomputed once its square has lost half of float64's digits (LAPACK's
+# tol3z, sqrt(machine epsilon)).
+_DOWNDATE_TOLERANCE = math.sqrt(np.finfo(np.float64).eps)
+
 
 @kernel
 def householder_factor(
@@ -49,20 +53,31 @@ def householder_factor(
             W[k, i] = A[k, i]
         tau[k] = 0.0
         order[k] = k
+    # With pivoting, each remaining row's norm in the coordinates not yet factorised, kept up to
+    # date as LAPACK's dlaqp2 does: scaled down by each step's reflector, and recomputed from the
+    # row when the scaling has cancelled more than half the digits of its norm at its last
+    # recomputation (`reference`). This keeps the pivoting's cost O(m n) instead of O(m^2 n).
+    norms = np.empty(m if pivot else 0)
+    reference = np.empty(m if pivot else 0)
+    if pivot:
+        for j in range(m):
+            s = 0.0
+            for i in range(n):
+                s += W[j, i] * W[j, i]
+            norms[j] = math.sqrt(s)
+            reference[j] = norms[j]
     for k in range(m):
         if pivot:
-            # The row with the largest norm in the coordinates not yet factorised goes next.
-            best, largest = k, -1.0
-            for j in range(k, m):
-                norm = 0.0
-                for i in range(k, n):
-                    norm += W[j, i] * W[j, i]
-                if norm > largest:
-                    best, largest = j, norm
+            best = k
+            for j in range(k + 1, m):
+                if norms[j] > norms[best]:
+                    best = j
             if best != k:
                 for i in range(n):
                     W[k, i], W[best, i] = W[best, i], W[k, i]
                 order[k], order[best] = order[best], order[k]
+                norms[k], norms[best] = norms[best], norms[k]
+                reference[k], reference[best] = reference[best], reference[k]
         alpha = W[k, k]
         scale = 0.0
         for i in range(k + 1, n):
@@ -86,6 +101,17 @@ def householder_factor(
             W[j, k] -= dot
             for i in range(k + 1, n):
                 W[j, i] -= dot * W[k, i]
+            if pivot and norms[j] != 0.0:
+                ratio = abs(W[j, k]) / norms[j]
+                remaining = max((1.0 + ratio) * (1.0 - ratio), 0.0)
+                if remaining * (norms[j] / reference[j]) ** 2 <= _DOWNDATE_TOLERANCE:
+                    s = 0.0
+                    for i in range(k + 1, n):
+                        s += W[j, i] * W[j, i]
+                    norms[j] = math.sqrt(s)
+                    reference[j] = norms[j]
+                else:
+                    norms[j] *= math.sqrt(remaining)
     for i in range(m):
         for j in range(m):
             R[i, j] = W[j, i] if j >= i else 0.0
