@@ -30,9 +30,10 @@ from pedi_drake.estimation.ground_truth import GroundTruthEstimator
 from pedi_drake.estimation.kalman_estimator import KalmanEstimator
 from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.exceptions import ScenarioError
+from pedi_drake.go1_driver.pacing import loop_wait
 from pedi_drake.ik.leg_ik_system import LegIkSystem
 from pedi_drake.log_hold import LogHold
-from pedi_drake.mission.mission_manager import MissionManager
+from pedi_drake.mission.mission_manager import MissionManager, needs_posture_planner
 from pedi_drake.mission.spec import MissionSpec, load_mission
 from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE
 from pedi_drake.operator.estop_gate import OperatorEstopGate
@@ -206,6 +207,14 @@ def _connect_operator_estop(builder, operator, station, command, scenario: Scena
     return gate.GetOutputPort("command")
 
 
+def _with_loop_wait_resolved(scenario: Scenario, mission: MissionSpec | None) -> Scenario:
+    """`scenario` with `go1_driver.wait: auto` replaced by the wait the loop does (pacing.loop_wait)."""
+    driver = scenario.go1_driver
+    work_beside_loop = scenario.operator.source != "none" or (mission is not None and needs_posture_planner(mission))
+    wait = loop_wait(driver.wait, realtime_priority=driver.realtime_priority, work_beside_loop=work_beside_loop)
+    return dataclasses.replace(scenario, go1_driver=dataclasses.replace(driver, wait=wait))
+
+
 def MakePedipulationDiagram(
     scenario: Scenario,
     meshcat: Meshcat | None = None,
@@ -229,6 +238,8 @@ def MakePedipulationDiagram(
         if scenario.controller not in MISSION_CONTROLLERS:
             raise ScenarioError(f"mission: {scenario.mission!r} needs controller: one of {MISSION_CONTROLLERS}")
         scenario = apply_mission(scenario, mission)
+    if hardware:
+        scenario = _with_loop_wait_resolved(scenario, mission)
     builder = DiagramBuilder()
     station = builder.AddNamedSystem("station", MakeStation(scenario, meshcat, hardware=hardware))
 

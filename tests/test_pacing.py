@@ -1,14 +1,20 @@
 """The hardware loop's busy wait (pedi_drake.go1_driver.pacing): its clock, its lock, its schedule."""
 
+import os
 import threading
 import time
 
 import pytest
 from pydrake.systems.framework import EventStatus
 
+from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.exceptions import ScenarioError
-from pedi_drake.go1_driver.pacing import SpinPacedMonitor, monotonic_ns, spin_until, wait_problem
+from pedi_drake.go1_driver.hardware_station import hardware_link
+from pedi_drake.go1_driver.pacing import SpinPacedMonitor, loop_wait, monotonic_ns, spin_until, wait_problem
 from pedi_drake.scenario import load_scenario
+
+# A bus of this test process's own (nothing is sent on it: the diagrams are built, not run).
+URL = f"udpm://239.255.76.67:{23000 + os.getpid() % 20000}?ttl=0"
 
 
 def test_the_compiled_clock_is_time_monotonic():
@@ -85,6 +91,33 @@ def test_a_rate_that_is_not_positive_is_refused():
 
 
 def test_the_wait_setting_is_checked_by_name():
-    assert wait_problem("sleep") is None and wait_problem("spin") is None
+    assert all(wait_problem(wait) is None for wait in ("auto", "sleep", "spin"))
     with pytest.raises(ScenarioError, match="go1_driver.wait.*'spinning'"):
         load_scenario(scenario_text="{go1_driver: {wait: spinning}}")
+
+
+def test_auto_spins_only_where_nothing_else_needs_the_core():
+    assert loop_wait("auto", realtime_priority=0, work_beside_loop=False) == "spin"
+    # A real-time thread that never sleeps is throttled by the kernel; an operator's input or the
+    # posture planner's worker needs the core a spinning loop would take.
+    assert loop_wait("auto", realtime_priority=50, work_beside_loop=False) == "sleep"
+    assert loop_wait("auto", realtime_priority=0, work_beside_loop=True) == "sleep"
+    for wait in ("sleep", "spin"):  # a wait chosen by name is kept
+        assert loop_wait(wait, realtime_priority=50, work_beside_loop=True) == wait
+
+
+@pytest.mark.parametrize(
+    ("settings", "expected"),
+    [
+        ("mission: hit_target_front", "spin"),
+        ("mission: hit_target_front, go1_driver: {wait: sleep}", "sleep"),
+        ("mission: hit_target_front, go1_driver: {realtime_priority: 50}", "sleep"),
+        ("mission: operator/stand_with_teleop, operator: {source: lcm}", "sleep"),  # an operator's input
+        ("mission: operator/stand_with_semi_autonomous", "sleep"),  # the posture planner's worker
+    ],
+)
+def test_a_hardware_run_resolves_auto_to_the_wait_its_loop_does(settings, expected):
+    scenario = load_scenario(scenario_text=f"{{{settings}, lcm_buses: {{go1: {{lcm_url: '{URL}'}}}}}}")
+    assert scenario.go1_driver.wait == "auto" or "wait" in settings
+    link = hardware_link(MakePedipulationDiagram(scenario, None, hardware=True).diagram)
+    assert link.config.wait == expected

@@ -102,6 +102,7 @@ def one_run(
         "longest_miss_ms": loop["longest_miss_ms"],
         "lateness_ms": loop["lateness_ms"],
         "scheduling": {"controller": loop["scheduling"], "bridge": sil["bridge_scheduling"]},
+        "wait": loop["wait"],
         "controller_process": sil["controller"],
         "command_interdeparture_ms": loop["command_interdeparture_ms"],
         "stalls": loop["stalls"],
@@ -150,6 +151,7 @@ def main() -> None:
             error = row["max_true_foot_error_mm"]
             print(
                 f"{mission:<18} run {run}: {'ok  ' if row['success'] else 'FAIL'} latched {row['latched']}, "
+                f"wait {row['wait']}, "
                 f"true foot error {error if error is None else round(error, 1)} mm, "
                 f"misses {row['deadline_misses_per_1000']:.2f}/1000 (longest {row['longest_miss_ms']:.1f} ms), "
                 f"stalls {row['stalls']['computing']} computing / {row['stalls']['waiting']} waiting, "

@@ -1,7 +1,7 @@
 """The teleoperation floors at real time over UDP: three processes, as on the robot.
 
     python -m pedi_drake.benchmarks.teleop [--scenarios square fuzz switches] [--fuzz_count 10000]
-        [--seed N] [--realtime_priority 0] [--wait sleep] [--work out/teleop_benchmark]
+        [--seed N] [--realtime_priority 0] [--wait auto] [--work out/teleop_benchmark]
         [--out benchmarks/results/teleop.json]
 
 Each scenario (pedi_drake.evaluation.teleop_floors) is `pedi_drake.apps.sil` with an operator:
@@ -63,7 +63,7 @@ def _stream(name: str, seed: int | None, fuzz_count: int):
 
 
 def one_scenario(
-    name: str, seed: int | None, fuzz_count: int, work: Path, realtime_priority: int = 0, wait: str = "sleep"
+    name: str, seed: int | None, fuzz_count: int, work: Path, realtime_priority: int = 0, wait: str = "auto"
 ) -> dict:
     """Runs scenario `name` at real time over UDP and judges it (module docstring); with
     `realtime_priority` > 0 the controller's loop runs under SCHED_FIFO at that priority, and it
@@ -173,7 +173,10 @@ def main() -> None:
         help="SCHED_FIFO priority of the controller and the bridge (0: normal scheduling)",
     )
     parser.add_argument(
-        "--wait", choices=WAITS, default="sleep", help="how the controller's loop waits for its periods"
+        "--wait",
+        choices=WAITS,
+        default="auto",
+        help="how the controller's loop waits for its periods (auto: sleep, as the operator's input needs the core)",
     )
     parser.add_argument("--work", default="out/teleop_benchmark", help="folder of the runs' outputs")
     parser.add_argument("--out", default="benchmarks/results/teleop.json")

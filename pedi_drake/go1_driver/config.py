@@ -75,11 +75,12 @@ class Go1DriverConfig:
     # default: with it the semi-autonomous mode's posture plans, computed at normal priority,
     # came too late (docs/real_time.md has the misses with and without).
     realtime_priority: int = 0
-    # How the loop waits for its next period: "sleep" (the OS's timer; the default) or "spin" (a
-    # busy wait that keeps a core busy for as long as the loop runs, and keeps the loop on time
-    # where waking a sleeping thread is slow, as on this project's virtual machines; see
-    # pedi_drake/go1_driver/pacing.py and docs/real_time.md).
-    wait: str = "sleep"
+    # How the loop waits for its next period: "sleep" (the OS's timer), "spin" (a busy wait that
+    # keeps a core busy for as long as the loop runs, and keeps the loop on time where waking a
+    # sleeping thread is slow, as on this project's virtual machines) or "auto": spin unless the
+    # loop runs at a real-time priority or the run has an operator or a posture planner, whose
+    # work needs that core (pedi_drake/go1_driver/pacing.py, docs/real_time.md).
+    wait: str = "auto"
     # Safety layer bounds and watchdogs.
     safety: Go1SafetyConfig = dataclasses.field(default_factory=Go1SafetyConfig)
     # The simulator bridge's latency, message drops and scheduling.

@@ -1,10 +1,11 @@
 """How a hardware run's loop waits for its next period: the OS's timer, or a busy wait.
 
-`go1_driver.wait` chooses. With "sleep" (the default) the Simulator paces the loop itself: before
-each step it sleeps until the step's wall-clock time. With "spin" the loop's thread busy-waits
-instead, in compiled code that releases the interpreter's lock (`spin_until`), so the driver's
-receive thread still runs meanwhile; `SpinPacedMonitor` does it at the end of every simulator
-step, from the Simulator's monitor, which is where the next step would otherwise sleep.
+`go1_driver.wait` chooses. With "sleep" the Simulator paces the loop itself: before each step it
+sleeps until the step's wall-clock time. With "spin" the loop's thread busy-waits instead, in
+compiled code that releases the interpreter's lock (`spin_until`), so the driver's receive thread
+still runs meanwhile; `SpinPacedMonitor` does it at the end of every simulator step, from the
+Simulator's monitor, which is where the next step would otherwise sleep. "auto" (the default)
+spins where nothing else of the run needs the core (`loop_wait`).
 
 Why a loop would burn a core to wait. A thread that sleeps gives up its CPU, and the CPU goes
 idle; its wake-up at the deadline then waits on everything between the timer and the thread
@@ -13,7 +14,8 @@ handed back to it and must be scheduled again) and the guest's scheduler (which 
 woken loop behind the simulator bridge on one CPU while the other sits idle). A thread that
 spins keeps its CPU busy and is running when its deadline comes. docs/real_time.md ("Waiting by
 spinning") has what each costs at real time beside the bridge. The price is a whole core for as
-long as the loop runs, which a shared machine may not want to pay: hence the choice.
+long as the loop runs, which a run with other work of its own may not want to pay: hence the
+choice, and what "auto" leaves to sleeping.
 """
 
 import time
@@ -22,7 +24,7 @@ from pydrake.systems.framework import EventStatus
 
 from pedi_drake.jit import ENABLED, kernel
 
-WAITS = ("sleep", "spin")
+WAITS = ("auto", "sleep", "spin")
 NANOSECONDS_PER_SECOND = 1_000_000_000
 _CLOCK_MONOTONIC = 1  # Linux's clock id, the clock of time.monotonic()
 
@@ -30,6 +32,20 @@ _CLOCK_MONOTONIC = 1  # Linux's clock id, the clock of time.monotonic()
 def wait_problem(wait: object) -> str | None:
     """What is wrong with `wait` as a `go1_driver.wait` setting (None: nothing)."""
     return None if wait in WAITS else f"must be one of {list(WAITS)}, got {wait!r}"
+
+
+def loop_wait(wait: str, *, realtime_priority: int, work_beside_loop: bool) -> str:
+    """The wait a loop set to `wait` does: "sleep" or "spin".
+
+    "auto" spins unless the loop runs at a real-time priority (the kernel throttles a real-time
+    thread that never sleeps: by default it gets at most 0.95 s of every second, then stops for
+    the rest) or the run has work of its own beside the loop (`work_beside_loop`: an operator's
+    input, the posture planner's worker), which on a machine of two cores needs the core a
+    spinning loop would take.
+    """
+    if wait != "auto":
+        return wait
+    return "sleep" if realtime_priority > 0 or work_beside_loop else "spin"
 
 
 def monotonic_ns() -> int:
