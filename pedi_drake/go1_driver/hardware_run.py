@@ -21,8 +21,8 @@ block runs, where the OS allows it (see pedi_drake.realtime_priority); the link'
 which scheduling the loop had.
 
 The interpreter's thread switch interval is shortened (SWITCH_INTERVAL) while the loop runs: the
-link's receive thread needs the GIL to stamp a message, and by default a thread computing in
-Python keeps it for 5 ms at a time.
+link's thread needs the GIL to stamp messages while a tick runs late, and by default a thread
+computing in Python keeps it for 5 ms at a time.
 """
 
 import contextlib

@@ -10,8 +10,9 @@ all on the scenario's LCM bus "go1" (one receiver latches the three status chann
     output driver.message_counts (6): [received, dropped] for leg_control_data,
            state_estimator_data, rc_command
     output driver.command_published (60): the bounded command that goes on the wire
-The messages travel through a Go1Link (go1_driver/link.py): its receive thread stamps status
-messages as they arrive and its guard damps a loop that went silent; `hardware_link(diagram)`
+The messages travel through a Go1Link (go1_driver/link.py): the loop reads and stamps status
+messages at the start of every tick, the link's own thread does while the loop is late, and that
+thread's guard damps a loop that went silent; `hardware_link(diagram)`
 finds it, for `hold_damping` at shutdown and for `report()` (rejected messages by reason, the
 loop's lateness). Run the diagram in real time (Simulator target_realtime_rate = 1): the
 watchdogs use the wall clock.

@@ -2,15 +2,20 @@
 
 The control loop (a Drake Simulator paced to the wall clock) can be late: a slow tick, a
 garbage collection, a loaded machine. The robot's silence must not be judged by a clock that a
-late loop stops reading, so the link receives on a thread of its own:
+late loop stops reading, so the link has a thread of its own beside the loop:
 
-  * status messages are decoded, checked and time-stamped (time.monotonic) by that thread within
-    about a millisecond of their arrival, while the loop computes; `Inbox.snapshot` hands the
-    newest to the loop;
-  * the thread records when it last looked at the socket (`last_look`): a channel's silence is
+  * status messages are decoded, checked and time-stamped (time.monotonic) by the loop at the
+    start of every tick (`poll`), and, while the loop is late (it has not looked for
+    LOOP_LOOK_LATE periods), by the thread, which looks every RECEIVE_POLL_PERIOD; so a message
+    is stamped within a tick of its arrival, or within a few milliseconds while the loop stalls.
+    `Inbox.snapshot` hands the newest to the loop. The loop does the receiving whenever it can
+    because a thread that takes Python's lock at every message takes it from the loop as often
+    (three datagrams a tick on the multicast group, the loop's own commands included), and the
+    loop then waits whenever that thread, holding the lock, is kept off its CPU;
+  * the link records when it last looked at the socket (`last_look`): a channel's silence is
     `last_look - receipt_time`, judged by the receiver's clock only. A stalled loop cannot make the
-    robot look silent, and if the thread itself was held up (by the GIL), both stamps are late
-    together and silence is not overestimated;
+    robot look silent (the thread looks for it), and if the thread itself was held up (by the
+    GIL), both stamps are late together and silence is not overestimated;
   * the guard: when the loop has not published for `command_timeout` the thread latches
     "controller_silence" and puts damping on the wire itself, every period, until the process
     leaves. The robot-side bridge (like walk-these-ways' `lcm_position`) holds the last command it
@@ -33,15 +38,14 @@ than the receiver's own clock allows (its time by more than the time since plus
 broken sender ("stamp_ahead"). After that silence any valid message is taken: a restarted or new
 sender.
 
-`threaded=False` keeps the same path without the thread: the loop polls the transport at every
-tick (lock-step runs on an in-process bus, `DrakeLcmTransport`, use it).
+`threaded=False` keeps the same path without the thread (no guard, and nothing received while
+the loop stalls): lock-step runs on an in-process bus (`DrakeLcmTransport`) use it.
 """
 
 import array
 import dataclasses
 import logging
 import math
-import select
 import threading
 import time
 import weakref
@@ -68,13 +72,16 @@ REJECT_REASONS = (
 )
 _REASON_INDEX = {name: i for i, name in enumerate(REJECT_REASONS)}
 
-# Messages the LCM library keeps per subscription between two looks of the receive thread: enough
+# Messages the LCM library keeps per subscription between two looks at the socket: enough
 # for a flood of malformed messages to be counted rather than silently displacing the valid ones.
 QUEUE_CAPACITY = 4096
 
-# Longest wait of the receive thread for a message [s]: how often it looks even when nothing
-# arrives (the silence judgement and the guard advance at this pace).
+# How often the receive thread wakes [s]: it runs the guard, and looks at the socket when the
+# loop is late (the silence judgement and the guard advance at this pace while the loop stalls).
 RECEIVE_POLL_PERIOD = 0.002
+# The loop looks at the socket at every tick; once it has not looked for this many periods (of
+# wall time, at the run's real-time rate) the thread looks for it [-].
+LOOP_LOOK_LATE = 1.5
 
 
 class FloatFields:
@@ -84,8 +91,8 @@ class FloatFields:
     For a type whose fields up to the last one read are fixed-size float arrays (the bridge's
     status types), the same values as decoding the message and concatenating the fields, at a
     fraction of the cost: the generated decoder builds the message object and a tuple per field
-    (about 12 us for leg_control_data and 40 us for state_estimator_data, at 500 Hz each on the
-    receive thread). The bytes must have passed the size and fingerprint checks (Inbox.handle).
+    (about 12 us for leg_control_data and 40 us for state_estimator_data, at 500 Hz each). The
+    bytes must have passed the size and fingerprint checks (Inbox.handle).
     """
 
     def __init__(self, lcm_type, names: tuple[str, ...]):
@@ -113,7 +120,7 @@ class FloatFields:
 class Inbox:
     """The newest valid message of one channel, its receipt stamp and the counts of what arrived.
 
-    `handle` runs on the receive thread (or the polling loop); `snapshot` on the control loop.
+    `handle` runs in the loop's look at the socket (or the link thread's); `snapshot` on the loop.
     `to_vector`: the channel's values from the decoded message, or a FloatFields, which reads them
     from the bytes without decoding.
     """
@@ -299,10 +306,11 @@ def distribution_ms(values) -> dict | None:
 
 
 class Go1Link:
-    """The bus to the Go1: status inboxes filled by a receive thread, commands out, the guard.
+    """The bus to the Go1: status inboxes filled by the loop (and by a thread while it is late),
+    commands out, the guard.
 
-    `transport`: an `lcm.LCM` (or anything with its subscribe / publish / handle_timeout and,
-    for the thread, fileno). `config`: the driver's settings (period, watchdogs, damping gain).
+    `transport`: an `lcm.LCM` (or anything with its subscribe / publish / handle_timeout).
+    `config`: the driver's settings (period, watchdogs, damping gain).
     """
 
     def __init__(
@@ -323,6 +331,7 @@ class Go1Link:
         self._threaded = threaded
         self._clock = clock
         self._publish_lock = threading.Lock()
+        self._receive_lock = threading.Lock()  # the transport is read by one thread at a time
         # The pace of the loop against the wall clock (the Simulator's target real-time rate).
         self.realtime_rate = 1.0
         # The loop's scheduling while it ran (see pedi_drake.realtime_priority), for the report.
@@ -408,22 +417,21 @@ class Go1Link:
             self._thread.join(1.0)
         self._thread = None
 
-    def _drain(self) -> None:
-        while self._transport.handle_timeout(0) > 0:
-            pass
+    def _look(self) -> None:
+        """Handles every pending message, then stamps the look (from the loop or the thread)."""
+        with self._receive_lock:
+            while self._transport.handle_timeout(0) > 0:
+                pass
+            self.last_look = self._clock()
 
-    def _look(self, timeout: float) -> None:
-        """Waits up to `timeout` [s] for messages, handles every pending one, then stamps the look."""
-        ready, _, _ = select.select([self._transport.fileno()], [], [], timeout)
-        if ready:
-            self._drain()
-        self.last_look = self._clock()
+    def _look_if_the_loop_is_late(self) -> None:
+        """The thread's look: only when the loop has not looked for LOOP_LOOK_LATE periods."""
+        if self._clock() - self.last_look > LOOP_LOOK_LATE * self._period / self.realtime_rate:
+            self._look()
 
     def poll(self) -> None:
-        """Handles what is pending when there is no receive thread (called by the loop every tick)."""
-        if not self._threaded:
-            self._drain()
-            self.last_look = self._clock()
+        """Handles what is pending (called by the loop at the start of every tick)."""
+        self._look()
 
     def silence(self, inbox: Inbox) -> float:
         """How long `inbox`'s channel has been silent when the receiver last looked [s] (inf before any)."""
@@ -493,13 +501,13 @@ class Go1Link:
         return True
 
     def _guard(self) -> None:
-        """Runs on the receive thread after every look: damping when the loop went silent."""
+        """Runs on the receive thread at every wake: damping when the loop went silent."""
         if self._last_publish is None or self._stop.is_set():
             return
         now = self._clock()
         if self.guard_latched is None and now - self._last_publish <= self._shortest_command_timeout:
             # The loop published lately: nothing to do, and no wait for the lock the loop holds
-            # while it publishes (this look may have been woken by that very publication).
+            # while it publishes.
             return
         with self._publish_lock:
             silent = now - self._last_publish
@@ -594,12 +602,12 @@ def loop_stalls(timing: LoopTiming, period: float) -> dict:
 def _receive_loop(link_ref: "weakref.ref[Go1Link]", stop: threading.Event) -> None:
     # Holds the link only while looking, so a link nobody uses any more is collected and the
     # thread ends with it.
-    while not stop.is_set():
+    while not stop.wait(RECEIVE_POLL_PERIOD):
         link = link_ref()
         if link is None:
             return
         try:
-            link._look(RECEIVE_POLL_PERIOD)
+            link._look_if_the_loop_is_late()
             link._guard()
         except Exception:  # the thread must outlive anything a message or the transport does
             _log.exception("Go1 link receive thread")

@@ -2,7 +2,7 @@
 
 `go1_driver.wait` chooses. With "sleep" the Simulator paces the loop itself: before each step it
 sleeps until the step's wall-clock time. With "spin" the loop's thread busy-waits instead, in
-compiled code that releases the interpreter's lock (`spin_until`), so the driver's receive thread
+compiled code that releases the interpreter's lock (`spin_until`), so the driver's link thread
 still runs meanwhile; `SpinPacedMonitor` does it at the end of every simulator step, from the
 Simulator's monitor, which is where the next step would otherwise sleep. "auto" (the default)
 spins where nothing else of the run needs the core (`loop_wait`).

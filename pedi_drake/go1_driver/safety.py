@@ -405,8 +405,9 @@ def _filter_step_kernel(published, memory, command, robot_status, estop, now, t,
             fired |= 1 << _CONTROLLER_SILENCE
     memory[_LAST_WALL] = now
 
-    # The receive thread's judgement, not `now - receipt`: a late tick does not make the robot
-    # look silent, and the robot's real silence trips within status_timeout + one look.
+    # The link's judgement (its last look at the socket), not `now - receipt`: a late tick does
+    # not make the robot look silent, and the robot's real silence trips within status_timeout +
+    # one look.
     for i in range(num_channels):
         if not robot_status[24 + i] <= settings[_STATUS_TIMEOUT_S]:  # NaN counts as silent
             fired |= 1 << _STATUS_TIMEOUT
@@ -474,7 +475,7 @@ class Go1SafetyFilter(LeafSystemWithoutWitnesses):
       command (60): the controller's `go1.command`.
       robot_status (24 + n + 1): what the filter reads from the robot, in one vector (one port
         evaluation a tick): [q (12) [rad], qd (12) [rad/s] (leg_control_data), silence (n): how
-        long each status channel has been silent [s], judged by the receive thread's clock
+        long each status channel has been silent [s], judged by the link's looks
         (Go1Link.silence; the watchdog trips on the longest), remote E-stop (1): > 0.5 latches
         damping (the remote's button)].
       estop (1, optional): > 0.5 latches damping.

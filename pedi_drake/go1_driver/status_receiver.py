@@ -1,8 +1,9 @@
 """Receivers of Go1 LCM messages: latch the newest valid message of each channel into the Context.
 
 `Go1LcmReceiver` reads one or more `Inbox`es (pedi_drake.go1_driver.link): on the driver the
-link's receive thread fills them, checking, decoding and time-stamping each message as it
-arrives; on the simulator bridge a DrakeLcm subscription does. A periodic unrestricted update at
+link fills them, checking, decoding and time-stamping each message, when the receiver's update
+polls it at every tick (and from its own thread while the loop is late); on the simulator bridge
+a DrakeLcm subscription does. A periodic unrestricted update at
 the control rate copies every inbox into one discrete state vector, so outputs are functions of
 the Context only, and the systems that read them at the same tick see that tick's status.
 Messages of the wrong size or fingerprint, that fail to decode or carry NaN, are dropped and
