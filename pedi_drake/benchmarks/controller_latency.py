@@ -202,28 +202,27 @@ class Replay:
         # As a run does (pedi_drake.run): the log never grows in a tick.
         self.built.reserve_logs(self.simulator.get_mutable_context(), len(samples) * period)
         self.manager = self.diagram.GetSubsystemByName("mission")
-        # The commands are kept by the link, not taken from the bus: a subscriber there would wake
-        # the receive thread at every command, in the middle of the tick being timed.
+        # The commands are kept by the link, not taken from the bus: a subscriber there would be
+        # handed every command in the next tick's read of the bus, work a hardware run does not do.
         self.link.keep_sent_messages()
+        self._published = 0
 
     def _publish(self, k: int) -> None:
+        """Puts tick k's status on the in-process bus, where the tick's receiver reads it (as a
+        hardware run's loop reads the socket at the start of its tick: the tick's time includes it)."""
         leg, estimator = status_messages(self.samples[min(k, len(self.samples) - 1)], k)
-        received = self.link.leg_control.received, self.link.state_estimator.received
         self.bus.publish(c.LEG_CONTROL_CHANNEL, leg.encode())
         self.bus.publish(c.STATE_ESTIMATOR_CHANNEL, estimator.encode())
-        # The receive thread takes them in; the tick is timed from when both are in the inbox
-        # (a tick run after only one of them would see the other's previous message).
-        deadline = time.monotonic() + 1.0
-        while any(
-            now == before
-            for now, before in zip(
-                (self.link.leg_control.received, self.link.state_estimator.received), received, strict=True
-            )
-        ):
-            if time.monotonic() > deadline:
+        self._published += 1
+
+    def _check_every_status_was_read(self) -> None:
+        """Every replayed status was read (a tick that missed its own would have run on the last)."""
+        for inbox in (self.link.leg_control, self.link.state_estimator):
+            if inbox.received != self._published:
                 counts = {inbox.channel: inbox.counts() for inbox in self.link.inboxes}
-                raise RuntimeError(f"replayed status of tick {k} was not received: {counts}")
-            time.sleep(0.00005)
+                raise RuntimeError(
+                    f"{self._published} replayed statuses, {inbox.channel} read {inbox.received}: {counts}"
+                )
 
     def sent_commands(self) -> np.ndarray:
         """(n, 60) the commands published so far, decoded from the wire."""
@@ -293,6 +292,8 @@ class Replay:
         try:
             start_tick(0)
             self.simulator.AdvanceTo(ticks * self.period)
+            self.link.poll()  # the status published for the tick after the last
+            self._check_every_status_was_read()
         finally:
             receive_cpu_s = self.link.receive_cpu_time() - receive_start
             self.simulator.clear_monitor()
