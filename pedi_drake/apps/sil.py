@@ -36,6 +36,7 @@ keeps a core of its own instead of the kernel moving them between the two.
 import argparse
 import contextlib
 import json
+import math
 import os
 import signal
 import subprocess
@@ -184,6 +185,8 @@ def run_sil(
     if separate and callbacks:
         raise ConfigError("--callbacks: times the controller side in this process; drop --separate")
     cpus = pinned_cpus(sorted(os.sched_getaffinity(0))) if pin else None
+    if not (math.isfinite(realtime_rate) and realtime_rate > 0.0):
+        raise ConfigError(f"--realtime_rate: must be a positive number (1: real time), got {realtime_rate}")
     if separate and realtime_rate != 1.0:
         raise ConfigError("--separate: run_sim.py --hardware runs at real time only; drop --realtime_rate")
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
