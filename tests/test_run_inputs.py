@@ -219,19 +219,24 @@ def test_every_shipped_scenario_and_mission_passes_the_scene_check(run_sim):
         check_scene_geometry(apply_mission(scenario, load_mission(mission)))
 
 
-def test_sil_with_an_unknown_mission_exits_2_with_the_real_error_before_starting_the_bridge(tmp_path):
+def _run_sil(tmp_path, *args: str):
+    """`python -m pedi_drake.apps.sil ARGS --out tmp_path/sil` from tmp_path, this checkout importable."""
     import os
     import subprocess
 
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
-    done = subprocess.run(
-        [sys.executable, "-m", "pedi_drake.apps.sil", "--mission", "nope", "--out", str(tmp_path / "sil")],
+    return subprocess.run(
+        [sys.executable, "-m", "pedi_drake.apps.sil", *args, "--out", str(tmp_path / "sil")],
         cwd=tmp_path,
         env=env,
         capture_output=True,
         text=True,
         timeout=300,
     )
+
+
+def test_sil_with_an_unknown_mission_exits_2_with_the_real_error_before_starting_the_bridge(tmp_path):
+    done = _run_sil(tmp_path, "--mission", "nope")
     assert done.returncode == 2, done.stderr
     assert "unknown mission 'nope'" in done.stderr and "hit_target_front" in done.stderr
     assert "Traceback" not in done.stderr and not (tmp_path / "sil").exists()
@@ -239,19 +244,7 @@ def test_sil_with_an_unknown_mission_exits_2_with_the_real_error_before_starting
 
 @pytest.mark.parametrize("rate", ["0", "-1", "nan"])
 def test_sil_with_a_rate_that_is_not_positive_exits_2_before_starting_the_bridge(tmp_path, rate):
-    import os
-    import subprocess
-
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(REPO), os.environ.get("PYTHONPATH")])))
-    done = subprocess.run(
-        [sys.executable, "-m", "pedi_drake.apps.sil", "--mission", "hit_target_front", "--realtime_rate", rate]
-        + ["--out", str(tmp_path / "sil")],
-        cwd=tmp_path,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    done = _run_sil(tmp_path, "--mission", "hit_target_front", "--realtime_rate", rate)
     assert done.returncode == 2, done.stderr
     assert "--realtime_rate" in done.stderr and "Traceback" not in done.stderr
     assert not (tmp_path / "sil").exists()
