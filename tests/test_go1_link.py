@@ -188,6 +188,8 @@ def test_status_is_stamped_while_a_tick_is_blocked_and_a_late_tick_does_not_look
     stamps = np.unique(samples[:, 1])
     assert stamps.size > 10
     assert np.max(np.diff(np.concatenate([[stall.started], stamps, [samples[-1, 0]]]))) < 0.020
+    # The link's thread read the socket while the loop was blocked (it wakes every 2 ms).
+    assert report["loop"]["status_reads"]["thread"] >= 10
     # The late tick was seen as lateness of the loop, not as silence of the robot.
     assert report["latched"] is None, report
     assert report["guard"]["latched"] == "shutdown"
@@ -281,6 +283,10 @@ def test_a_loop_that_spins_for_its_periods_keeps_time_and_counts_its_waiting_apa
     loop = report["loop"]
     assert loop["wait"] == "spin"
     assert loop["command_interdeparture_ms"]["median"] == pytest.approx(2.0, abs=0.2)
+    # On time, the loop reads the status at every tick and the link's thread hardly ever (only
+    # before the first tick, and in a tick late by over 1.5 periods): it stays off Python's lock.
+    reads = loop["status_reads"]
+    assert reads["loop"] >= loop["ticks"] and reads["thread"] < 0.1 * loop["ticks"], reads
     # Most of each period went to the wait, and the report keeps it apart from the loop's work.
     assert 0.5 < loop["busy_wait_cpu_s"] < wall
     assert link._timing.loop_cpu[-1] - link._timing.loop_cpu[0] < 0.5

@@ -332,6 +332,8 @@ class Go1Link:
         self._clock = clock
         self._publish_lock = threading.Lock()
         self._receive_lock = threading.Lock()  # the transport is read by one thread at a time
+        # How many looks at the socket each side made: the thread's should be the loop's late ticks.
+        self._looks = {"loop": 0, "thread": 0}
         # The pace of the loop against the wall clock (the Simulator's target real-time rate).
         self.realtime_rate = 1.0
         # The loop's scheduling while it ran (see pedi_drake.realtime_priority), for the report.
@@ -417,21 +419,22 @@ class Go1Link:
             self._thread.join(1.0)
         self._thread = None
 
-    def _look(self) -> None:
-        """Handles every pending message, then stamps the look (from the loop or the thread)."""
+    def _look(self, by: str) -> None:
+        """Handles every pending message, then stamps the look (`by`: "loop" or "thread")."""
         with self._receive_lock:
             while self._transport.handle_timeout(0) > 0:
                 pass
             self.last_look = self._clock()
+            self._looks[by] += 1
 
     def _look_if_the_loop_is_late(self) -> None:
         """The thread's look: only when the loop has not looked for LOOP_LOOK_LATE periods."""
         if self._clock() - self.last_look > LOOP_LOOK_LATE * self._period / self.realtime_rate:
-            self._look()
+            self._look("thread")
 
     def poll(self) -> None:
         """Handles what is pending (called by the loop at the start of every tick)."""
-        self._look()
+        self._look("loop")
 
     def silence(self, inbox: Inbox) -> float:
         """How long `inbox`'s channel has been silent when the receiver last looked [s] (inf before any)."""
@@ -559,6 +562,7 @@ class Go1Link:
                 "longest_miss_ms": float(1e3 * lateness.max()) if misses else 0.0,
                 "command_interdeparture_ms": distribution_ms(np.diff(np.asarray(self._timing.departures))),
                 "stalls": loop_stalls(self._timing, self._period),
+                "status_reads": dict(self._looks),
             },
             "guard": {
                 "latched": self.guard_latched,
