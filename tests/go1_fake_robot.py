@@ -7,7 +7,8 @@ standing status at 500 Hz, records every command it receives, and can flood malf
 Prints "publishing" once running. Writes OUT.npz on SIGTERM/SIGINT: the arrival times
 (time.monotonic) and the 60-vectors of the received commands, the status send times, and what
 it flooded (counts by channel and kind). The flood sends, per channel and at `flood_rate` each,
-a message with a wrong fingerprint, a truncated one and one whose float fields are NaN.
+the malformed messages of `pedi_drake.apps.status_flood` (a wrong fingerprint, truncated, NaN
+float fields) from the same loop as the status.
 """
 
 import argparse
@@ -21,10 +22,9 @@ import lcm
 import numpy as np
 
 from pedi_drake import robot
+from pedi_drake.apps.status_flood import FLOOD_KINDS, malformed
 from pedi_drake.go1_driver import constants as c
-from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, rc_command_lcmt, state_estimator_lcmt
-
-FLOOD_KINDS = ("wrong_fingerprint", "wrong_size", "nonfinite")
+from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimator_lcmt
 
 
 def status_messages() -> tuple[bytes, bytes]:
@@ -35,25 +35,6 @@ def status_messages() -> tuple[bytes, bytes]:
     estimator.aBody = [0.0, 0.0, 9.81]
     estimator.contact_estimate = [300.0] * 4
     return leg.encode(), estimator.encode()
-
-
-def malformed(channel: str, kind: str) -> bytes:
-    message = {
-        c.LEG_CONTROL_CHANNEL: leg_control_data_lcmt,
-        c.STATE_ESTIMATOR_CHANNEL: state_estimator_lcmt,
-        c.RC_COMMAND_CHANNEL: rc_command_lcmt,
-    }[channel]()
-    if kind == "nonfinite":
-        for name, typename in zip(message.__slots__, message.__typenames__, strict=True):
-            if typename == "float":
-                value = getattr(message, name)
-                setattr(message, name, [float("nan")] * len(value) if isinstance(value, list) else float("nan"))
-        return message.encode()
-    data = bytearray(message.encode())
-    if kind == "wrong_fingerprint":
-        data[0] ^= 0xFF
-        return bytes(data)
-    return bytes(data[: len(data) // 2])
 
 
 def main() -> int:

@@ -248,3 +248,12 @@ def test_sil_with_a_rate_that_is_not_positive_exits_2_before_starting_the_bridge
     assert done.returncode == 2, done.stderr
     assert "--realtime_rate" in done.stderr and "Traceback" not in done.stderr
     assert not (tmp_path / "sil").exists()
+
+
+@pytest.mark.parametrize(("flag", "value"), [("--flood_at", "-1"), ("--flood_rate", "0")])
+def test_sil_with_a_flood_that_cannot_be_exits_2_before_starting_the_bridge(tmp_path, flag, value):
+    flood = ["--flood_at", "2"] if flag != "--flood_at" else []
+    done = _run_sil(tmp_path, "--mission", "hit_target_front", *flood, flag, value)
+    assert done.returncode == 2, done.stderr
+    assert flag in done.stderr and "Traceback" not in done.stderr
+    assert not (tmp_path / "sil").exists()

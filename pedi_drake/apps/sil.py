@@ -5,6 +5,7 @@ bridge in a second process, judged against the bridge's ground truth.
                                   [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
                                   [--separate]
                                   [--operator_log FILE] [--callbacks] [--pin]
+                                  [--flood_at S [--flood_duration S] [--flood_rate HZ]]
 
 Starts `python -m pedi_drake.apps.sim_bridge --mission M --truth_log ...` (the robot side,
 real time, 500 Hz), then runs the mission here exactly as `run_sim.py --hardware` does (driver,
@@ -28,6 +29,14 @@ diagram time: beside the driver's stalls (their tick times and the loop's CPU ti
 a late tick computed, and the page faults the loop thread took in each call. The timers add a
 microsecond or two to each call.
 
+`--flood_at S` adds a publisher of malformed status messages in a third process,
+`python -m pedi_drake.apps.status_flood`: S seconds after the controller's first command it
+floods every status channel for `--flood_duration` seconds (1) at `--flood_rate` messages a
+second (500) of each kind (a wrong fingerprint, truncated, NaN fields). `sil.json`'s `flood`
+then says whether the driver counted every one by channel and reason, and how late the loop's
+ticks were while it lasted (from the run's wall-clock log): a floor of the hardware swap is that
+the flood latches nothing and delays no tick past its period.
+
 `--pin` runs the bridge on the last CPU this process may use and the controller side on the
 others (Linux CPU affinity; `sil.json`'s `cpus` says which): on a 2-core machine each process
 keeps a core of its own instead of the kernel moving them between the two.
@@ -49,10 +58,12 @@ from pydrake.common.yaml import yaml_load
 
 from pedi_drake import robot
 from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD
+from pedi_drake.apps.status_flood import expected_rejections
 from pedi_drake.callback_profile import slow_calls
 from pedi_drake.cpu_steal import steal_seconds
 from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.exceptions import ConfigError
+from pedi_drake.go1_driver.link import lateness_against_earliest
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.run import run
 from pedi_drake.run_checks import check_out_dir
@@ -70,6 +81,8 @@ BRIDGE_GAP = 0.02
 OPERATOR_END_TIMEOUT = 30.0
 # [s] of the loop's CPU time over which `--callbacks` keeps a call (a control period is 2 ms).
 SLOW_CALL = 0.001
+# [s] for the flood's publisher to leave once stopped.
+FLOOD_END_TIMEOUT = 30.0
 
 
 def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[dict]:
@@ -165,6 +178,9 @@ def run_sil(
     records: list | None = None,
     callbacks: bool = False,
     pin: bool = False,
+    flood_at: float | None = None,
+    flood_duration: float = 1.0,
+    flood_rate: float = 500.0,
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
@@ -179,6 +195,9 @@ def run_sil(
     pedi_drake.callback_profile): what the late ticks computed.
     `pin`: the bridge runs on this process's last CPU and the controller side on the others
     (`pinned_cpus`), so that neither is moved onto the other's CPU.
+    `flood_at`, `flood_duration`, `flood_rate`: a flood of malformed status messages `flood_at` [s]
+    after the first command, for `flood_duration` [s], at `flood_rate` [1/s] per channel and kind
+    (module docstring); None: no flood.
     """
     if separate and not RUN_SIM.is_file():
         raise ConfigError(f"--separate: needs run_sim.py beside the package (a source checkout); no {RUN_SIM}")
@@ -189,6 +208,12 @@ def run_sil(
         raise ConfigError(f"--realtime_rate: must be a positive number (1: real time), got {realtime_rate}")
     if separate and realtime_rate != 1.0:
         raise ConfigError("--separate: run_sim.py --hardware runs at real time only; drop --realtime_rate")
+    if flood_at is not None:
+        bounds = {"--flood_at": (flood_at, "non-negative"), "--flood_duration": (flood_duration, "positive")}
+        bounds["--flood_rate"] = (flood_rate, "positive")
+        for flag, (value, kind) in bounds.items():
+            if not (math.isfinite(value) and (value >= 0.0 if kind == "non-negative" else value > 0.0)):
+                raise ConfigError(f"{flag}: must be a finite {kind} number, got {value}")
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
     text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
     # Everything both sides will read is checked here first: bad input is a ConfigError naming
@@ -202,7 +227,8 @@ def run_sil(
     check_out_dir(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     truth_path = out_dir / "bridge_truth.npz"
-    operator = None
+    operator = flooder = None
+    flood_path = out_dir / "flood.json"
     bridge = subprocess.Popen(
         [sys.executable, "-m", "pedi_drake.apps.sim_bridge", "--mission", mission, "--lcm_url", url]
         + ["--scenario_name", scenario_name, "--scenario_text", text]
@@ -238,6 +264,15 @@ def run_sil(
                 stderr=subprocess.STDOUT,
                 text=True,
             )
+        if flood_at is not None:
+            flooder = subprocess.Popen(
+                [sys.executable, "-m", "pedi_drake.apps.status_flood", "--lcm_url", url, "--out", str(flood_path)]
+                + ["--start_after", str(flood_at), "--duration", str(flood_duration), "--rate", str(flood_rate)]
+                + ["--hold"],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
+            )
         steal_before = steal_seconds()
         if separate:
             result = _run_controller_program(mission, scenario_name, text, url, out_dir)
@@ -264,6 +299,10 @@ def run_sil(
             except subprocess.TimeoutExpired:
                 operator.send_signal(signal.SIGTERM)
                 operator_output, _ = operator.communicate(timeout=30)
+        if flooder is not None:  # it holds after the flood (or still waits for it): stopped now
+            if flooder.poll() is None:
+                flooder.send_signal(signal.SIGTERM)
+            flooder_output, _ = flooder.communicate(timeout=FLOOD_END_TIMEOUT)
     with np.load(truth_path) as archive:
         truth = {key: archive[key] for key in archive.files}
     logs = read_run_logs(out_dir)
@@ -286,6 +325,12 @@ def run_sil(
         result["sil"]["slow_calls"] = calls.summary()
     if operator is not None:
         result["sil"]["operator"] = {"returncode": operator.returncode, "output": operator_output.strip()}
+    if flooder is not None:
+        if flood_path.is_file():
+            flood = json.loads(flood_path.read_text())
+            result["sil"]["flood"] = flood_outcome(flood, result, logs, realtime_rate)
+        else:  # the run ended before the flood was due, or the publisher failed: say which
+            result["sil"]["flood"] = {"returncode": flooder.returncode, "output": flooder_output.strip()}
     (out_dir / "sil.json").write_text(json.dumps(result["sil"], indent=2))
     return result
 
@@ -297,6 +342,53 @@ def pinned_cpus(available: list[int]) -> dict[str, set[int]]:
             f"--pin: needs two CPUs to put the bridge and the controller apart; this process may use {available}"
         )
     return {"bridge": {available[-1]}, "controller": set(available[:-1])}
+
+
+def flood_outcome(flood: dict, result: dict, controller_logs: dict, realtime_rate: float = 1.0) -> dict:
+    """What a flood of malformed messages (`apps.status_flood`'s record) did to the run: the
+    driver's rejections by channel and reason against the ones the flood calls for, and the
+    lateness of the loop's ticks logged between its first and last message [ms] (each tick's
+    wall-clock log against its schedule, as the driver's report measures its publications)."""
+    messages = result["driver"]["messages"]
+    expected = expected_rejections(flood["sent"])
+    rejected = {channel: dict(messages.get(channel, {}).get("rejected", {})) for channel in expected}
+    every_one_counted = all(
+        rejected[channel].get(reason, 0) == count
+        for channel, reasons in expected.items()
+        for reason, count in reasons.items()
+    )
+    period = result["driver"]["loop"]["period_s"]
+    clock = controller_logs["wall_clock"]
+    wall = clock.data[0]
+    lateness = lateness_against_earliest(wall - clock.times / realtime_rate)
+    during = (wall >= flood["first_wall"]) & (wall <= flood["last_wall"] + period)
+    late = lateness[during]
+    return {
+        "sent": flood["sent"],
+        "expected_rejections": expected,
+        "rejected": rejected,
+        "every_one_counted": every_one_counted,
+        "ticks_during": int(np.count_nonzero(during)),
+        "deadline_misses_during": int(np.count_nonzero(late > period)),
+        "longest_lateness_during_ms": 1e3 * float(late.max()) if late.size else None,
+        "first_wall": flood["first_wall"],
+        "last_wall": flood["last_wall"],
+    }
+
+
+def flood_text(flood: dict) -> str:
+    """One line for `sil.flood` (flood_outcome, or the publisher's exit when it sent nothing)."""
+    if "sent" not in flood:
+        return f"flood: none sent (the publisher exited with {flood['returncode']}: {flood['output'] or 'no output'})"
+    sent = sum(sum(kinds.values()) for kinds in flood["sent"].values())
+    expected = sum(sum(reasons.values()) for reasons in flood["expected_rejections"].values())
+    longest = flood["longest_lateness_during_ms"]
+    return (
+        f"flood: {sent} malformed messages, {expected} to reject: "
+        f"{'every one counted' if flood['every_one_counted'] else 'NOT all counted'} by channel and reason; "
+        f"{flood['ticks_during']} ticks during it, {flood['deadline_misses_during']} past the period"
+        + (f", the latest {longest:.2f} ms late" if longest is not None else "")
+    )
 
 
 def slow_calls_text(summary: dict, count: int = 5) -> str:
@@ -353,6 +445,11 @@ def main() -> int:
         "--callbacks", action="store_true", help="record the controller side's callbacks over 1 ms of CPU time"
     )
     parser.add_argument("--pin", action="store_true", help="the bridge on the last CPU, the controller on the others")
+    parser.add_argument(
+        "--flood_at", type=float, default=None, help="flood malformed status this long after the first command [s]"
+    )
+    parser.add_argument("--flood_duration", type=float, default=1.0, help="of the flood [s]")
+    parser.add_argument("--flood_rate", type=float, default=500.0, help="of the flood, per channel and kind [1/s]")
     args = parser.parse_args()
     out_dir = Path(args.out or f"out/sil_{Path(args.mission).stem}")
     try:
@@ -362,6 +459,9 @@ def main() -> int:
             "operator_log": args.operator_log,
             "callbacks": args.callbacks,
             "pin": args.pin,
+            "flood_at": args.flood_at,
+            "flood_duration": args.flood_duration,
+            "flood_rate": args.flood_rate,
         }
         result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate, **options)
     except ConfigError as error:
@@ -421,6 +521,8 @@ def main() -> int:
         print(f"CPU time the hypervisor took from this machine meanwhile: {result['sil']['cpu_steal_ms']:.0f} ms")
     if "slow_calls" in result["sil"]:
         print(slow_calls_text(result["sil"]["slow_calls"]))
+    if "flood" in result["sil"]:
+        print(flood_text(result["sil"]["flood"]))
     print(f"wrote {out_dir / 'sil.json'}")
     return 0 if result["success"] else 1
 

@@ -1,7 +1,7 @@
 """Software in the loop at real time, repeated: how often each mission succeeds over the wire.
 
     python -m pedi_drake.benchmarks.sil_floors [--missions hit_target_front open_door prong_push_box]
-        [--runs 5] [--scenario_name default] [--separate | --callbacks] [--pin]
+        [--runs 5] [--scenario_name default] [--separate | --callbacks] [--pin] [--flood_at S]
         [--out benchmarks/results/sil_floors.json]
 
 Each run is `python -m pedi_drake.apps.sil --mission M` (the simulator bridge in its own process,
@@ -22,6 +22,11 @@ throttled; see pedi_drake.realtime_priority).
 side's callbacks and garbage collections over 1 ms (`slow_calls`), and the summary prints, per
 run, the costliest of them beside the longest stalls: what the late ticks computed.
 `--pin` runs them with `apps.sil --pin` (the bridge and the controller on CPUs of their own).
+`--flood_at S` runs them with `apps.sil --flood_at S`: S seconds after the first command, a third
+process floods every status channel with malformed messages for a second (500 a second of each
+kind: a wrong fingerprint, truncated, NaN fields). Such a run meets the floors only if, besides,
+the driver counted every malformed message by channel and reason and no tick logged during the
+flood was past its period.
 """
 
 import argparse
@@ -31,7 +36,7 @@ import platform
 import time
 from pathlib import Path
 
-from pedi_drake.apps.sil import run_sil, slow_calls_text
+from pedi_drake.apps.sil import flood_text, run_sil, slow_calls_text
 from pedi_drake.realtime_priority import rt_throttling
 
 DEFAULT_MISSIONS = ("hit_target_front", "open_door", "prong_push_box")
@@ -45,8 +50,16 @@ LONGEST_MISS_FLOOR_MS = 10.0  # no miss longer [ms]
 def meets_floors(row: dict) -> bool:
     """Whether a run (a row of `one_run`) met every floor (see the module docstring)."""
     error = row["max_true_foot_error_mm"]
+    flood = row.get("flood")
+    flood_held = flood is None or (
+        "sent" in flood
+        and flood["every_one_counted"]
+        and flood["ticks_during"] > 0
+        and flood["deadline_misses_during"] == 0
+    )
     return (
-        row["success"]
+        flood_held
+        and row["success"]
         and row["latched"] is None
         and error is not None
         and error < FOOT_ERROR_FLOOR_MM
@@ -80,10 +93,12 @@ def one_run(
     separate: bool = False,
     callbacks: bool = False,
     pin: bool = False,
+    flood_at: float | None = None,
 ) -> dict:
     load_before = _load()
     start = time.monotonic()
     options = {"scenario_name": scenario_name, "separate": separate, "callbacks": callbacks, "pin": pin}
+    options["flood_at"] = flood_at
     result = run_sil(mission, out_dir, scenario_text=scenario_text, **options)
     driver, sil = result["driver"], result["sil"]
     errors = [row["true_error_m"] for row in sil["foot_errors"]]
@@ -115,6 +130,7 @@ def one_run(
         "slow_calls": sil.get("slow_calls"),
         "cpu_steal_ms": sil.get("cpu_steal_ms"),
         "cpus": sil.get("cpus"),
+        "flood": sil.get("flood"),
     }
     row["meets_floors"] = meets_floors(row)
     return row
@@ -135,6 +151,9 @@ def main() -> None:
         "--callbacks", action="store_true", help="keep the controller side's callbacks over 1 ms (apps.sil --callbacks)"
     )
     parser.add_argument("--pin", action="store_true", help="the bridge and the controller on CPUs of their own")
+    parser.add_argument(
+        "--flood_at", type=float, default=None, help="a flood of malformed status this long after the first command [s]"
+    )
     parser.add_argument("--work", default="out/sil_floors", help="folder of the runs' outputs")
     parser.add_argument("--out", default="benchmarks/results/sil_floors.json")
     args = parser.parse_args()
@@ -145,7 +164,14 @@ def main() -> None:
         for mission in args.missions:
             work = Path(args.work) / f"{mission}_{run}"
             row = one_run(
-                mission, args.scenario_name, work, args.scenario_text, args.separate, args.callbacks, args.pin
+                mission,
+                args.scenario_name,
+                work,
+                args.scenario_text,
+                args.separate,
+                args.callbacks,
+                args.pin,
+                args.flood_at,
             )
             rows.append(row)
             error = row["max_true_foot_error_mm"]
@@ -161,6 +187,8 @@ def main() -> None:
                 f"{', meets the floors' if row['meets_floors'] else ''}",
                 flush=True,
             )
+            if row["flood"] is not None:
+                print("  " + flood_text(row["flood"]), flush=True)
             if row["slow_calls"] is not None:
                 stalls = row["stalls"]["longest"][:3]
                 print(
@@ -209,6 +237,7 @@ def main() -> None:
                 "separate": args.separate,
                 "callbacks": args.callbacks,
                 "pin": args.pin,
+                "flood_at": args.flood_at,
                 "machine": machine,
                 "summary": summary,
                 "runs": rows,

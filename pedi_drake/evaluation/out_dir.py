@@ -31,6 +31,7 @@ OWNED_FILES = (
     "live_suf.png",
     "sil.json",
     "bridge_truth.npz",
+    "flood.json",
 )
 
 
