@@ -20,7 +20,7 @@ the remote's sticks, which the driver does not read: its NaN messages are valid 
 not rejected); `expected_rejections` says so.
 
 Exit codes: 0 sent (with `--hold`: and then stopped); 1 no command on the bus within `--wait`
-seconds; 2 bad input.
+seconds; 2 bad input; 130 stopped (Ctrl-C) before the flood ended.
 """
 
 import argparse
@@ -147,4 +147,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except KeyboardInterrupt:  # Ctrl-C before or during the flood: stopped, nothing written
+        sys.exit(130)
