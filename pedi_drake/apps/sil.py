@@ -58,7 +58,7 @@ from pydrake.common.yaml import yaml_load
 
 from pedi_drake import robot
 from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD
-from pedi_drake.apps.status_flood import expected_rejections
+from pedi_drake.apps.status_flood import expected_rejections, number_problem
 from pedi_drake.callback_profile import slow_calls
 from pedi_drake.cpu_steal import steal_seconds
 from pedi_drake.evaluation.run_logs import read_run_logs
@@ -209,11 +209,11 @@ def run_sil(
     if separate and realtime_rate != 1.0:
         raise ConfigError("--separate: run_sim.py --hardware runs at real time only; drop --realtime_rate")
     if flood_at is not None:
-        bounds = {"--flood_at": (flood_at, "non-negative"), "--flood_duration": (flood_duration, "positive")}
-        bounds["--flood_rate"] = (flood_rate, "positive")
-        for flag, (value, kind) in bounds.items():
-            if not (math.isfinite(value) and (value >= 0.0 if kind == "non-negative" else value > 0.0)):
-                raise ConfigError(f"{flag}: must be a finite {kind} number, got {value}")
+        flood_flags = {"--flood_at": flood_at, "--flood_duration": flood_duration, "--flood_rate": flood_rate}
+        for flag, value in flood_flags.items():
+            problem = number_problem(flag, value, may_be_zero=flag == "--flood_at")
+            if problem is not None:
+                raise ConfigError(problem)
     url = lcm_url or f"udpm://{GROUP}:{20000 + os.getpid() % 20000}?ttl=0"
     text = scenario_text if scenario_text.strip() not in ("", "{}") else "{}"
     # Everything both sides will read is checked here first: bad input is a ConfigError naming

@@ -25,6 +25,7 @@ seconds; 2 bad input; 130 stopped (Ctrl-C) before the flood ended.
 
 import argparse
 import json
+import math
 import signal
 import sys
 import time
@@ -57,6 +58,14 @@ def malformed(channel: str, kind: str) -> bytes:
     if kind == "wrong_size":
         return bytes(data[: len(data) // 2])
     raise ValueError(f"malformed: kind must be one of {FLOOD_KINDS}, got {kind!r}")
+
+
+def number_problem(flag: str, value: float, *, may_be_zero: bool) -> str | None:
+    """Why `value` cannot be given to `flag` (a finite number above 0, or from 0 with
+    `may_be_zero`), as a message naming both; None when it can."""
+    if math.isfinite(value) and (value >= 0.0 if may_be_zero else value > 0.0):
+        return None
+    return f"{flag}: must be a finite number {'of 0 or more' if may_be_zero else 'above 0'}, got {value}"
 
 
 def expected_rejections(sent: dict[str, dict[str, int]]) -> dict[str, dict[str, int]]:
@@ -114,9 +123,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--hold", action="store_true", help="after the flood, idle until SIGTERM or SIGINT")
     args = parser.parse_args(argv)
     for name in ("start_after", "duration", "rate", "wait"):
-        value = getattr(args, name)
-        if not (value >= 0.0 and value < float("inf")) or (name in ("duration", "rate") and value == 0.0):
-            print(f"status_flood: --{name} must be a finite positive number, got {value}", file=sys.stderr)
+        problem = number_problem(f"--{name}", getattr(args, name), may_be_zero=name in ("start_after", "wait"))
+        if problem is not None:
+            print(f"status_flood: {problem}", file=sys.stderr)
             return 2
     if not lcm_url_is_valid(args.lcm_url):
         print(f"status_flood: --lcm_url: expected 'udpm://GROUP:PORT', got {args.lcm_url!r}", file=sys.stderr)
