@@ -194,7 +194,7 @@ def main(argv: list[str] | None = None) -> int:
     else:
         seconds = compile_kernels(jobs)
     workers = f"{jobs} processes" if jobs > 1 and jit.CACHE_WRITES_LOCKED else "1 process"
-    print(f"pedi_drake kernels {state} in {seconds:.1f} s ({workers}), cache {jit.cache_folder()}")
+    print(f"pedi_drake kernels {state} in {seconds:.1f} s ({workers}), cache {jit.cache_root()}")
     return 0
 
 

@@ -9,11 +9,14 @@ the compiled one on random inputs.
 
     PEDI_DRAKE_JIT=0    runs every kernel as plain Python (debugging; the same results, slower)
 
-The disk cache lives in a folder named by a hash of the package's sources
-(`<cache>/pedi_drake/numba/<hash>`, the user cache folder, or NUMBA_CACHE_DIR when set). numba
-judges a cached kernel stale only by its own file's time stamp, not by the kernels it calls in
-other files, so a kernel calling a changed kernel of another module would otherwise keep the old
-code: with the folder keyed by every source, any change of the package starts a new cache.
+The disk cache keeps each kernel module's kernels in a folder of their own, named by a hash of
+that module's source and of every package module it imports, directly or through others
+(`<cache>/pedi_drake/numba/<module>-<hash>`, under the user cache folder, or NUMBA_CACHE_DIR when
+set). numba judges a cached kernel stale only by its own file's time stamp, not by the kernels it
+calls in other files or the constants it read from them; a folder keyed by the module's import
+closure starts anew whenever anything its kernels can see changes, and only then: editing a
+phase, a plot or a benchmark compiles nothing, editing one kernel module recompiles the kernels of
+the modules that import it.
 
 Without numba installed the kernels run as plain Python too. Systems that call kernels compile
 them in their constructor (`warm_up`), never inside a control tick.
@@ -22,9 +25,12 @@ A kernel may call kernels (numba compiles them into it) and reads module constan
 when it was compiled; the cache folder's hash covers both.
 """
 
+import ast
+import functools
 import hashlib
 import logging
 import os
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -38,20 +44,66 @@ except ImportError:  # pragma: no cover - numba is a dependency; this keeps a br
 ENABLED = numba is not None and os.environ.get("PEDI_DRAKE_JIT", "1") != "0"
 
 
-def _source_hash() -> str:
-    """A short hash of every Python source of the package (paths and contents)."""
-    package = Path(__file__).resolve().parent
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def _module_file(name: str) -> Path | None:
+    """The source file of the package module `name` (dotted), or None if `name` is not one."""
+    parts = name.split(".")
+    if parts[0] != _PACKAGE.name:
+        return None
+    path = _PACKAGE.joinpath(*parts[1:])
+    for candidate in (path.with_suffix(".py"), path / "__init__.py"):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+@functools.cache
+def _imported_files(path: Path) -> frozenset[Path]:
+    """The package's source files that the module at `path` imports by name (one level)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_bytes())):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+            # `from pedi_drake.x import y` may name a module y as well as a member.
+            names.update(f"{node.module}.{alias.name}" for alias in node.names)
+    return frozenset(file for file in map(_module_file, names) if file is not None)
+
+
+def import_closure(path: Path) -> list[Path]:
+    """The module at `path` and every package module it imports, directly or indirectly, sorted."""
+    seen, todo = {path}, [path]
+    while todo:
+        for file in _imported_files(todo.pop()):
+            if file not in seen:
+                seen.add(file)
+                todo.append(file)
+    return sorted(seen)
+
+
+def _closure_hash(path: Path) -> str:
+    """A short hash of the sources (paths and contents) of `import_closure(path)`."""
     digest = hashlib.sha1()
-    for path in sorted(package.rglob("*.py")):
-        digest.update(str(path.relative_to(package)).encode())
-        digest.update(path.read_bytes())
+    for file in import_closure(path):
+        digest.update(str(file.relative_to(_PACKAGE)).encode())
+        digest.update(file.read_bytes())
     return digest.hexdigest()[:16]
 
 
-def cache_folder() -> Path:
-    """The disk cache folder of this version of the package's kernels."""
+def cache_root() -> Path:
+    """The folder holding every kernel module's cache folder."""
     base = os.environ.get("NUMBA_CACHE_DIR") or os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
-    return Path(base) / "pedi_drake" / "numba" / _source_hash()
+    return Path(base) / "pedi_drake" / "numba"
+
+
+def cache_folder(module_file: str | Path) -> Path:
+    """The disk cache folder of the kernels of the module at `module_file` in its current version."""
+    path = Path(module_file).resolve()
+    name = ".".join(path.relative_to(_PACKAGE).with_suffix("").parts)
+    return cache_root() / f"{name}-{_closure_hash(path)}"
 
 
 if ENABLED:
@@ -68,16 +120,14 @@ if ENABLED:
             if not self.told:
                 self.told = True
                 logging.getLogger(__name__).warning(
-                    "compiling the package's numba kernels into %s: once per version of the package, "
-                    "a few minutes on a 2-core machine",
-                    numba.config.CACHE_DIR,
+                    "compiling the package's numba kernels into %s: once per version of their modules, "
+                    "minutes when all are new",
+                    cache_root(),
                 )
 
         def on_end(self, event_) -> None:
             pass
 
-    # Read by numba when a kernel is decorated (below, as each module is imported).
-    numba.config.CACHE_DIR = str(cache_folder())
     event.register("numba:compile", _CompileNotice())
 
 
@@ -158,4 +208,10 @@ def kernel(function):
     if not ENABLED:
         function.py_func = function
         return function
+    # numba reads its cache folder when the kernel is decorated (as its module is imported).
+    module_file = getattr(sys.modules.get(function.__module__), "__file__", None)
+    if module_file is not None and Path(module_file).resolve().is_relative_to(_PACKAGE):
+        numba.config.CACHE_DIR = str(cache_folder(module_file))
+    else:  # a kernel outside the package (a test's): numba's own time-stamp check only
+        numba.config.CACHE_DIR = str(cache_root() / "outside")
     return numba.njit(cache=True, nogil=True, error_model="numpy")(function)
