@@ -22,7 +22,7 @@ setup(
         "pedi_drake.studies": "studies",
     },
     package_data={
-        "pedi_drake.models": ["*.xml", "**/*.urdf", "**/*.sdf", "**/*.obj", "**/*.py"],
+        "pedi_drake.models": ["*.xml", "**/*.xml", "**/*.urdf", "**/*.sdf", "**/*.obj", "**/*.py"],
         "pedi_drake.scenarios": ["*.yaml"],
         # The controller demonstrations (pedi_drake.benchmarks.demos) and the short paper-002
         # evaluations (pedi_drake.reproduce --quick, tests) in their subfolders.

@@ -3,7 +3,7 @@ bridge in a second process, judged against the bridge's ground truth.
 
     python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_name NAME]
                                   [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
-                                  [--separate]
+                                  [--separate] [--robot drake|mujoco]
                                   [--operator_log FILE] [--callbacks] [--pin]
                                   [--flood_at S [--flood_duration S] [--flood_rate HZ]]
 
@@ -18,6 +18,13 @@ With `--separate` the controller side is not run here but started as its own pro
 README's second terminal: `python run_sim.py --hardware --mission M ...` (the run_sim.py beside
 the package, so a source checkout), while the bridge keeps running as the first terminal's does.
 This process then only starts, waits and judges.
+
+`--robot mujoco` runs the robot side in MuJoCo instead (`python -m pedi_drake.apps.mujoco_bridge`,
+the same wire and truth log, another engine and a Go1 model with a real one's joint friction and
+soft feet); everything else is unchanged. For either robot, `sil.json` has the mission's touches
+judged by the truth log's contact forces (`touches`, pedi_drake.evaluation.touches), a
+`success_by_truth` (the mission's success and every touch happened by physics) and the estimate's
+vertical trunk error against the truth while standing (`estimator_trunk_height_error`).
 
 `--operator_log FILE` adds an operator in a third process, as a person would run one:
 `python -m pedi_drake.apps.teleop_lcm --lcm_log FILE --start_on_feedback` on the same bus, which
@@ -62,6 +69,7 @@ from pedi_drake.apps.status_flood import expected_rejections, number_problem
 from pedi_drake.callback_profile import slow_calls
 from pedi_drake.cpu_steal import steal_seconds
 from pedi_drake.evaluation.run_logs import read_run_logs
+from pedi_drake.evaluation.touches import judge_touches
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.go1_driver.link import lateness_against_earliest
 from pedi_drake.mission.spec import load_mission
@@ -83,6 +91,10 @@ OPERATOR_END_TIMEOUT = 30.0
 SLOW_CALL = 0.001
 # [s] for the flood's publisher to leave once stopped.
 FLOOD_END_TIMEOUT = 30.0
+# The robot side's program for each --robot: the project's Drake simulation, or MuJoCo.
+BRIDGES = {"drake": "pedi_drake.apps.sim_bridge", "mujoco": "pedi_drake.apps.mujoco_bridge"}
+# [m] true trunk height above which the robot counts as standing for `estimator_height_error`.
+STANDING_TRUNK_HEIGHT = 0.2
 
 
 def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[dict]:
@@ -107,8 +119,9 @@ def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[d
     return rows
 
 
-def estimator_error(controller_logs: dict, truth: dict) -> dict:
-    """Trunk position error of the estimate against the bridge's ground truth over the run [m]."""
+def _estimate_and_truth(controller_logs: dict, truth: dict) -> tuple[np.ndarray, np.ndarray]:
+    """(estimated, true) trunk positions (3, n) [m] at the estimator's logged samples within the
+    truth log's span, aligned by the wall clock."""
     clock, base = controller_logs["wall_clock"], controller_logs["base_state"]
     n = min(len(clock.times), len(base.times))
     wall = clock.data[0, :n]
@@ -116,8 +129,46 @@ def estimator_error(controller_logs: dict, truth: dict) -> dict:
     # The sample logged at t = 0 precedes the estimator's first update (it is all zeros).
     inside &= base.times[:n] > 0.0
     p_true = np.array([np.interp(wall[inside], truth["wall_time"], truth["p_WB"][:, k]) for k in range(3)])
-    error = np.linalg.norm(base.data[4:7, :n][:, inside] - p_true, axis=0)
+    return base.data[4:7, :n][:, inside], p_true
+
+
+def estimator_error(controller_logs: dict, truth: dict) -> dict:
+    """Trunk position error of the estimate against the bridge's ground truth over the run [m]."""
+    p_estimated, p_true = _estimate_and_truth(controller_logs, truth)
+    error = np.linalg.norm(p_estimated - p_true, axis=0)
     return {"max_m": float(np.max(error)), "final_m": float(error[-1])}
+
+
+def estimator_height_error(controller_logs: dict, truth: dict, standing: float = STANDING_TRUNK_HEIGHT) -> dict:
+    """|z_estimated - z_true| of the trunk [m], median and max over the run's samples with the true
+    trunk above `standing` [m] (None when it never stood), and how many samples that was."""
+    p_estimated, p_true = _estimate_and_truth(controller_logs, truth)
+    up = p_true[2] > standing
+    error = np.abs(p_estimated[2, up] - p_true[2, up])
+    if error.size == 0:
+        return {"median_m": None, "max_m": None, "samples": 0, "standing_above_m": standing}
+    return {
+        "median_m": float(np.median(error)),
+        "max_m": float(np.max(error)),
+        "samples": int(error.size),
+        "standing_above_m": standing,
+    }
+
+
+def truth_touches(result: dict, touches: list, controller_logs: dict, truth: dict) -> tuple[list[dict], str]:
+    """The mission's `touches` judged by the truth log's contact forces (judge_touches): its
+    samples taken while the controller side ran, put on the controller's clock (the phases')
+    through the wall clock. A truth log without contact forces judges every touch as missed."""
+    clock = controller_logs["wall_clock"]
+    wall = truth["wall_time"]
+    inside = (wall >= clock.data[0, 0]) & (wall <= clock.data[0, -1])
+    times = np.interp(wall[inside], clock.data[0], clock.times)
+    names = [str(name) for name in truth.get("scene_names", [])]
+    forces = truth.get("scene_contact_forces", np.zeros((len(wall), 0)))[inside].T
+    missing = [touch.object for touch in touches if touch.object not in names]
+    if missing:
+        return [], f"the truth log has no contact forces for {sorted(set(missing))}"
+    return judge_touches(touches, names, result["phases"], times, forces)
 
 
 def start_transient(controller_logs: dict, truth: dict, window: float = START_WINDOW) -> dict:
@@ -181,6 +232,7 @@ def run_sil(
     flood_at: float | None = None,
     flood_duration: float = 1.0,
     flood_rate: float = 500.0,
+    robot: str = "drake",
 ) -> dict:
     """Runs `mission` over UDP against the simulator bridge; returns the run's result with a `sil` entry.
 
@@ -198,7 +250,10 @@ def run_sil(
     `flood_at`, `flood_duration`, `flood_rate`: a flood of malformed status messages `flood_at` [s]
     after the first command, for `flood_duration` [s], at `flood_rate` [1/s] per channel and kind
     (module docstring); None: no flood.
+    `robot`: the robot side's engine, a key of BRIDGES ("drake": sim_bridge, "mujoco": mujoco_bridge).
     """
+    if robot not in BRIDGES:
+        raise ConfigError(f"--robot: expected one of {sorted(BRIDGES)}, got {robot!r}")
     if separate and not RUN_SIM.is_file():
         raise ConfigError(f"--separate: needs run_sim.py beside the package (a source checkout); no {RUN_SIM}")
     if separate and callbacks:
@@ -220,7 +275,7 @@ def run_sil(
     # the flag, not a bridge that dies with its message out of sight.
     if not lcm_url_is_valid(url):
         raise ConfigError(f"--lcm_url: expected 'udpm://GROUP:PORT' (a multicast group 224-239.x.x.x), got {url!r}")
-    load_mission(mission)
+    touches = load_mission(mission).touches
     bus = f"{{go1: {{lcm_url: '{url}'}}}}"
     overrides = f"{{mission: {mission}, controller: whole_body, estimator: kalman, lcm_buses: {bus}}}"
     scenario = apply_scenario_text(load_scenario(scenario_name=scenario_name, scenario_text=text), overrides)
@@ -230,7 +285,7 @@ def run_sil(
     operator = flooder = None
     flood_path = out_dir / "flood.json"
     bridge = subprocess.Popen(
-        [sys.executable, "-m", "pedi_drake.apps.sim_bridge", "--mission", mission, "--lcm_url", url]
+        [sys.executable, "-m", BRIDGES[robot], "--mission", mission, "--lcm_url", url]
         + ["--scenario_name", scenario_name, "--scenario_text", text]
         + ["--truth_log", str(truth_path), "--realtime_rate", str(realtime_rate)],
         stdout=subprocess.PIPE,
@@ -254,7 +309,7 @@ def run_sil(
                 raise RuntimeError(f"the simulator bridge exited with {bridge.returncode} before starting:\n{output}")
             if time.monotonic() - start > BRIDGE_START_TIMEOUT:
                 raise RuntimeError("the simulator bridge did not start within 60 s")
-        # "go1_sim_bridge: running on URL (its scheduling)"
+        # "go1_sim_bridge: running on URL (its scheduling)" (go1_mujoco_bridge: the same)
         bridge_scheduling = line.strip().rpartition("(")[2].rstrip(")")
         if operator_log is not None:
             operator = subprocess.Popen(
@@ -306,9 +361,15 @@ def run_sil(
     with np.load(truth_path) as archive:
         truth = {key: archive[key] for key in archive.files}
     logs = read_run_logs(out_dir)
+    touch_rows, touch_problem = truth_touches(result, touches, logs, truth)
     result["sil"] = {
+        "robot": robot,
         "foot_errors": true_foot_errors(result, logs, truth),
+        "touches": touch_rows,
+        "touches_reason": touch_problem,
+        "success_by_truth": bool(result["success"]) and not touch_problem,
         "estimator_trunk_position_error": estimator_error(logs, truth),
+        "estimator_trunk_height_error": estimator_height_error(logs, truth),
         "start": start_transient(logs, truth),
         "bridge_pace": bridge_pace(truth),
         "lcm_url": url,
@@ -450,6 +511,7 @@ def main() -> int:
     )
     parser.add_argument("--flood_duration", type=float, default=1.0, help="of the flood [s]")
     parser.add_argument("--flood_rate", type=float, default=500.0, help="of the flood, per channel and kind [1/s]")
+    parser.add_argument("--robot", choices=sorted(BRIDGES), default="drake", help="the robot side's physics engine")
     args = parser.parse_args()
     out_dir = Path(args.out or f"out/sil_{Path(args.mission).stem}")
     try:
@@ -462,6 +524,7 @@ def main() -> int:
             "flood_at": args.flood_at,
             "flood_duration": args.flood_duration,
             "flood_rate": args.flood_rate,
+            "robot": args.robot,
         }
         result = run_sil(args.mission, out_dir, args.scenario_text, args.lcm_url, args.realtime_rate, **options)
     except ConfigError as error:
@@ -478,10 +541,26 @@ def main() -> int:
             f"{row['phase']:<20}{row['leg']:<5}{1000 * row['true_error_m']:16.1f}"
             f"{(1000 * estimated if estimated is not None else float('nan')):16.1f}"
         )
+    for row in result["sil"]["touches"]:
+        print(
+            f"touch {row['phase']:<20}{row['leg']:<5}{row['object']:<16}largest normal force "
+            f"{row['max_normal_force_n']:.1f} N (need {row['required_force_n']:.1f}): "
+            f"{'touched' if row['touched'] else 'NOT touched'}"
+        )
+    print(
+        f"success by truth ({result['sil']['robot']} robot): {'yes' if result['sil']['success_by_truth'] else 'NO'}"
+        + (f" ({result['sil']['touches_reason']})" if result["sil"]["touches_reason"] else "")
+    )
     trunk = result["sil"]["estimator_trunk_position_error"]
     print(
         f"estimated trunk position vs truth: max {1000 * trunk['max_m']:.1f} mm, final {1000 * trunk['final_m']:.1f} mm"
     )
+    height = result["sil"]["estimator_trunk_height_error"]
+    if height["median_m"] is not None:
+        print(
+            f"estimated trunk height vs truth while standing (true z > {height['standing_above_m']} m): median "
+            f"{1000 * height['median_m']:.1f} mm, max {1000 * height['max_m']:.1f} mm"
+        )
     start = result["sil"]["start"]
     print(
         f"first {1000 * start['window_s']:.0f} ms: largest step of a measured joint "

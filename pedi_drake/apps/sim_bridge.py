@@ -15,7 +15,8 @@ e.g. `python run_sim.py --hardware --mission hit_target_front` in a second termi
 
 `--mission` adds the mission's scene objects and robot variant, as run_sim does. `--truth_log`
 writes the simulated ground truth on exit (wall-clock time [s], trunk pose, foot positions in
-world), which no controller sees: `pedi_drake.apps.sil` uses it to judge a run over the wire.
+world, the robot's normal contact forces on each scene object), which no controller
+sees: `pedi_drake.apps.sil` uses it to judge a run over the wire.
 """
 
 import argparse
@@ -210,7 +211,10 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
     builder.ExportOutput(receiver.GetOutputPort("message_counts"), "bridge.command_counts")
     builder.ExportOutput(station.GetOutputPort("sim.plant_state"), "sim.plant_state")
     clock = builder.AddNamedSystem("wall_clock", WallClock())
-    for name, port in (("log.plant_state", station.GetOutputPort("sim.plant_state")), ("log.wall_clock", clock.clock)):
+    logged = [("log.plant_state", station.GetOutputPort("sim.plant_state")), ("log.wall_clock", clock.clock)]
+    if scenario.scene:  # the robot's contact forces on each scene object (none without a scene)
+        logged.append(("log.scene_contact_forces", station.GetOutputPort("sim.scene_contact_forces")))
+    for name, port in logged:
         logger = builder.AddNamedSystem(name, VectorLogSink(port.size(), TRUTH_LOG_PERIOD))
         builder.Connect(port, logger.get_input_port())
     diagram = builder.Build()
@@ -218,16 +222,22 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
     return diagram
 
 
-def write_truth_log(diagram, context, path: Path) -> Path:
+def write_truth_log(diagram, context, path: Path, scene_names: list[str] = ()) -> Path:
     """Writes the bridge's ground truth to `path` (npz): wall_time (N,) [s], p_WB (N, 3) [m],
-    quaternion_WB (N, 4) (w, x, y, z), p_WF (N, 4, 3) foot centres FR, FL, RR, RL [m]."""
+    quaternion_WB (N, 4) (w, x, y, z), p_WF (N, 4, 3) foot centres FR, FL, RR, RL [m],
+    scene_names (the scene's object names, in order) and scene_contact_forces (N, len(scene_names) * 5)
+    [N]: the true normal contact forces between each object and each foot / the rest of the robot
+    (`sim.scene_contact_forces`, in the order of pedi_drake.station.scene_contact.scene_contact_index)."""
     plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     states = diagram.GetSubsystemByName("log.plant_state").FindLog(context).data()
     wall = diagram.GetSubsystemByName("log.wall_clock").FindLog(context).data()[0]
     plant_context = plant.CreateDefaultContext()
     trunk = plant.GetBodyByName(robot.TRUNK_BODY_NAME)
     feet = [plant.GetBodyByName(name) for name in robot.FOOT_BODY_NAMES]
-    n = min(states.shape[1], len(wall))
+    logged_forces = (
+        diagram.GetSubsystemByName("log.scene_contact_forces").FindLog(context).data() if scene_names else None
+    )
+    n = min(states.shape[1], len(wall), logged_forces.shape[1] if logged_forces is not None else len(wall))
     p_WB, quaternion, p_WF = np.zeros((n, 3)), np.zeros((n, 4)), np.zeros((n, 4, 3))
     for k in range(n):
         plant.SetPositionsAndVelocities(plant_context, states[:, k])
@@ -237,7 +247,16 @@ def write_truth_log(diagram, context, path: Path) -> Path:
             p_WF[k, i] = plant.EvalBodyPoseInWorld(plant_context, foot).translation()
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    np.savez_compressed(path, wall_time=wall[:n], p_WB=p_WB, quaternion_WB=quaternion, p_WF=p_WF)
+    forces = logged_forces[:, :n].T if logged_forces is not None else np.zeros((n, 0))
+    np.savez_compressed(
+        path,
+        wall_time=wall[:n],
+        p_WB=p_WB,
+        quaternion_WB=quaternion,
+        p_WF=p_WF,
+        scene_names=np.asarray(list(scene_names), dtype=str),
+        scene_contact_forces=forces,
+    )
     return path
 
 
@@ -291,7 +310,8 @@ def main(argv: list[str] | None = None) -> int:
         pass
     finally:
         if args.truth_log:
-            path = write_truth_log(diagram, simulator.get_context(), args.truth_log)
+            scene_names = [obj.instance_name for obj in scenario.scene]
+            path = write_truth_log(diagram, simulator.get_context(), args.truth_log, scene_names)
             print(f"go1_sim_bridge: ground truth written to {path} ({time.time():.3f})", flush=True)
     return 0
 

@@ -1,0 +1,56 @@
+"""apps.sil's judgement by the robot side's truth log: touches by contact force, the estimate's trunk height."""
+
+import numpy as np
+
+from pedi_drake.apps.sil import estimator_height_error, truth_touches
+from pedi_drake.evaluation.run_logs import SignalLog
+from pedi_drake.mission.spec import Touch
+
+PERIOD = 0.002  # [s] controller tick
+
+
+def _controller_logs(wall_start: float, n: int, z_estimated: np.ndarray) -> dict[str, SignalLog]:
+    times = PERIOD * np.arange(n)
+    base = np.zeros((13, n))
+    base[6] = z_estimated
+    return {"wall_clock": SignalLog(times, (wall_start + times)[np.newaxis, :]), "base_state": SignalLog(times, base)}
+
+
+def test_a_touch_counts_in_its_phase_on_the_controllers_clock():
+    logs = _controller_logs(1000.0, 1000, np.zeros(1000))  # the controller ran from wall 1000 to 1002
+    wall = 999.0 + 0.01 * np.arange(400)  # the bridge from 999 to 1003
+    forces = np.zeros((400, 10))  # two objects
+    forces[(wall > 1001.2) & (wall < 1001.3), 5] = 3.0  # panel (object 1), FR, at t = 1.2..1.3 s
+    forces[wall < 1000.0, 9] = 50.0  # before the controller ran: not judged
+    truth = {"wall_time": wall, "scene_names": np.array(["box", "panel"]), "scene_contact_forces": forces}
+    phases = [{"name": "reach", "t_start": 1.0, "t_end": 1.5}, {"name": "early", "t_start": 0.0, "t_end": 0.5}]
+    touches = [Touch(object="panel", leg="FR", phase="reach", force=1.0)]
+    rows, problem = truth_touches({"phases": phases}, touches, logs, truth)
+    assert problem == ""
+    assert rows[0]["touched"] and rows[0]["max_normal_force_n"] == 3.0
+    assert abs(rows[0]["max_force_at_s"] - 1.21) < 0.011
+    missed, problem = truth_touches({"phases": phases}, [Touch("panel", "other", "early", 1.0)], logs, truth)
+    assert not missed[0]["touched"] and "did not touch panel" in problem
+
+
+def test_a_touch_of_an_object_the_truth_does_not_know_is_a_problem():
+    logs = _controller_logs(0.0, 10, np.zeros(10))
+    truth = {"wall_time": 0.01 * np.arange(3), "scene_names": np.array([]), "scene_contact_forces": np.zeros((3, 0))}
+    rows, problem = truth_touches({"phases": []}, [Touch("panel", "FR", "reach", 1.0)], logs, truth)
+    assert rows == [] and "panel" in problem
+
+
+def test_the_height_error_counts_only_while_standing():
+    n = 1000
+    wall = 50.0 + 0.01 * np.arange(200)
+    p_WB = np.zeros((200, 3))
+    p_WB[:, 2] = np.where(wall < 51.0, 0.1, 0.28)  # lying for a second, then standing
+    # The estimate 10 mm below the truth throughout, 1 m below it at the first tick while lying.
+    z_estimated = np.interp(50.0 + PERIOD * np.arange(n), wall, p_WB[:, 2]) - 0.01
+    z_estimated[1] -= 1.0
+    logs = _controller_logs(50.0, n, z_estimated)
+    error = estimator_height_error(logs, {"wall_time": wall, "p_WB": p_WB})
+    assert abs(error["median_m"] - 0.01) < 1e-9 and abs(error["max_m"] - 0.01) < 1e-9  # not the lying one
+    assert 0 < error["samples"] < n
+    never = estimator_height_error(logs, {"wall_time": wall, "p_WB": np.zeros((200, 3))})
+    assert never["median_m"] is None and never["samples"] == 0
