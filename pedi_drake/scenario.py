@@ -34,6 +34,7 @@ from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.realtime_priority import priority_problem
 from pedi_drake.resources import models_dir, scenarios_dir
+from pedi_drake.station.model_error import ModelErrorConfig
 from pedi_drake.suf.live_config import LiveSufConfig
 
 SCENE_OBJECT_KINDS = (
@@ -201,6 +202,10 @@ class Scenario:
     pushes: list[Push] = dataclasses.field(default_factory=list)
     # Simulated sensor noise.
     sensor_noise: SensorNoiseConfig = dataclasses.field(default_factory=SensorNoiseConfig)
+    # How the simulated Go1 differs from the controllers' model (payload, motor strength and
+    # latency, joint losses, foot size and softness; simulation only, default none; see
+    # pedi_drake.station.model_error for each field's unit and range).
+    model_error: ModelErrorConfig = dataclasses.field(default_factory=ModelErrorConfig)
     # Which controller drives the robot: "stand_pd", "whole_body" (the HQP of papers 000 / 003) or
     # "projected_impedance" (paper 002's projected inverse dynamics with foot impedance).
     controller: str = "stand_pd"
@@ -310,6 +315,8 @@ class Scenario:
         for i, push in enumerate(self.pushes):
             for field, problem in push.problems():
                 need(False, f"pushes[{i}].{field}", problem)
+        for field, problem in self.model_error.problems(self.plant_config):
+            need(False, f"model_error.{field}", problem)
         if self.robot.prongs is not None:
             try:
                 self.robot.prongs.validate(where="robot.prongs")

@@ -16,12 +16,30 @@
           - {random_seed: 0, sensor_noise.enabled: false}
           - {random_seed: 1, sensor_noise.enabled: true}
         labels: [clean, noisy]         # optional: how the rows and the summary name the values
+      - name: error                    # joint random draws of several fields (one value per draw)
+        draw:
+          count: 30                    # draws
+          seed: 11                     # optional (default 0)
+          fields:                      # field: distribution (optional size: a list of that many)
+            model_error.payload_mass: {uniform: [0.0, 3.0]}
+            model_error.motor_strength: {uniform: [0.6, 1.0], size: 4}
+            model_error.foot_contact_stiffness: {log_uniform: [1880.0, 2.0e+5]}
+            model_error.payload_offset: {ball: 0.05}      # a point uniform in a ball [x, y, z]
+            random_seed: {integers: [0, 1000]}            # whole numbers, high excluded
+            estimator: {choice: [kalman, ground_truth]}
 
 A factor sets the scenario field `field` (default: its name; dotted for nested fields, e.g.
 `sensor_noise.enabled`, `whole_body.stack`, `robot.prongs`), or, when a value is a mapping,
 every field of that mapping. For `kind: suf` the fields are those of `SufDesign` (trunk height,
 feet, prongs, method). Every task's settings are checked when the study is loaded, so a bad
 study file stops before any task starts.
+
+A `draw` factor draws every field of each of its values at random, each field from its own
+generator (seeded by the draw's seed and the field's name, so adding a field leaves the others'
+draws as they were). Its rows and summary name a draw by one number per field
+(`draw_label`): the value itself, the smallest entry of a `size` draw (the weakest leg of
+`model_error.motor_strength`), the distance from the centre of a `ball` draw (how far the
+payload sits from the trunk centre), so that the summary can bin success against each field.
 """
 
 import dataclasses
@@ -29,6 +47,7 @@ import hashlib
 import itertools
 import json
 import math
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -93,10 +112,96 @@ class Study:
     source: str  # the file it came from
 
 
-def _values(raw: dict, where: str, missions_ok: bool) -> list:
-    keys = [k for k in ("values", "range", "random") if k in raw]
+# The distributions of a `draw` factor's fields and what each takes.
+DISTRIBUTIONS = {
+    "uniform": "[low, high]",
+    "log_uniform": "[low, high], 0 < low (uniform in the logarithm)",
+    "integers": "[low, high], whole numbers, high excluded",
+    "choice": "a non-empty list of values, each as likely",
+    "ball": "a radius > 0: a point [x, y, z] uniform in the ball of that radius about the origin",
+}
+
+
+def _draw_field(spec, count: int, rng: np.random.Generator, where: str) -> tuple[list, list]:
+    """(values, labels) of `count` draws of one field from its distribution `spec`."""
+    if not isinstance(spec, dict) or len(set(spec) & set(DISTRIBUTIONS)) != 1 or set(spec) - {*DISTRIBUTIONS, "size"}:
+        raise StudyError(f"{where}: one of {sorted(DISTRIBUTIONS)} (and optionally size), got {spec!r}")
+    (kind,) = set(spec) & set(DISTRIBUTIONS)
+    args, size = spec[kind], spec.get("size")
+    if size is not None and (kind in ("ball", "choice") or not (isinstance(size, int) and size >= 1)):
+        raise StudyError(f"{where}.size: a whole number >= 1 for uniform, log_uniform or integers, got {size!r}")
+    shape = (count,) if size is None else (count, size)
+    if kind == "choice":
+        if not isinstance(args, list) or not args:
+            raise StudyError(f"{where}.choice: {DISTRIBUTIONS['choice']}, got {args!r}")
+        values = [args[int(k)] for k in rng.integers(0, len(args), size=count)]
+        return values, [v if isinstance(v, int | float | str | bool) else json.dumps(v) for v in values]
+    if kind == "ball":
+        if not (isinstance(args, int | float) and math.isfinite(args) and args > 0):
+            raise StudyError(f"{where}.ball: {DISTRIBUTIONS['ball']}, got {args!r}")
+        direction = rng.normal(size=(count, 3))
+        direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+        radius = args * rng.uniform(size=count) ** (1.0 / 3.0)
+        points = direction * radius[:, None]
+        return [[float(v) for v in p] for p in points], [float(r) for r in radius]
+    ok = (
+        isinstance(args, list) and len(args) == 2 and all(isinstance(v, int | float) and math.isfinite(v) for v in args)
+    )
+    if not ok or not args[0] < args[1] or (kind == "log_uniform" and args[0] <= 0):
+        raise StudyError(f"{where}.{kind}: {DISTRIBUTIONS[kind]} with low < high, got {args!r}")
+    low, high = args
+    if kind == "integers":
+        drawn = rng.integers(int(low), int(high), size=shape)
+        convert = int
+    elif kind == "log_uniform":
+        drawn = np.exp(rng.uniform(math.log(low), math.log(high), size=shape))
+        convert = float
+    else:
+        drawn = rng.uniform(low, high, size=shape)
+        convert = float
+    if size is None:
+        values = [convert(v) for v in drawn]
+        return values, list(values)
+    return [[convert(v) for v in row] for row in drawn], [convert(min(row)) for row in drawn]
+
+
+def _draw(spec, where: str) -> tuple[list[dict], list[dict]]:
+    """(values, labels) of a `draw` factor: per draw, {field: value} and {field: label number}."""
+    if not isinstance(spec, dict) or set(spec) - {"count", "seed", "fields"} or not {"count", "fields"} <= set(spec):
+        raise StudyError(f"{where}: needs count and fields (optional seed), got {spec!r}")
+    count, seed, fields = spec["count"], spec.get("seed", 0), spec["fields"]
+    if not (isinstance(count, int) and not isinstance(count, bool) and count >= 1):
+        raise StudyError(f"{where}.count: a whole number >= 1, got {count!r}")
+    if not (isinstance(seed, int) and not isinstance(seed, bool) and seed >= 0):
+        raise StudyError(f"{where}.seed: a whole number >= 0, got {seed!r}")
+    if not isinstance(fields, dict) or not fields:
+        raise StudyError(f"{where}.fields: a non-empty mapping of field: distribution")
+    values, labels = [{} for _ in range(count)], [{} for _ in range(count)]
+    for field, distribution in fields.items():
+        # Each field's own stream: adding or reordering fields leaves the others' draws unchanged.
+        rng = np.random.default_rng([seed, zlib.crc32(str(field).encode())])
+        drawn, shown = _draw_field(distribution, count, rng, f"{where}.fields.{field}")
+        for k in range(count):
+            values[k][str(field)], labels[k][str(field)] = drawn[k], shown[k]
+    return values, labels
+
+
+def draw_label(label) -> bool:
+    """Whether a row's factor value is a draw's label ({field: number or choice}, see `_draw`)."""
+    return isinstance(label, dict) and bool(label) and all(isinstance(v, int | float | str) for v in label.values())
+
+
+def _values(raw: dict, where: str, missions_ok: bool) -> tuple[list, list | None]:
+    """(values, default labels) of a factor: the labels are the values, except for a draw."""
+    if "draw" in raw and len([k for k in ("values", "range", "random") if k in raw]) == 0:
+        return _draw(raw["draw"], f"{where}.draw")
+    return _plain_values(raw, where, missions_ok), None
+
+
+def _plain_values(raw: dict, where: str, missions_ok: bool) -> list:
+    keys = [k for k in ("values", "range", "random", "draw") if k in raw]
     if len(keys) != 1:
-        raise StudyError(f"{where}: give exactly one of values, range, random (got {keys or 'none'})")
+        raise StudyError(f"{where}: give exactly one of values, range, random, draw (got {keys or 'none'})")
     key = keys[0]
     spec = raw[key]
     if key == "values":
@@ -235,15 +340,17 @@ def study_from_dict(raw, where: str) -> Study:
         at = f"{where}: factors[{i}]"
         if not isinstance(factor, dict) or "name" not in factor:
             raise StudyError(f"{at}: a mapping with a name")
-        unknown = set(factor) - {"name", "field", "values", "range", "random", "labels"}
+        unknown = set(factor) - {"name", "field", "values", "range", "random", "draw", "labels"}
         if unknown:
             raise StudyError(f"{at}: unknown field(s) {sorted(unknown)}")
+        if "draw" in factor and {"field", "labels"} & set(factor):
+            raise StudyError(f"{at}: a draw names its fields and labels its values itself (no field, no labels)")
         fname = factor["name"]
         if fname in names:
             raise StudyError(f"{at}.name: duplicate factor {fname!r}")
         field = factor.get("field", fname)
-        values = _values(factor, at, missions_ok=(field == "mission"))
-        labels = factor.get("labels", values)
+        values, drawn_labels = _values(factor, at, missions_ok=(field == "mission"))
+        labels = factor.get("labels", values if drawn_labels is None else drawn_labels)
         if "labels" in factor and (
             not isinstance(labels, list)
             or len(labels) != len(values)

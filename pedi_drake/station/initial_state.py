@@ -16,10 +16,11 @@ from pedi_drake.scenario import RobotConfig
 GROUND_CLEARANCE = 0.0005  # [m] feet start this far above the ground, so nothing starts in penetration.
 
 
-def _height_on_feet(q: np.ndarray) -> float:
-    """Trunk height [m] at which the lowest foot of the (level) pose `q` rests on the ground."""
+def _height_on_feet(q: np.ndarray, foot_radius: float = robot.FOOT_RADIUS) -> float:
+    """Trunk height [m] at which the lowest foot (of `foot_radius` [m]) of the (level) pose `q`
+    rests on the ground."""
     lowest = min(foot_position_B(leg, q[robot.leg_slice(leg)])[2] for leg in robot.LEG_NAMES)
-    return -lowest + robot.FOOT_RADIUS + GROUND_CLEARANCE
+    return -lowest + foot_radius + GROUND_CLEARANCE
 
 
 def _prong_rest_height(config: RobotConfig) -> float | None:
@@ -45,12 +46,14 @@ def initial_joint_positions(config: RobotConfig) -> np.ndarray:
     return q
 
 
-def initial_trunk_pose(config: RobotConfig) -> RigidTransform:
+def initial_trunk_pose(config: RobotConfig, foot_radius: float = robot.FOOT_RADIUS) -> RigidTransform:
     """X_WB with the trunk level, at `initial_xy` and `initial_yaw`, resting on its lowest support.
 
     That is the lowest foot or, for a robot with prongs, the prong tips (whichever is lower).
+    `foot_radius` [m]: the plant's feet (a scenario's model error may make them differ from the
+    controllers' robot.FOOT_RADIUS); the joint angles are the same for every radius.
     """
-    height = _height_on_feet(initial_joint_positions(config))
+    height = _height_on_feet(initial_joint_positions(config), foot_radius)
     rest = _prong_rest_height(config)
     if rest is not None:
         height = max(height, rest)
@@ -58,10 +61,13 @@ def initial_trunk_pose(config: RobotConfig) -> RigidTransform:
     return RigidTransform(RollPitchYaw(0.0, 0.0, config.initial_yaw), [x, y, height])
 
 
-def set_default_go1_state(plant, plant_map: robot.Go1PlantMap, config: RobotConfig) -> None:
-    """Sets the plant's default (initial) Go1 pose; call after Finalize, before creating contexts."""
+def set_default_go1_state(
+    plant, plant_map: robot.Go1PlantMap, config: RobotConfig, foot_radius: float = robot.FOOT_RADIUS
+) -> None:
+    """Sets the plant's default (initial) Go1 pose, feet of `foot_radius` [m]; call after Finalize,
+    before creating contexts."""
     plant.SetDefaultFloatingBaseBodyPose(
-        plant.GetBodyByName(robot.TRUNK_BODY_NAME, plant_map.model), initial_trunk_pose(config)
+        plant.GetBodyByName(robot.TRUNK_BODY_NAME, plant_map.model), initial_trunk_pose(config, foot_radius)
     )
     q = initial_joint_positions(config)
     for name, angle in zip(robot.JOINT_NAMES, q, strict=True):

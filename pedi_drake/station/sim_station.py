@@ -1,7 +1,9 @@
 """The simulated Go1 station: MultibodyPlant + SceneGraph + motor model + sensors.
 
 Exports exactly the station ports of docs/conventions.md (`go1.*`), plus simulation-only
-ports (`sim.*`) for logging and tests, which controllers and estimators never read.
+ports (`sim.*`) for logging and tests, which controllers and estimators never read. The
+scenario's `model_error` (pedi_drake.station.model_error) makes this plant and its motors differ
+from the Go1 the controllers model.
 """
 
 import numpy as np
@@ -14,6 +16,7 @@ from pedi_drake import robot
 from pedi_drake.scenario import Scenario
 from pedi_drake.station.disturbance import PUSH_FORCE_SIZE, PushDisturbance
 from pedi_drake.station.initial_state import initial_trunk_pose, set_default_go1_state
+from pedi_drake.station.model_error import apply_plant_error
 from pedi_drake.station.motor_model import Go1MotorModel
 from pedi_drake.station.plant_readings import PlantReadings
 from pedi_drake.station.scene import add_ground, add_scene_object
@@ -43,16 +46,27 @@ def MakeSimulationStation(scenario: Scenario, meshcat: Meshcat | None = None) ->
     builder = DiagramBuilder()
     plant, scene_graph = AddMultibodyPlant(scenario.plant_config, builder)
     model = robot.add_go1(plant, prongs=scenario.robot.prongs)
+    # The reality gap: this plant and its motors only, never the controllers' model.
+    error = scenario.model_error
+    apply_plant_error(plant, scene_graph, model, error)
     add_ground(plant, scenario.ground_friction)
-    X_WB0 = initial_trunk_pose(scenario.robot)
+    X_WB0 = initial_trunk_pose(scenario.robot, error.foot_radius)
     for obj in scenario.scene:
         add_scene_object(plant, obj, X_WB0)
     plant.Finalize()
     plant_map = robot.Go1PlantMap.from_plant(plant, model)
-    set_default_go1_state(plant, plant_map, scenario.robot)
+    set_default_go1_state(plant, plant_map, scenario.robot, error.foot_radius)
 
     motors = builder.AddNamedSystem(
-        "motors", Go1MotorModel(plant_map, plant.num_positions(), plant.num_velocities(), plant.num_actuators())
+        "motors",
+        Go1MotorModel(
+            plant_map,
+            plant.num_positions(),
+            plant.num_velocities(),
+            plant.num_actuators(),
+            error=error,
+            time_step=plant.time_step(),
+        ),
     )
     builder.Connect(plant.get_state_output_port(), motors.GetInputPort("plant_state"))
     builder.Connect(motors.GetOutputPort("actuation"), plant.get_actuation_input_port())
