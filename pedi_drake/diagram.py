@@ -253,7 +253,7 @@ def MakePedipulationDiagram(
         estimator = builder.AddNamedSystem(
             "estimator", KalmanEstimator(scenario.kalman, scenario.robot.initial_xy, scenario.robot.prongs)
         )
-        for name in ("imu", "position_measured", "velocity_measured", "foot_contact"):
+        for name in ("imu", "position_measured", "velocity_measured", "torque_estimated", "foot_contact"):
             builder.Connect(station.GetOutputPort(f"go1.{name}"), estimator.GetInputPort(name))
     base_state = estimator.GetOutputPort("base_state")
 

@@ -1,43 +1,15 @@
 """The controller side of a hardware run sends the recorded reference commands.
 
-The fixture holds the first 4000 ticks (8 s: standing up, lifting FR and reaching) of
-hit_target_front replayed through the `--hardware` diagram: the robot's status at every tick and
-the command sent for it, both float32 as on the wire. Regenerate it only when a change of the
-commands is intended:
+The fixture holds the first 4000 ticks (8 s: settling the trunk on the ground, standing up,
+lifting FR and reaching) of hit_target_front replayed through the `--hardware` diagram: the
+robot's status at every tick and the command sent for it, both float32 as on the wire. Regenerate
+it only when a change of the commands is intended (say which in the commit):
 
     python -m pedi_drake.benchmarks.controller_latency --record-reference \
         tests/fixtures/controller_side_reference.npz
 
 Speed work on the estimator, mission manager, IK, whole-body controller or driver must leave
 every command within the solver's tolerance of the reference.
-
-It was last recorded when the driver's safety filter and sender began to run after the
-controller in the same tick, so the command computed in a tick is sent in it (before, two ticks
-later): the commands are the recording before's two ticks earlier (4000 of its 4001; the two
-damping commands the filter and the controller held at the start are gone), equal in kp and kd,
-and in q_des within 0.64 mrad and tau_ff within 0.026 N m (a median of 0), where the filter now
-bounds them against the status of their own tick. The recording before it was made when the
-driver's status receiver began to latch in an unrestricted update,
-so the estimator and the controller use the status of their own tick, a tick sooner than before
-(from tick 1 on the commands differ: up to 0.1 rad in q_des over the open-loop ticks, where the
-controller's joint reference runs against its bound around the measurement, a median of 6 mN m a
-tick in tau_ff). The recording before it was made when the controllers began to hold damping
-until their first tick
-(go1_command.initial_command: the second command on the wire, tick 1, went from kp = kd = 0, a
-limp motor, to kd = 1 N m s/rad; the other 4000 commands stayed within one float32 rounding of
-the recording before, 1.5e-8 rad/s in qd_des, from the recorded status's own last bits). The
-recording before it began when the hardware diagram began to initialise its state estimate from the
-robot's first status (an intended change of the commands from the third tick on: before, the
-mission's first update planned the stand-up from the estimator's unset output, a trunk at z = 0,
-so the replayed stand-up differed by up to 0.1 rad in q_des and 2.8 N m in tau_ff). The
-recording before that one began when reaches planned their joint targets from the trunk's
-reference pose instead of its estimate. Both were made on the compiled whole-body tick, whose
-level QPs are solved exactly (`pedi_drake.control.dense_qp`; tests/test_compiled_controller.py
-and tests/test_dense_qp.py tie it to the Python reference and to DAQP at tight tolerances). An
-older reference had been recorded with DAQP at the controller's settings, which stops within its tolerance: the
-compiled tick's commands differed from it by at most 1.2e-7 rad (q_des), 7.4e-5 N m (tau_ff)
-and 3.2e-4 rad/s (qd_des, which integrates the per-tick differences of the joint accelerations
-over the 4000 open-loop ticks).
 """
 
 from pathlib import Path

@@ -10,10 +10,12 @@ from pedi_drake import robot
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.estimation.kalman_estimator import (
+    COMPLIANCE,
     GRAVITY_W,
     FloatingBaseKalmanFilter,
     ImuSample,
     KalmanEstimator,
+    _vertical_forces_kernel,
     imu_offset_B,
 )
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
@@ -194,6 +196,7 @@ def _estimator_context(config=None):
     estimator.imu_port.FixValue(context, imu)
     estimator.position_port.FixValue(context, q)
     estimator.velocity_port.FixValue(context, np.zeros(12))
+    estimator.torque_port.FixValue(context, np.zeros(12))
     estimator.foot_contact_port.FixValue(context, np.full(4, 30.0))
     return estimator, context
 
@@ -219,7 +222,7 @@ def _quaternion(wxyz):
     return Quaternion(np.asarray(wxyz) / np.linalg.norm(wxyz))
 
 
-@pytest.mark.parametrize("port", ["imu", "position_measured", "velocity_measured", "foot_contact"])
+@pytest.mark.parametrize("port", ["imu", "position_measured", "velocity_measured", "torque_estimated", "foot_contact"])
 def test_non_finite_inputs_hold_the_last_estimate(port):
     estimator, context = _estimator_context()
     before = _tick(estimator, context).copy()
@@ -264,3 +267,85 @@ def test_estimate_follows_the_simulated_robot_standing_up_with_sensor_noise():
 
 def test_imu_offset_is_read_from_the_model():
     np.testing.assert_allclose(imu_offset_B(), [-0.01592, -0.06659, -0.00617], atol=1e-9)
+
+
+# A quarter of the Go1's weight sinks a rubber foot of MuJoCo Menagerie's Go1 by about 17 mm [m/N].
+RUBBER_FOOT_COMPLIANCE = 0.017 / (robot.TOTAL_MASS * 9.81 / 4)
+
+
+def _sinking_feet_run(compliance: float, duration: float, rng, noise: bool, config=None):
+    """Height error [m] and compliance estimate [m/N] of the filter, per tick, over a trunk swaying
+    +-2 cm in x at 0.5 Hz on feet that sink `compliance` [m/N] times their load; the front and rear
+    loads swing by +-30 % with the sway. The joint torques are those that hold the feet's loads."""
+    kf = FloatingBaseKalmanFilter(config or KalmanEstimatorConfig(), np.zeros(3))
+    weight = robot.TOTAL_MASS * 9.81
+    h = robot.trunk_height_for(0.9, -1.8)
+    w = 2.0 * np.pi * 0.5
+    nominal = _feet_W(np.array([0.0, 0.0, h]))
+    front = np.array([1.0, 1.0, -1.0, -1.0])  # FR, FL, RR, RL
+    contact = np.ones(4, dtype=bool)
+    errors, compliances = [], []
+    x = P = q_prev = None
+    for k in range(int(duration / DT)):
+        t = k * DT
+        p = np.array([0.02 * np.sin(w * t), 0.0, h])
+        a = np.array([-0.02 * w * w * np.sin(w * t), 0.0, 0.0])
+        loads = weight / 4 * (1.0 + 0.3 * front * np.sin(w * t))
+        feet = nominal.copy()
+        feet[:, 2] = robot.FOOT_RADIUS - compliance * loads
+        q = _joint_angles_for(p, feet)
+        qd = np.zeros(12) if q_prev is None else (q - q_prev) / DT
+        q_prev = q
+        _, jacobians = foot_kinematics_B(q)
+        tau = np.concatenate([-jacobians[i].T @ [0.0, 0.0, loads[i]] for i in range(4)])
+        f_B = a - GRAVITY_W
+        if noise:
+            f_B = f_B + rng.normal(0.0, 0.05, 3)
+            q = q + rng.normal(0.0, 0.0005, 12)
+            tau = tau + rng.normal(0.0, 0.1, 12)
+        imu = ImuSample(np.eye(3), np.zeros(3), f_B)
+        if x is None:
+            x, P = kf.initial_state(imu, q, p[:2])
+        else:
+            x, P = kf.predict(x, P, imu, contact, DT)
+        x, P = kf.update(x, P, imu, q, qd, contact, tau=tau)
+        errors.append(x[2] - p[2])
+        compliances.append(x[COMPLIANCE])
+    return np.array(errors), np.array(compliances)
+
+
+def test_feet_that_sink_under_load_do_not_lift_the_estimated_world(rng):
+    errors, compliances = _sinking_feet_run(RUBBER_FOOT_COMPLIANCE, 4.0, rng, noise=True)
+    settled = slice(int(1.0 / DT), None)
+    assert np.max(np.abs(errors[settled])) < 0.003, np.max(np.abs(errors[settled]))
+    assert abs(compliances[-1] - RUBBER_FOOT_COMPLIANCE) < 0.2 * RUBBER_FOOT_COMPLIANCE
+
+
+def test_taking_the_sinking_feet_as_rigid_puts_the_world_too_high_by_the_sink(rng):
+    # The same robot with the compliance held at 0 (the filter before it estimated one).
+    rigid = KalmanEstimatorConfig(
+        foot_compliance_std=0.0, foot_compliance_process_noise=0.0, foot_sink_std=0.0, foot_sink_process_noise=0.0
+    )
+    errors, _ = _sinking_feet_run(RUBBER_FOOT_COMPLIANCE, 4.0, rng, noise=True, config=rigid)
+    assert np.median(errors[int(1.0 / DT) :]) > 0.012
+
+
+def test_rigid_feet_are_estimated_rigid(rng):
+    errors, compliances = _sinking_feet_run(0.0, 4.0, rng, noise=True)
+    assert np.max(np.abs(errors[int(1.0 / DT) :])) < 0.002
+    assert compliances[-1] < 0.05 * RUBBER_FOOT_COMPLIANCE
+
+
+def test_vertical_loads_come_from_the_joint_torques_that_hold_them(rng):
+    R = RotationMatrix(RollPitchYaw(0.05, -0.08, 0.3)).matrix()
+    _, jacobians = foot_kinematics_B(robot.STANDING_Q)
+    loads_W = rng.uniform(5.0, 60.0, 4)
+    tau = np.concatenate([-jacobians[i].T @ (R.T @ [0.0, 0.0, loads_W[i]]) for i in range(4)])
+    np.testing.assert_allclose(_vertical_forces_kernel(R, jacobians, tau), loads_W, rtol=1e-9)
+    # A leg pulled upwards (no ground can do that) reads as no load.
+    assert _vertical_forces_kernel(R, jacobians, -tau).tolist() == [0.0] * 4
+
+
+def test_bad_compliance_settings_name_the_field():
+    with pytest.raises(ScenarioError, match=r"kalman\.foot_compliance_std"):
+        load_scenario(scenario_text="{kalman: {foot_compliance_std: -1.0}}")

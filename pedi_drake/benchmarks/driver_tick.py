@@ -69,7 +69,7 @@ def run(ticks: int, evict_mb: float, wake_on_command: bool = False) -> dict:
         estimator = builder.AddNamedSystem(
             "estimator", KalmanEstimator(scenario.kalman, scenario.robot.initial_xy, scenario.robot.prongs)
         )
-    for name in ("imu", "position_measured", "velocity_measured", "foot_contact"):
+    for name in ("imu", "position_measured", "velocity_measured", "torque_estimated", "foot_contact"):
         builder.Connect(station.GetOutputPort(f"go1.{name}"), estimator.GetInputPort(name))
     builder.ExportInput(station.GetInputPort("go1.command"), "go1.command")
     diagram = builder.Build()

@@ -31,6 +31,25 @@ class KalmanEstimatorConfig:
     ground_height_measurement: bool = True
     # Noise of that height measurement [m].
     ground_height_noise: float = 0.003
+    # Feet that sink into the ground under load (rubber feet, carpet, soft soil): each stance foot's
+    # centre sits at foot radius - c F above the ground, F its vertical load [N] (joint-torque
+    # estimate), c the compliance [m/N] the filter estimates from how the loads differ between the
+    # feet and change over time. Its prior mean [m/N] (0: rigid) ...
+    foot_compliance_prior: float = 0.0
+    # ... and standard deviation [m/N] (0: c stays at the prior). 5e-4 covers a rubber foot that
+    # sinks 17 mm under a quarter of a Go1's weight (0.53 mm/N) at one sigma.
+    foot_compliance_std: float = 5e-4
+    # Random walk of c [m/N / sqrt(s)]: the ground changes under a walking robot.
+    foot_compliance_process_noise: float = 2e-5
+    # The sink s [m] every stance foot has whatever its load (a soft layer that bottoms out): the
+    # centre sits at foot radius - s - c F. The feet's loads cannot tell it from a higher floor; it
+    # is calibrated whenever something rigid rests on the ground (the trunk, the prong tips). Its
+    # prior mean [m] ...
+    foot_sink_prior: float = 0.0
+    # ... standard deviation [m] (0: s stays at the prior) ...
+    foot_sink_std: float = 0.01
+    # ... and random walk [m / sqrt(s)].
+    foot_sink_process_noise: float = 1e-4
     # Where the trunk starts in the world, x, y [m]; null takes the scenario's robot.initial_xy
     # (the height follows from the feet on the ground, the orientation from the IMU).
     initial_xy: list[float] | None = None
@@ -52,6 +71,17 @@ class KalmanEstimatorConfig:
             value = getattr(self, name)
             if not (isinstance(value, int | float) and value > 0 and value < float("inf")):
                 problems.append(f"{where}.{name}: must be a finite number > 0, got {value!r}")
+        for name in (
+            "foot_compliance_prior",
+            "foot_compliance_std",
+            "foot_compliance_process_noise",
+            "foot_sink_prior",
+            "foot_sink_std",
+            "foot_sink_process_noise",
+        ):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and 0 <= value < float("inf")):
+                problems.append(f"{where}.{name}: must be a finite number >= 0, got {value!r}")
         if self.initial_xy is not None and len(self.initial_xy) != 2:
             problems.append(f"{where}.initial_xy: expected [x, y] in metres, got {self.initial_xy!r}")
         return problems

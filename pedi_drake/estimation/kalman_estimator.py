@@ -3,16 +3,36 @@
 The filter of Bloesch et al. (2013) in its linear form (as in MIT Cheetah 3): the IMU gives the
 orientation R_WB (its quaternion) and the angular velocity (gyro); the filter estimates
 
-    x = [p_WB (3), v_WB (3), p_WF for the four feet (12)]   (world frame, 18 states)
+    x = [p_WB (3), v_WB (3), p_WF for the four feet (12), c, s]   (world frame, 20 states)
+
+Feet that sink into the ground (rubber feet, carpet, soft soil): a stance foot under a vertical
+load F has its centre at foot radius - s - c F, with c [m/N] the feet's compliance and s [m] a
+sink they reach under any load (a soft layer that bottoms out, as MuJoCo's soft foot contact and
+a carpet's pile do);
 
 * predict: p += v dt + a dt^2 / 2, v += a dt with a = R_WB (f_I - w x (w x p_BI)) + g, the
   accelerometer's specific force moved from the IMU to the trunk origin; feet stand still, with
   a small random walk in contact and a large one in the air;
 * update, every foot: p_WF - p_WB = R_WB p_BF(q) (leg kinematics);
   every foot in contact: v_WB = -R_WB (J(q) qd + w_B x p_BF) + (its rolling velocity) (the
-  contact point does not move), and, on flat ground, p_WF,z = foot radius; every loaded prong
+  contact point does not move), and, on flat ground, p_WF,z + s + c F = foot radius, F the foot's
+  vertical load from the joint torques (F = -J^-T tau, quasi-static); every loaded prong
   tip likewise (it does not move and touches the ground); with no foot and no prong loaded the
-  trunk rests on the ground (lying): v_WB = 0.
+  trunk rests on the ground (lying): v_WB = 0; and while the trunk rests on the ground with the
+  feet loaded (the feet carry a share of the weight within `RESTING_LOAD_SHARES`, the trunk lower
+  than `RESTING_HEIGHT_SLACK` above its resting height, no prong loaded, for `RESTING_TICKS`),
+  p_WB,z = the height at which its lowest rigid point (a corner of the trunk's box, a prong tip)
+  touches flat ground.
+
+The height rows make c observable wherever the feet carry different loads (the trunk's centre of
+mass is never exactly amid them, a lifted leg moves its load onto the others): the IMU fixes the
+trunk's tilt, the kinematics each foot's height under it, so a foot carrying 10 N more that sits
+lower than the others by 10 c says what c is. s is the same under every load, so the feet alone
+cannot tell it from a higher floor: it is calibrated against something rigid on the ground, the
+trunk resting on it (the stand-up begins by settling the trunk on the ground,
+pedi_drake.mission.phases.StandUpRunner) or loaded prong tips. Without both the filter takes
+every stance foot to sit at its radius, and a robot whose feet sink puts its whole world too high
+by the sink.
 
 A foot is in contact when the mission's contact schedule (if connected) loads it and its sensor
 reads above a threshold; a prong tip when the schedule loads that prong. Each prong counts on
@@ -44,9 +64,32 @@ from pedi_drake.prongs import ProngDesign
 from pedi_drake.vector3 import rotation_matrix_kernel
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
-NUM_STATES = 18
-# Layout of the filter's discrete state: [initialised flag, x (18), P (18 x 18) row by row].
-FILTER_STATE_SIZE = 1 + NUM_STATES + NUM_STATES * NUM_STATES
+NUM_STATES = 20
+COMPLIANCE = 18  # index of the feet's compliance c [m/N] in x
+SINK = 19  # index of the feet's sink s [m] in x
+# s is kept within [0, this] [m]: no foot lifts under load, and none sinks further than its radius.
+MAX_SINK = 0.03
+# The trunk rests on the ground, its feet loaded, when the feet carry between these shares of the
+# robot's weight (below the lower one the legs are limp or in the air, and the feet's sink, which
+# the resting trunk measures, is not there to measure) ...
+RESTING_LOAD_SHARES = (0.2, 0.8)
+# ... it is at most this far above the height at which its lowest point touches the ground [m] ...
+RESTING_HEIGHT_SLACK = 0.03
+# ... and both have held for this many ticks in a row (a load passes through the band as the legs
+# take the weight, without the trunk resting).
+RESTING_TICKS = 50
+# c and s are learnt only while the robot is nearly still: the trunk slower than this [m/s] and
+# every joint slower than this [rad/s]. In a fast motion the joint torques carry the legs' own
+# dynamics, not only the feet's loads, and a falling or rising trunk's kinematics would be taken
+# for feet sinking; then c and s are held, and the feet's heights use them as they are.
+QUASI_STATIC_SPEED = 0.05
+QUASI_STATIC_RATE = 1.0
+# c is kept within [0, this] [m/N]: no foot lifts under load, and none sinks 2 mm per newton (60 mm
+# under a standing Go1's quarter weight, which no foot of a walking robot does).
+MAX_COMPLIANCE = 2e-3
+# Layout of the filter's discrete state: [initialised flag, x (20), P (20 x 20) row by row, ticks the
+# trunk has rested].
+FILTER_STATE_SIZE = 1 + NUM_STATES + NUM_STATES * NUM_STATES + 1
 # A joint angle further than this outside its limits is no real sample (all zeros before the
 # first leg_control_data: the calf cannot be at 0) [rad].
 _PLAUSIBLE_SLACK = 0.2
@@ -151,9 +194,47 @@ def _contact_kernel(foot_sensor, schedule, threshold):
 
 
 @kernel
+def _vertical_forces_kernel(R_WB, J, tau):
+    """(4,) the vertical force of the ground on each foot [N], >= 0: F = -J^-T tau (the motor
+    torques of a still leg balance its contact force), turned into the world by R_WB; 0 for a leg
+    whose Jacobian is singular. Only F's world z is needed: z^T R J^-T = (J^-1 R^T z)^T, so one
+    3x3 solve (Cramer's rule) per leg."""
+    forces = np.zeros(4)
+    for i in range(4):
+        A = J[i]
+        # u solves A u = R^T z (the world's vertical in the trunk frame); F_z = -u . tau.
+        b0, b1, b2 = R_WB[2, 0], R_WB[2, 1], R_WB[2, 2]
+        det = (
+            A[0, 0] * (A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1])
+            - A[0, 1] * (A[1, 0] * A[2, 2] - A[1, 2] * A[2, 0])
+            + A[0, 2] * (A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0])
+        )
+        if abs(det) < 1e-9:
+            continue
+        u0 = (
+            b0 * (A[1, 1] * A[2, 2] - A[1, 2] * A[2, 1])
+            - A[0, 1] * (b1 * A[2, 2] - A[1, 2] * b2)
+            + A[0, 2] * (b1 * A[2, 1] - A[1, 1] * b2)
+        ) / det
+        u1 = (
+            A[0, 0] * (b1 * A[2, 2] - A[1, 2] * b2)
+            - b0 * (A[1, 0] * A[2, 2] - A[1, 2] * A[2, 0])
+            + A[0, 2] * (A[1, 0] * b2 - b1 * A[2, 0])
+        ) / det
+        u2 = (
+            A[0, 0] * (A[1, 1] * b2 - b1 * A[2, 1])
+            - A[0, 1] * (A[1, 0] * b2 - b1 * A[2, 0])
+            + b0 * (A[1, 0] * A[2, 1] - A[1, 1] * A[2, 0])
+        ) / det
+        value = -(u0 * tau[3 * i] + u1 * tau[3 * i + 1] + u2 * tau[3 * i + 2])
+        forces[i] = max(value, 0.0)
+    return forces
+
+
+@kernel
 def _process_noise_kernel(in_contact, dt, noise_std):
     """Diagonal of Q over dt [s] for the feet in contact; `noise_std` = the config's position,
-    accelerometer, stance-foot and swing-foot process noises."""
+    accelerometer, stance-foot, swing-foot and foot-compliance process noises."""
     q = np.empty(NUM_STATES)
     for k in range(3):
         q[k] = noise_std[0] ** 2 * dt
@@ -162,6 +243,8 @@ def _process_noise_kernel(in_contact, dt, noise_std):
         sigma = noise_std[2] if in_contact[i] else noise_std[3]
         for k in range(3):
             q[6 + 3 * i + k] = sigma * sigma * dt
+    q[COMPLIANCE] = noise_std[4] ** 2 * dt
+    q[SINK] = noise_std[5] ** 2 * dt
     return q
 
 
@@ -200,15 +283,17 @@ def _predict_kernel(x, P, R_WB, w_B, f_B, p_BI, dt, rolling, in_contact, noise_s
 
 
 @kernel
-def _measurement_rows(in_contact, num_tips, use_height, noise_std):
+def _measurement_rows(in_contact, num_tips, use_height, noise_std, vertical_forces, resting_trunk, learn_sink):
     """The measurement model of `update` for the feet `in_contact` and `num_tips` loaded prong tips:
-    (columns (m, 2), coefficients (m, 2), variances (m,)), row i of H being coefficients[i, 0] at
-    columns[i, 0] plus coefficients[i, 1] at columns[i, 1] (0 where a row has one non-zero).
+    (columns (m, 3), coefficients (m, 3), variances (m,)), row i of H being coefficients[i, j] at
+    columns[i, j] summed over j (a coefficient 0 where a row has fewer non-zeros).
 
     `noise_std`: the config's foot position [m], foot velocity [m/s], ground height [m] and resting
-    velocity [m/s] noises. Rows: every foot's position relative to the trunk, the stance feet's
-    trunk velocities, their heights (`use_height`), each loaded tip's trunk velocity and height,
-    or, with nothing loaded, the resting trunk's horizontal velocity.
+    velocity [m/s] noises; `vertical_forces` (4,) the feet's loads [N]. Rows: every foot's position
+    relative to the trunk, the stance feet's trunk velocities, their heights with their sink
+    (`use_height`: p_WF,z + s + c F; with `learn_sink` false, p_WF,z alone, s and c held), each
+    loaded tip's trunk velocity and height, with nothing loaded the resting trunk's horizontal
+    velocity, and the resting trunk's height (`resting_trunk`).
     """
     foot_position, foot_velocity = noise_std[0], noise_std[1]
     ground_height, resting_velocity = noise_std[2], noise_std[3]
@@ -221,8 +306,9 @@ def _measurement_rows(in_contact, num_tips, use_height, noise_std):
     # drifting while the legs unfold (the knees may push it up: z is left to the IMU).
     resting = stance == 0 and num_tips == 0
     m = 12 + 3 * stance + (stance if use_height else 0) + (2 if resting else 0) + 4 * num_tips
-    columns = np.zeros((m, 2), dtype=np.int64)
-    coefficients = np.zeros((m, 2))
+    m += 1 if resting_trunk else 0
+    columns = np.zeros((m, 3), dtype=np.int64)
+    coefficients = np.zeros((m, 3))
     noise = np.empty(m)
     # Every foot's position p_WF - p_WB; a foot in the air is carried by the kinematics: a loose
     # measurement of it costs nothing.
@@ -243,6 +329,9 @@ def _measurement_rows(in_contact, num_tips, use_height, noise_std):
         for i in range(4):  # flat ground under the feet in contact
             if in_contact[i]:
                 columns[row, 0], coefficients[row, 0] = 6 + 3 * i + 2, 1.0
+                if learn_sink:
+                    columns[row, 1], coefficients[row, 1] = COMPLIANCE, vertical_forces[i]
+                    columns[row, 2], coefficients[row, 2] = SINK, 1.0
                 noise[row] = ground_height**2
                 row += 1
     for _ in range(num_tips):  # tip velocity (3) and height (1)
@@ -256,11 +345,17 @@ def _measurement_rows(in_contact, num_tips, use_height, noise_std):
         for k in range(2):
             columns[row + k, 0], coefficients[row + k, 0] = 3 + k, 1.0
             noise[row + k] = resting_velocity**2
+        row += 2
+    if resting_trunk:
+        columns[row, 0], coefficients[row, 0] = 2, 1.0
+        noise[row] = ground_height**2
     return columns, coefficients, noise
 
 
 @kernel
-def _measurements_kernel(R, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, use_height, foot_radius, tips_B, m):
+def _measurements_kernel(
+    R, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, use_height, foot_radius, tips_B, resting_height, sinks, m
+):
     """The measurement vector y (m,) of `FloatingBaseKalmanFilter.update`, in the row order of
     `_measurement_rows`: every foot's R p_BF, the stance feet's trunk velocities (and heights),
     the loaded prong tips' trunk velocity and height (radius - (R p_BT)_z: `tips_B` (k, 4) holds
@@ -286,9 +381,12 @@ def _measurements_kernel(R, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, 
             if use_rolling:
                 y[row + r] += rolling[i, r]
         row += 3
-    if use_height:  # flat ground under the feet in contact
-        for i in range(stance):
-            y[row + i] = foot_radius
+    if use_height:  # flat ground under the feet in contact, each foot sunk by `sinks` (held s + c F)
+        k = 0
+        for i in range(4):
+            if in_contact[i]:
+                y[row + k] = foot_radius - sinks[i]
+                k += 1
         row += stance
     for t in range(tips_B.shape[0]):
         # A loaded prong tip does not move and touches the ground: v_WB = -R (w x p_BT) and
@@ -299,7 +397,10 @@ def _measurements_kernel(R, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, 
             y[row + r] = -(R[r, 0] * v_B[0] + R[r, 1] * v_B[1] + R[r, 2] * v_B[2])
         y[row + 3] = p[3] - (R[2, 0] * p[0] + R[2, 1] * p[1] + R[2, 2] * p[2])
         row += 4
-    # With nothing loaded the trunk rests on the ground: the remaining rows (zero velocity) stay 0.
+    # With nothing loaded the trunk rests on the ground: the zero-velocity rows stay 0. A resting
+    # trunk's height row (`resting_height` > 0) is the last.
+    if resting_height > 0.0:
+        y[m - 1] = resting_height
     return y
 
 
@@ -318,18 +419,19 @@ def _correct_kernel(x, P, columns, coefficients, noise, y):
     P_new = 0.5 * (P + P.T)
     ph = np.empty(n)
     for i in range(y.shape[0]):
-        a, b = columns[i, 0], columns[i, 1]
-        ca, cb = coefficients[i, 0], coefficients[i, 1]
         for r in range(n):
-            ph[r] = ca * P_new[r, a]
-        if cb != 0.0:
-            for r in range(n):
-                ph[r] += cb * P_new[r, b]
-        variance = ca * ph[a] + noise[i]
-        innovation = y[i] - ca * x_new[a]
-        if cb != 0.0:
-            variance += cb * ph[b]
-            innovation -= cb * x_new[b]
+            ph[r] = 0.0
+        variance, innovation = noise[i], y[i]
+        for j in range(columns.shape[1]):
+            coefficient = coefficients[i, j]
+            if coefficient != 0.0:
+                column = columns[i, j]
+                for r in range(n):
+                    ph[r] += coefficient * P_new[r, column]
+                innovation -= coefficient * x_new[column]
+        for j in range(columns.shape[1]):
+            if coefficients[i, j] != 0.0:
+                variance += coefficients[i, j] * ph[columns[i, j]]
         if not variance > 0.0:
             return x, P, False
         inverse = 1.0 / variance
@@ -342,7 +444,7 @@ def _correct_kernel(x, P, columns, coefficients, noise, y):
 
 
 @kernel
-def _initial_state_kernel(R_WB, q, xy, offsets, foot_radius):
+def _initial_state_kernel(R_WB, q, xy, offsets, foot_radius, sink_prior):
     """`FloatingBaseKalmanFilter.initial_state` on plain arrays: (x, P)."""
     p_BF, _ = foot_kinematics_kernel(q, offsets)
     feet_W = np.empty((4, 3))
@@ -360,25 +462,84 @@ def _initial_state_kernel(R_WB, q, xy, offsets, foot_radius):
     for k in range(3):
         P[k, k] = _INITIAL_STD[0] ** 2
         P[3 + k, 3 + k] = _INITIAL_STD[1] ** 2
-    for k in range(6, NUM_STATES):
+    for k in range(6, COMPLIANCE):
         P[k, k] = _INITIAL_STD[2] ** 2
+    # sink_prior: c's and s's prior means and standard deviations, [c, std c, s, std s].
+    x[COMPLIANCE], x[SINK] = sink_prior[0], sink_prior[2]
+    P[COMPLIANCE, COMPLIANCE] = sink_prior[1] * sink_prior[1]
+    P[SINK, SINK] = sink_prior[3] * sink_prior[3]
     return x, P
 
 
 @kernel
+def _resting_height(R_WB, rest_points):
+    """The trunk height [m] at which the lowest of `rest_points` (k, 4: position in the trunk frame
+    [m], radius [m]) touches flat ground at the attitude R_WB."""
+    height = 0.0
+    for k in range(rest_points.shape[0]):
+        p = rest_points[k]
+        height = max(height, p[3] - (R_WB[2, 0] * p[0] + R_WB[2, 1] * p[1] + R_WB[2, 2] * p[2]))
+    return height
+
+
+@kernel
 def _update_kernel(
-    x, P, R_WB, w_B, q, qd, in_contact, rolling, use_rolling, tips_B, offsets, use_height, foot_radius, noise_std
+    x,
+    P,
+    R_WB,
+    w_B,
+    q,
+    qd,
+    tau,
+    in_contact,
+    rolling,
+    use_rolling,
+    tips_B,
+    offsets,
+    use_height,
+    foot_radius,
+    noise_std,
+    resting_height,
+    learn_sink,
 ):
     """`FloatingBaseKalmanFilter.update` on plain arrays: (x, P, whether the correction succeeded).
 
-    `tips_B` (k, 4): the loaded prong tips' positions in the trunk frame [m] and radii [m].
+    `tau` (12,) the joint torques [N m] (the feet's loads); `tips_B` (k, 4): the loaded prong tips'
+    positions in the trunk frame [m] and radii [m]; `resting_height` [m]: the height of a trunk
+    resting on the ground (`_resting_height`), 0 when it does not rest; `learn_sink`: whether the
+    feet's heights correct c and s (else they are held). The compliance and the sink are kept
+    within [0, MAX_COMPLIANCE] and [0, MAX_SINK].
     """
     p_BF, J = foot_kinematics_kernel(q, offsets)
-    columns, coefficients, noise = _measurement_rows(in_contact, tips_B.shape[0], use_height, noise_std)
-    y = _measurements_kernel(
-        R_WB, w_B, p_BF, J, qd, in_contact, rolling, use_rolling, use_height, foot_radius, tips_B, noise.shape[0]
+    forces = _vertical_forces_kernel(R_WB, J, tau)
+    resting_trunk = use_height and resting_height > 0.0
+    columns, coefficients, noise = _measurement_rows(
+        in_contact, tips_B.shape[0], use_height, noise_std, forces, resting_trunk, learn_sink
     )
-    return _correct_kernel(x, P, columns, coefficients, noise, y)
+    sinks = np.zeros(4)
+    if not learn_sink:
+        for i in range(4):
+            sinks[i] = x[SINK] + x[COMPLIANCE] * forces[i]
+    y = _measurements_kernel(
+        R_WB,
+        w_B,
+        p_BF,
+        J,
+        qd,
+        in_contact,
+        rolling,
+        use_rolling,
+        use_height,
+        foot_radius,
+        tips_B,
+        resting_height if resting_trunk else 0.0,
+        sinks,
+        noise.shape[0],
+    )
+    x, P, corrected = _correct_kernel(x, P, columns, coefficients, noise, y)
+    x[COMPLIANCE] = min(max(x[COMPLIANCE], 0.0), MAX_COMPLIANCE)
+    x[SINK] = min(max(x[SINK], 0.0), MAX_SINK)
+    return x, P, corrected
 
 
 @kernel
@@ -407,6 +568,7 @@ def _step_kernel(
     imu,
     q,
     qd,
+    tau,
     foot_sensor,
     schedule,
     xy,
@@ -420,10 +582,13 @@ def _step_kernel(
     process_noise_std,
     measurement_noise_std,
     plausible_q,
+    sink_prior,
+    rest_points,
+    weight,
 ):
     """One tick of the estimator on its state, in place: True when the estimate was updated.
 
-    filter_state (1 + 18 + 18 * 18): [initialised flag, x, P row by row]; base_state (13): the
+    filter_state (1 + 20 + 20 * 20): [initialised flag, x, P row by row]; base_state (13): the
     output (see base_state.py). Both are left as they are (the last estimate held) when a sample
     is not usable: a non-finite input, an unusable IMU quaternion, joint angles outside
     `plausible_q` (2, 12: lower, upper [rad]) before the first estimate (no leg_control_data
@@ -433,7 +598,7 @@ def _step_kernel(
     if not usable:
         return False
     for i in range(12):
-        if not (math.isfinite(q[i]) and math.isfinite(qd[i])):
+        if not (math.isfinite(q[i]) and math.isfinite(qd[i]) and math.isfinite(tau[i])):
             return False
     for i in range(4):
         if not math.isfinite(foot_sensor[i]):
@@ -450,7 +615,7 @@ def _step_kernel(
     if initialised:
         x, P = _predict_kernel(
             filter_state[1 : 1 + n],
-            filter_state[1 + n :].reshape((n, n)),
+            filter_state[1 + n : 1 + n + n * n].reshape((n, n)),
             R,
             w_B,
             imu[7:10],
@@ -461,10 +626,40 @@ def _step_kernel(
             process_noise_std,
         )
     else:
-        x, P = _initial_state_kernel(R, q, xy, offsets, foot_radius)
+        x, P = _initial_state_kernel(R, q, xy, offsets, foot_radius, sink_prior)
     tips = _loaded_tips(tips_B, schedule)
+    # A trunk resting on the ground with its feet loaded (the module docstring), for RESTING_TICKS.
+    p_BF, J = foot_kinematics_kernel(q, offsets)
+    load = _vertical_forces_kernel(R, J, tau).sum()
+    rest_height = _resting_height(R, rest_points)
+    still = math.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]) < QUASI_STATIC_SPEED
+    for i in range(12):
+        still = still and abs(qd[i]) < QUASI_STATIC_RATE
+    resting = (
+        still
+        and tips.shape[0] == 0
+        and RESTING_LOAD_SHARES[0] * weight < load < RESTING_LOAD_SHARES[1] * weight
+        and x[2] < rest_height + RESTING_HEIGHT_SLACK
+    )
+    rested = filter_state[-1] + 1.0 if resting else 0.0
     x, P, corrected = _update_kernel(
-        x, P, R, w_B, q, qd, in_contact, rolling, True, tips, offsets, use_height, foot_radius, measurement_noise_std
+        x,
+        P,
+        R,
+        w_B,
+        q,
+        qd,
+        tau,
+        in_contact,
+        rolling,
+        True,
+        tips,
+        offsets,
+        use_height,
+        foot_radius,
+        measurement_noise_std,
+        rest_height if rested >= RESTING_TICKS else 0.0,
+        still,
     )
     if not corrected:
         return False
@@ -476,7 +671,8 @@ def _step_kernel(
                 return False
     filter_state[0] = 1.0
     filter_state[1 : 1 + n] = x
-    filter_state[1 + n :] = P.ravel()
+    filter_state[1 + n : 1 + n + n * n] = P.ravel()
+    filter_state[-1] = rested
     base_state[0:4] = quaternion
     base_state[4:7] = x[0:3]
     for r in range(3):  # w_W = R_WB w_B
@@ -496,7 +692,10 @@ class FloatingBaseKalmanFilter:
         foot_radius: float = robot.FOOT_RADIUS,
         prong_tips_B: np.ndarray | None = None,
         prong_tip_radius: float = 0.0,
+        weight: float = robot.TOTAL_MASS * -GRAVITY_W[2],
     ):
+        """`weight` [N]: the robot's (prongs included), against which the feet's loads tell a
+        trunk resting on the ground."""
         self.config = config
         self.p_BI = np.array(p_BI, dtype=float)
         self.foot_radius = float(foot_radius)
@@ -506,10 +705,25 @@ class FloatingBaseKalmanFilter:
         # The constants of every tick, as the kernels take them (writable: numba checks a
         # read-only array's type on every call, several microseconds).
         self._tips = np.column_stack([self.prong_tips_B, np.full(len(self.prong_tips_B), self.prong_tip_radius)])
+        # Where the trunk can rest on the ground: its collision box's corners and the prong tips.
+        corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
+        corners = corners * np.array(robot.TRUNK_HALF_EXTENTS)
+        self._rest_points = np.vstack([np.column_stack([corners, np.zeros(8)]), self._tips])
+        self._weight = float(weight)
         self._leg_offsets = np.array(leg_offsets())
         c = config
         self._process_noise_std = np.array(
-            [c.position_process_noise, c.accelerometer_noise, c.stance_foot_process_noise, c.swing_foot_process_noise]
+            [
+                c.position_process_noise,
+                c.accelerometer_noise,
+                c.stance_foot_process_noise,
+                c.swing_foot_process_noise,
+                c.foot_compliance_process_noise,
+                c.foot_sink_process_noise,
+            ]
+        )
+        self._sink_prior = np.array(
+            [c.foot_compliance_prior, c.foot_compliance_std, c.foot_sink_prior, c.foot_sink_std], dtype=float
         )
         self._measurement_noise_std = np.array(
             [c.foot_position_noise, c.foot_velocity_noise, c.ground_height_noise, c.resting_velocity_noise]
@@ -528,6 +742,9 @@ class FloatingBaseKalmanFilter:
             self._process_noise_std,
             self._measurement_noise_std,
             self._plausible_q,
+            self._sink_prior,
+            self._rest_points,
+            self._weight,
         )
 
     def warm_up(self) -> None:
@@ -547,7 +764,7 @@ class FloatingBaseKalmanFilter:
         imu_vector, q, rates = np.array([1.0, 0, 0, 0, 0, 0, 0, 0, 0, 9.81]), robot.STANDING_Q, np.zeros(12)
         for schedule in (np.zeros(0), np.ones(4 + len(self.prong_tips_B))):
             for _ in range(2):  # initialise, then predict and correct
-                self.step(filter_state, base_state, imu_vector, q, rates, np.ones(4), schedule, np.zeros(2))
+                self.step(filter_state, base_state, imu_vector, q, rates, rates, np.ones(4), schedule, np.zeros(2))
 
     def initial_state(self, imu: ImuSample, q: np.ndarray, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(x, P) for a robot at rest with its lowest foot on the ground, trunk at `xy` [m]."""
@@ -557,6 +774,7 @@ class FloatingBaseKalmanFilter:
             np.asarray(xy, dtype=float),
             self._leg_offsets,
             self.foot_radius,
+            self._sink_prior,
         )
 
     def predict(
@@ -593,11 +811,18 @@ class FloatingBaseKalmanFilter:
         contact: np.ndarray,
         rolling: np.ndarray | None = None,
         tips_loaded: np.ndarray | None = None,
+        tau: np.ndarray | None = None,
+        trunk_resting: bool = False,
+        learn_sink: bool = True,
     ):
         """Corrects (x, P) with the leg kinematics of all feet and the no-slip of the feet in contact
         (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with each
         prong tip flagged in `tips_loaded` (one bool per prong; None: none loaded): it does not
-        move, and touches the ground. Raises np.linalg.LinAlgError when P is not positive definite."""
+        move, and touches the ground. `tau` (12,): the joint torques [N m] that give the feet's
+        loads, and with them their sink; None: no load known, so the compliance is left as it is.
+        `trunk_resting`: the trunk rests on flat ground (its lowest rigid point touches it);
+        `learn_sink`: the feet's heights correct c and s (the robot is nearly still), else hold them.
+        Raises np.linalg.LinAlgError when P is not positive definite."""
         tips = self._tips[np.asarray(tips_loaded, bool)] if tips_loaded is not None else self._tips[:0]
         x, P, corrected = _update_kernel(
             np.asarray(x, dtype=float),
@@ -606,6 +831,7 @@ class FloatingBaseKalmanFilter:
             np.asarray(imu.w_B, dtype=float),
             np.asarray(q, dtype=float),
             np.asarray(qd, dtype=float),
+            np.zeros(12) if tau is None else np.asarray(tau, dtype=float),
             np.asarray(contact[:4], dtype=bool),
             np.zeros((4, 3)) if rolling is None else np.asarray(rolling, dtype=float),
             rolling is not None,
@@ -614,6 +840,8 @@ class FloatingBaseKalmanFilter:
             self._use_height,
             self.foot_radius,
             self._measurement_noise_std,
+            _resting_height(np.asarray(imu.R_WB, dtype=float), self._rest_points) if trunk_resting else 0.0,
+            learn_sink,
         )
         if not corrected:
             raise np.linalg.LinAlgError("Kalman correction: an innovation variance is not positive")
@@ -626,17 +854,18 @@ class FloatingBaseKalmanFilter:
         imu: np.ndarray,
         q: np.ndarray,
         qd: np.ndarray,
+        tau: np.ndarray,
         foot_sensor: np.ndarray,
         schedule: np.ndarray,
         xy: np.ndarray,
     ) -> bool:
         """One estimator tick on its state vectors, in place (see `_step_kernel`): True when updated.
 
-        Inputs as the estimator's ports give them: go1.imu (10), q [rad], qd [rad/s] (12),
-        go1.foot_contact (4), and the contact schedule (4 feet, then one per prong; empty: none);
-        `xy` [m]: where the trunk starts (see `initial_state`).
+        Inputs as the estimator's ports give them: go1.imu (10), q [rad], qd [rad/s], tau [N m]
+        (12), go1.foot_contact (4), and the contact schedule (4 feet, then one per prong; empty:
+        none); `xy` [m]: where the trunk starts (see `initial_state`).
         """
-        return _step_kernel(filter_state, base_state, imu, q, qd, foot_sensor, schedule, xy, *self._step_constants)
+        return _step_kernel(filter_state, base_state, imu, q, qd, tau, foot_sensor, schedule, xy, *self._step_constants)
 
     @staticmethod
     def contact_flags(foot_sensor: np.ndarray, schedule: np.ndarray | None, threshold: float) -> np.ndarray:
@@ -649,8 +878,8 @@ class FloatingBaseKalmanFilter:
 
 
 class KalmanEstimator(LeafSystemWithoutWitnesses):
-    """go1.imu, go1.position_measured, go1.velocity_measured, go1.foot_contact (+ optional
-    contact_set) -> base_state (13: quaternion, p_WB, w_WB, v_WB; see base_state.py).
+    """go1.imu, go1.position_measured, go1.velocity_measured, go1.torque_estimated, go1.foot_contact
+    (+ optional contact_set) -> base_state (13: quaternion, p_WB, w_WB, v_WB; see base_state.py).
 
     Periodic discrete update at `config.period`; base_state is a discrete state of its own (the
     output port reads it without computing), so the loop estimator -> mission manager ->
@@ -663,12 +892,16 @@ class KalmanEstimator(LeafSystemWithoutWitnesses):
         self._xy = np.array(config.initial_xy if config.initial_xy is not None else initial_xy, dtype=float)
         tips = None if prongs is None else prongs.tip_positions_B()
         radius = 0.0 if prongs is None else prongs.tip_radius
-        self.filter = FloatingBaseKalmanFilter(config, imu_offset_B(), prong_tips_B=tips, prong_tip_radius=radius)
+        mass = robot.TOTAL_MASS + (0.0 if prongs is None else prongs.num_prongs * prongs.mass)
+        self.filter = FloatingBaseKalmanFilter(
+            config, imu_offset_B(), prong_tips_B=tips, prong_tip_radius=radius, weight=mass * -GRAVITY_W[2]
+        )
         self.filter.warm_up()
         num_contacts = 4 + (0 if prongs is None else prongs.num_prongs)
         self.imu_port = self.DeclareVectorInputPort("imu", 10)
         self.position_port = self.DeclareVectorInputPort("position_measured", 12)
         self.velocity_port = self.DeclareVectorInputPort("velocity_measured", 12)
+        self.torque_port = self.DeclareVectorInputPort("torque_estimated", 12)
         self.foot_contact_port = self.DeclareVectorInputPort("foot_contact", 4)
         # Optional: the mission's contact schedule (feet first, then prongs).
         self.contact_set_port = self.DeclareVectorInputPort("contact_set", num_contacts)
@@ -693,12 +926,21 @@ class KalmanEstimator(LeafSystemWithoutWitnesses):
             self.imu_port.Eval(context),
             self.position_port.Eval(context),
             self.velocity_port.Eval(context),
+            self.torque_port.Eval(context),
             self.foot_contact_port.Eval(context),
             schedule,
             self._xy,
         )
 
+    def foot_compliance(self, context: Context) -> float:
+        """The feet's compliance c the filter holds in `context` (this system's) [m/N]."""
+        return float(context.get_discrete_state(self._filter_state).get_value()[1 + COMPLIANCE])
+
+    def foot_sink(self, context: Context) -> float:
+        """The feet's sink s the filter holds in `context` (this system's) [m]."""
+        return float(context.get_discrete_state(self._filter_state).get_value()[1 + SINK])
+
     def covariance(self, context: Context) -> np.ndarray:
         """The filter's covariance P (18 x 18) in `context` (this system's)."""
         n = NUM_STATES
-        return context.get_discrete_state(self._filter_state).get_value()[1 + n :].reshape(n, n)
+        return context.get_discrete_state(self._filter_state).get_value()[1 + n : 1 + n + n * n].reshape(n, n)

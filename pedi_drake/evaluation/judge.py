@@ -143,6 +143,8 @@ def judge_run(record) -> dict:
         status_log, body_log = logs["mission.status"].data, logs["mission.body_reference"].data
         result["max_base_drift_m"] = mission_results.max_base_drift(p_WB, body_log, status_log)
         result["presses"] = mission_results.press_results(progress)
+        result["sensed_touches"] = mission_results.sensed_touches(progress)
+        result["prong_leans"] = mission_results.prong_leans(progress)
         if "mission.suf" in logs:
             result["live_suf"] = live_suf_summary(logs["mission.suf"].times, logs["mission.suf"].data, result["phases"])
         polygon = logs["mission.safety_polygon"]

@@ -146,6 +146,45 @@ def estimated_foot_errors(progress: MissionProgress) -> list[dict]:
     ]
 
 
+def sensed_touches(progress: MissionProgress) -> list[dict]:
+    """Each touching reach (spec.GuardedTouch) as the robot sensed it: whether contact was felt,
+    the force it felt against the approach [N] (less its bias before the touch) by which estimate,
+    and where along the approach it came, from the target [m] (< 0: before it)."""
+    rows = []
+    for record in progress.records:
+        touch = record.metrics.get("touch") if record.kind == "reach" else None
+        if touch is None:
+            continue
+        rows.append(
+            {
+                "phase": record.name,
+                "leg": record.metrics.get("leg", ""),
+                "confirmed": bool(touch["confirmed"]),
+                "force_n": touch.get("force_n", touch["largest_force_n"]),
+                "force_estimate": touch["force_estimate"],
+                "felt_from_target_m": touch.get("felt_from_target_m"),
+                "travel_m": touch["travel_m"],
+            }
+        )
+    return rows
+
+
+def prong_leans(progress: MissionProgress) -> list[dict]:
+    """Each lean_on_prongs as the robot sensed it: the feet's vertical load at its start [N] (the
+    joint-torque estimate), the load the prongs took off them when the lean was judged loaded (or
+    at its end) [N], and when the load was felt [s] (null: never)."""
+    return [
+        {
+            "phase": record.name,
+            "feet_load_at_start_n": record.metrics["feet_load_at_start_n"],
+            "prong_load_n": record.metrics.get("prong_load_n"),
+            "load_felt_at_s": record.metrics.get("load_felt_at_s"),
+        }
+        for record in progress.records
+        if record.kind == "lean_on_prongs" and "feet_load_at_start_n" in record.metrics
+    ]
+
+
 def press_results(progress: MissionProgress) -> list[dict]:
     """Each press phase: force, displacement, stiffness and the rigid/soft call."""
     rows = []

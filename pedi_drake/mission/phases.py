@@ -48,6 +48,7 @@ from pedi_drake.trajectory import (
     PivotedPosition,
     QuinticOrientationSegment,
     QuinticSegment,
+    smooth_start_kernel,
 )
 from pedi_drake.vector3 import orientation_error_W
 
@@ -56,6 +57,20 @@ CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-do
 PLACE_DEPTH = 0.015  # [m] below the floor that leg_to_support aims the foot (it stops at the touch)
 SHIFT_DURATION = 1.0  # [s] trunk shift before lifting a leg
 CONTACT_RAMP_WAIT = 0.3  # [s] wait for the controller to ramp a contact's force away
+# A stand-up that starts with the trunk lower than this [m] settles it on the ground first: ...
+LYING_START = 0.12
+SETTLE_DEPTH = 0.03  # [m] ... lowering it by at most this ...
+SETTLE_SPEED = 0.03  # [m/s] ... at this speed, until ...
+SETTLE_SHED = 0.3  # [-] ... the feet have shed this share of their load, ...
+SETTLE_HOLD = 0.3  # [s] ... and resting this long, for the estimator to take the ground's height.
+# A lean's prongs carry load when the feet have shed this fraction of what they carried before [-]:
+# well above the estimate's noise and the descent's own inertial forces (under 2 N).
+PRONG_LOAD_FRACTION = 0.08
+PRONG_SEARCH_DEPTH = 0.03  # [m] a lean goes on down this far below its plan to find the load ...
+PRONG_SEARCH_SPEED = 0.01  # [m/s] ... at this speed
+# A guarded touch starts along its line once the foot is this close to the approach point [m] ...
+GUARD_SETTLE_DISTANCE = 0.005
+GUARD_SETTLE_TIME = 1.0  # [s] ... or after this long.
 # [s] a press reaches its speed over this, twice the foot impedance's slow time constant (30 N s/m
 # over 600 N/m: 50 ms), so that its start does not read as a force; 2.5 mm of travel at 5 cm/s.
 PRESS_SPEED_RAMP = 0.1
@@ -203,20 +218,57 @@ class PhaseRunner:
 
 
 class StandUpRunner(PhaseRunner):
-    """Raises the trunk to `height` over the centroid of the four feet."""
+    """Raises the trunk to `height` over the centroid of the four feet.
+
+    From lying (the trunk lower than `LYING_START`) it first settles the trunk on the ground: the
+    trunk goes down, by at most `SETTLE_DEPTH`, until the feet have shed `SETTLE_SHED` of their
+    load (the legs' force balance, joint-torque estimate), and rests there for `SETTLE_HOLD`. A
+    trunk resting on the ground is the one rigid thing a robot with feet that sink (rubber, carpet)
+    can measure the ground by: the estimator takes the trunk's resting height and the feet's
+    kinematics under it as the feet's sink (pedi_drake.estimation.kalman_estimator). A trunk that
+    meets no ground within the depth (its legs at their limits) stands up without it.
+    """
 
     def start(self, phase, progress, view, env):
+        t = view.time
+        memo = progress.memo
+        memo.update(rise_at=t, rose_at=None)
+        if view.base.p_WB[2] < LYING_START:
+            p_now, _ = _body_sample(progress, t)
+            _move_body(progress, t, p_now - [0.0, 0.0, SETTLE_DEPTH], None, SETTLE_DEPTH / SETTLE_SPEED)
+            baseline = feet_vertical_load(view)
+            memo.update(rise_at=None, settle_end=t + SETTLE_DEPTH / SETTLE_SPEED, baseline=baseline)
+            progress.records[-1].metrics.update(settle=dict(feet_load_at_start_n=baseline, rested=False))
+
+    @staticmethod
+    def _rise(phase, progress, view) -> None:
         t = view.time
         feet = np.array(list(view.feet_W().values()))
         p_goal = _trunk_target_for_com(view, view.base.p_WB.copy(), feet[:, :2].mean(axis=0))
         p_goal[2] = phase.height
         yaw = RollPitchYaw(view.X_WB.rotation()).yaw_angle()
         _move_body(progress, t, p_goal, RotationMatrix.MakeZRotation(yaw), phase.duration)
-        progress.memo["goal"] = p_goal
+        progress.memo.update(goal=p_goal, rose_at=t)
 
     def step(self, phase, progress, view, env):
-        done = view.time >= progress.phase_start + phase.duration
-        if done and np.linalg.norm(view.base.p_WB - progress.memo["goal"]) < 0.01:
+        t, memo = view.time, progress.memo
+        if memo["rise_at"] is None:
+            settle = progress.records[-1].metrics["settle"]
+            shed = memo["baseline"] - feet_vertical_load(view)
+            settle["feet_load_shed_n"] = shed
+            if shed >= SETTLE_SHED * memo["baseline"]:
+                p_now, _ = _body_sample(progress, t)
+                _move_body(progress, t, p_now, None, SETTLE_HOLD)
+                settle.update(rested=True, rested_at_s=t)
+                memo["rise_at"] = t + SETTLE_HOLD
+            elif t >= memo["settle_end"]:
+                memo["rise_at"] = t
+        if memo["rose_at"] is None:
+            if memo["rise_at"] is not None and t >= memo["rise_at"]:
+                self._rise(phase, progress, view)
+            return RUNNING
+        done = t >= memo["rose_at"] + phase.duration
+        if done and np.linalg.norm(view.base.p_WB - memo["goal"]) < 0.01:
             return SUCCEEDED
         return RUNNING
 
@@ -540,6 +592,10 @@ class ReachRunner(PhaseRunner):
 
     With `together`, every listed leg gets its own quintics over the same time span, so the feet
     move and arrive together; the phase succeeds when every foot is within the tolerance.
+
+    With `touch` (spec.GuardedTouch) the quintics end at the approach point and a guarded move
+    follows (`_guard`): the phase succeeds when contact is felt, wherever the estimate puts the
+    foot, and fails when nothing is felt within the over-travel.
     """
 
     def start(self, phase, progress, view, env):
@@ -549,25 +605,37 @@ class ReachRunner(PhaseRunner):
                 raise UnreachableTarget(
                     f"{phase.name}: {leg} is not in pedipulation mode (add leg_to_pedipulation first)"
                 )
+        if phase.touch is not None and env.force_estimate not in view.foot_force_estimates_W(phase.leg):
+            raise UnreachableTarget(
+                f"{phase.name}: the {env.force_estimate} force estimate a touch feels with is not available "
+                "from this controller"
+            )
         targets_B, targets_W = {}, {}
         X_WB = _planning_pose(progress, view)
         X_BW = X_WB.inverse()
+        approach_W = None
         for leg, target, via_points in legs:
             points = [np.asarray(p, float) for p in via_points]
             if phase.approach_offset:
                 points.append(np.asarray(target) + np.asarray(phase.approach_offset))
-            points.append(np.asarray(target, float))
+            if phase.touch is None:
+                points.append(np.asarray(target, float))
             X_WF = _reach_frame(progress, X_WB, leg, phase.frame)
             points_W = [X_WF @ point for point in points]
-            for p_W in points_W:
+            for p_W in points_W + [X_WF @ np.asarray(target, float)]:
                 problem = target_problem(p_W, X_WB)
                 if problem is not None:
                     raise UnreachableTarget(f"{phase.name}: {leg}: {problem}")
             targets_B[leg] = [X_BW @ p_W for p_W in points_W]
-            targets_W[leg] = points_W[-1]
+            targets_W[leg] = X_WF @ np.asarray(target, float)
+            if phase.touch is not None:
+                offset = X_WF.rotation() @ np.asarray(phase.approach_offset, float)
+                approach_W = GuardedApproach(direction_W=-offset / np.linalg.norm(offset), start_W=points_W[-1])
         _ask_ik(progress, view, X_WB, targets_B, phase.name)
         # The motion starts once the IK has answered (`t_arrive` is set then).
-        progress.memo.update(t_arrive=math.inf, target_W=targets_W[phase.leg], targets_W=targets_W, t_ok=None)
+        progress.memo.update(
+            t_arrive=math.inf, target_W=targets_W[phase.leg], targets_W=targets_W, t_ok=None, approach=approach_W
+        )
 
     @staticmethod
     def _plan(phase, progress, view) -> None:
@@ -603,6 +671,8 @@ class ReachRunner(PhaseRunner):
             ]
         if view.time < memo["t_arrive"]:
             return RUNNING
+        if phase.touch is not None:
+            return _guard(phase, progress, view, env)
         if max(errors.values()) < phase.tolerance:
             memo["t_ok"] = memo["t_ok"] if memo["t_ok"] is not None else view.time
             if view.time - memo["t_ok"] >= phase.hold:
@@ -614,10 +684,108 @@ class ReachRunner(PhaseRunner):
     @staticmethod
     def timeout_reason(phase, progress) -> str:
         metrics = progress.records[-1].metrics
+        if phase.touch is not None:
+            touch = metrics.get("touch")
+            if touch is None:
+                return "the foot did not reach its approach point"
+            return (
+                f"no contact felt: the foot moved {1000 * touch['travel_m']:.1f} mm along the approach "
+                f"(the largest force against it {touch['largest_force_n']:.2f} N, {phase.touch.force:.1f} N needed)"
+            )
         rows = metrics.get("legs") or [{"leg": phase.leg, "error_m": metrics.get("error_m", float("nan"))}]
         late = [row for row in rows if not row["error_m"] < phase.tolerance] or rows
         errors = ", ".join(f"{row['leg']} {row['error_m'] * 1000:.1f} mm" for row in late)
         return f"foot error {errors} still above the {phase.tolerance * 1000:.1f} mm tolerance"
+
+
+@dataclasses.dataclass(frozen=True)
+class GuardedApproach:
+    """The straight line of a guarded touch: its world direction [-] and the approach point it
+    starts from [m]."""
+
+    direction_W: np.ndarray
+    start_W: np.ndarray
+
+
+def _force_against(view: RobotView, leg: str, direction_W: np.ndarray) -> dict[str, float]:
+    """Every available estimate of the force pushing the foot of `leg` back against `direction_W` [N]."""
+    return {source: float(-force @ direction_W) for source, force in view.foot_force_estimates_W(leg).items()}
+
+
+def _guard(phase, progress: MissionProgress, view: RobotView, env: MissionEnvironment) -> str:
+    """The guarded move of a touching reach, one mission update: RUNNING, SUCCEEDED or FAILED.
+
+    The joint motion to the approach point may end with the foot behind it (a leg with more
+    friction and rotor inertia than the model has): the foot is held there until it is within
+    GUARD_SETTLE_DISTANCE of it, for GUARD_SETTLE_TIME at most. Then it is driven along the
+    approach direction (the press reference) from the approach point; each estimate's bias (leg
+    dynamics, model error) is measured there first, with nothing touched. Contact is felt when
+    the mission's estimate, less its bias, reaches the touch's force: the foot's reference is then
+    held where the drive had brought it, a little past the foot (the tracking lag keeps a light
+    preload), for `hold`.
+    """
+    memo, refs, touch, leg = progress.memo, progress.references, phase.touch, phase.leg
+    approach: GuardedApproach = memo["approach"]
+    t = view.time
+    metrics = progress.records[-1].metrics
+    if "guard" not in memo:
+        start = approach.start_W
+        if "settle_until" not in memo:
+            refs.legs[leg] = LegTrajectory(LEG_MODE_FOOT, QuinticSegment(start, start, t, 1e-3))
+            memo["settle_until"] = t + GUARD_SETTLE_TIME
+        if np.linalg.norm(view.foot_W(leg) - start) > GUARD_SETTLE_DISTANCE and t < memo["settle_until"]:
+            return RUNNING
+        refs.press = dict(
+            leg=leg,
+            start=start,
+            direction=approach.direction_W,
+            speed=touch.speed,
+            ramp=PRESS_SPEED_RAMP,
+            t0=t,
+            frozen_at=None,
+        )
+        to_target = float((memo["target_W"] - start) @ approach.direction_W)
+        memo["guard"] = dict(
+            start=start, to_target=to_target, bias=_force_against(view, leg, approach.direction_W), felt_at=None
+        )
+        metrics["touch"] = dict(confirmed=False, travel_m=0.0, largest_force_n=0.0, force_estimate=env.force_estimate)
+        return RUNNING
+    guard = memo["guard"]
+    if guard["felt_at"] is not None:
+        return SUCCEEDED if t - guard["felt_at"] >= phase.hold else RUNNING
+    forces = {
+        source: value - guard["bias"][source]
+        for source, value in _force_against(view, leg, approach.direction_W).items()
+        if source in guard["bias"]
+    }
+    force = forces[env.force_estimate]
+    travel = float((view.foot_W(leg) - guard["start"]) @ approach.direction_W)
+    press = refs.press
+    driven, _, _ = smooth_start_kernel(t, press["t0"], press["ramp"])
+    reference_travel = touch.speed * driven
+    record = metrics["touch"]
+    record.update(travel_m=travel, largest_force_n=max(record["largest_force_n"], force), forces_n=forces)
+    if force >= touch.force:
+        held = guard["start"] + reference_travel * approach.direction_W
+        refs.press = None
+        refs.legs[leg] = LegTrajectory(LEG_MODE_FOOT, QuinticSegment(held, held, t, 1e-3))
+        guard["felt_at"] = t
+        # Where contact came along the line, from the target (< 0: before it, > 0: beyond it).
+        record.update(confirmed=True, force_n=force, felt_from_target_m=travel - guard["to_target"], t=t)
+        return SUCCEEDED if phase.hold <= 0.0 else RUNNING
+    limit = guard["to_target"] + touch.over_travel
+    # The reference may run ahead of a foot that is held back by something it does not feel.
+    if travel >= limit or reference_travel >= limit + touch.over_travel:
+        refs.press = None
+        hold = PiecewiseQuintic.through(np.array([view.leg_q(leg)] * 2), t, [1e-3])
+        refs.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, hold)
+        return _fail(
+            progress,
+            f"{phase.name}: no contact felt: the {leg} foot went {1000 * (travel - guard['to_target']):.1f} mm "
+            f"beyond the target along the approach (the largest force against it {record['largest_force_n']:.2f} N "
+            f"by the {env.force_estimate} estimate, {touch.force:.1f} N needed)",
+        )
+    return RUNNING
 
 
 class PressRunner(PhaseRunner):
@@ -812,8 +980,21 @@ def _lean_prongs(phase, env: MissionEnvironment) -> list[int]:
     return [spec.prong_index(name) for name in names]
 
 
+def feet_vertical_load(view: RobotView) -> float:
+    """The summed vertical force of the ground on the four feet, by the joint-torque estimate [N]."""
+    return float(sum(view.foot_external_force_W(leg)[2] for leg in robot.LEG_NAMES))
+
+
 class LeanOnProngsRunner(PhaseRunner):
-    """Lowers the trunk at its attitude until the named prong tips touch, then loads them."""
+    """Lowers the trunk at its attitude until the named prong tips carry load, then loads them.
+
+    The descent aims 5 mm below the height at which the estimate puts the tips on the ground. The
+    tips carry load when the feet carry less: the legs' force balance (joint-torque estimate),
+    against what they carried at the phase start, must drop by `PRONG_LOAD_FRACTION` of it. A
+    robot whose estimated height is off (soft feet, carpet) reaches that load above or below the
+    planned height; if the descent ends without it, the trunk goes on down slowly, by at most
+    `PRONG_SEARCH_DEPTH`, and the phase fails if no load is felt by then.
+    """
 
     def start(self, phase, progress, view, env):
         if env.prongs is None:
@@ -833,18 +1014,41 @@ class LeanOnProngsRunner(PhaseRunner):
                 "(tilt the trunk first, or lean on them as well)"
             )
         _move_body(progress, view.time, goal, None, phase.duration)
-        progress.memo.update(goal=goal, loaded=False, lean=lean)
+        baseline = feet_vertical_load(view)
+        progress.memo.update(goal=goal, loaded=False, lean=lean, baseline=baseline, searching=False)
+        progress.records[-1].metrics.update(feet_load_at_start_n=baseline)
 
     def step(self, phase, progress, view, env):
         t, memo = view.time, progress.memo
-        if not memo["loaded"] and t >= progress.phase_start + phase.duration:
-            tips_z = np.array([(view.X_WB @ tip)[2] for tip in env.prongs.tip_positions_B()])
-            if np.all(tips_z[memo["lean"]] < env.prongs.tip_radius + 0.01):
-                for k in memo["lean"]:
-                    progress.references.contacts[4 + k] = 1.0
-                memo.update(loaded=True, t_loaded=t + CONTACT_RAMP_WAIT)
-        if memo["loaded"] and t >= memo["t_loaded"]:
-            return SUCCEEDED
+        if memo["loaded"]:
+            return SUCCEEDED if t >= memo["t_loaded"] else RUNNING
+        prong_load = memo["baseline"] - feet_vertical_load(view)
+        metrics = progress.records[-1].metrics
+        metrics.update(prong_load_n=prong_load)
+        if prong_load >= PRONG_LOAD_FRACTION * memo["baseline"]:
+            for k in memo["lean"]:
+                progress.references.contacts[4 + k] = 1.0
+            # Once loaded, the estimator puts the tips on the ground: the planned goal, 5 mm
+            # below their touch, is then a height in the same terms.
+            p_now, _ = _body_sample(progress, t)
+            goal = memo["goal"].copy()
+            goal[2] = min(goal[2], p_now[2])
+            _move_body(progress, t, goal, None, CONTACT_RAMP_WAIT)
+            metrics.update(load_felt_at_s=t, trunk_reference_height_m=float(p_now[2]))
+            memo.update(loaded=True, t_loaded=t + CONTACT_RAMP_WAIT)
+            return RUNNING
+        descent_end = progress.phase_start + phase.duration
+        if t >= descent_end and not memo["searching"]:
+            deeper = memo["goal"] - [0.0, 0.0, PRONG_SEARCH_DEPTH]
+            _move_body(progress, t, deeper, None, PRONG_SEARCH_DEPTH / PRONG_SEARCH_SPEED)
+            memo.update(searching=True, t_search_end=t + PRONG_SEARCH_DEPTH / PRONG_SEARCH_SPEED)
+        if memo["searching"] and t >= memo["t_search_end"]:
+            return _fail(
+                progress,
+                f"{phase.name}: no load felt on the prongs {1000 * PRONG_SEARCH_DEPTH:.0f} mm below their planned "
+                f"touch (the feet shed {prong_load:.1f} N of {memo['baseline']:.1f} N, "
+                f"{100 * PRONG_LOAD_FRACTION:.0f} % needed)",
+            )
         return RUNNING
 
 

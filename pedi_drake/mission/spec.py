@@ -198,6 +198,26 @@ class CompanionReach:
 
 
 @dataclasses.dataclass
+class GuardedTouch:
+    """How a reach whose purpose is to touch confirms the touch by sensed contact.
+
+    The joint-space motion ends at the approach point (`Reach.approach_offset` from the target);
+    from there the foot moves in a straight line along the approach direction, through the target,
+    until the foot force estimate against that direction reaches `force` (contact felt: the phase
+    holds there and succeeds) or the foot has gone `over_travel` beyond the target (nothing felt:
+    the phase fails). A target in the world frame is only as good as the robot's idea of where the
+    ground is; contact is what says the foot met the object.
+    """
+
+    # The estimated force against the approach direction that counts as contact [N].
+    force: float = 3.0
+    # How far beyond the target the foot may go before the touch fails [m].
+    over_travel: float = 0.02
+    # Foot speed along the approach direction [m/s].
+    speed: float = 0.04
+
+
+@dataclasses.dataclass
 class Reach(PhaseBase):
     """Moves the foot of `leg` to `target` through the IK, optionally via `approach_offset` first.
 
@@ -222,6 +242,9 @@ class Reach(PhaseBase):
     hold: float = 0.3
     # Legs moving at the same time, e.g. [{leg: FL, target: [x, y, z]}].
     together: list[CompanionReach] = dataclasses.field(default_factory=list)
+    # A touch confirmed by sensed contact (needs `approach_offset`: it gives the direction); null:
+    # the phase ends when the estimated foot is within `tolerance` of the target.
+    touch: GuardedTouch | None = None
 
 
 @dataclasses.dataclass
@@ -763,6 +786,17 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         for k, point in enumerate(phase.via_points):
             need(len(point) == 3, f"via_points[{k}]", f"expected [x, y, z] in metres, got {point}")
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+        if phase.touch is not None:
+            touch = phase.touch
+            for field in ("force", "over_travel", "speed"):
+                value = getattr(touch, field)
+                need(math.isfinite(value) and value > 0, f"touch.{field}", f"must be a finite number > 0, got {value}")
+            need(
+                len(phase.approach_offset) == 3 and math.hypot(*phase.approach_offset) > 1e-3,
+                "touch",
+                "a guarded touch moves along the approach direction: give approach_offset (at least 1 mm)",
+            )
+            need(not phase.together, "touch", "a guarded touch moves one foot: drop `together`")
         if phase.frame == "world":
             # The ground is z = 0: a foot centre below its radius would be in the floor.
             points = {"target": phase.target, **{f"via_points[{k}]": p for k, p in enumerate(phase.via_points)}}
