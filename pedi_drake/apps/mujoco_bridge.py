@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 
-from pedi_drake.apps.mujoco_go1 import MujocoGo1
+from pedi_drake.apps.mujoco_go1 import MujocoGo1, mujoco_foot_radius
 from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD, bridge_scenario
 from pedi_drake.apps.status_encoder import StatusEncoder
 from pedi_drake.exceptions import ConfigError
@@ -51,8 +51,9 @@ _NAP = 0.0005
 class TruthLog:
     """The ground truth every TRUTH_LOG_PERIOD of simulated time, stamped with the host's clock."""
 
-    def __init__(self, scene_names: list[str]):
+    def __init__(self, scene_names: list[str], foot_radius: float):
         self.scene_names = list(scene_names)
+        self.foot_radius = float(foot_radius)  # of the robot's feet [m]
         self.rows: dict[str, list] = {key: [] for key in ("wall_time", "p_WB", "quaternion_WB", "p_WF", "forces")}
 
     def record(self, robot: MujocoGo1) -> None:
@@ -77,6 +78,7 @@ class TruthLog:
             p_WF=np.asarray(self.rows["p_WF"], float).reshape(n, 4, 3),
             scene_names=np.asarray(self.scene_names, dtype=str),
             scene_contact_forces=np.asarray(self.rows["forces"], float).reshape(n, width),
+            foot_radius=self.foot_radius,
         )
         return path
 
@@ -95,7 +97,7 @@ class MujocoBridge:
         self._encoder = StatusEncoder()
         depth = int(math.ceil(config.latency / robot.period - 1e-9)) + 1
         self._ring = collections.deque([robot.status_sample()] * depth, maxlen=depth)
-        self.truth = TruthLog(robot.scene_names)
+        self.truth = TruthLog(robot.scene_names, mujoco_foot_radius())
         self._truth_every = max(1, int(round(TRUTH_LOG_PERIOD / robot.period)))
 
     def tick(self) -> None:

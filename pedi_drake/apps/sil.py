@@ -68,6 +68,7 @@ from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD
 from pedi_drake.apps.status_flood import expected_rejections, number_problem
 from pedi_drake.callback_profile import slow_calls
 from pedi_drake.cpu_steal import steal_seconds
+from pedi_drake.evaluation.estimator_accuracy import STANDING_TRUNK_HEIGHT
 from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.evaluation.touches import judge_touches
 from pedi_drake.exceptions import ConfigError
@@ -93,8 +94,6 @@ SLOW_CALL = 0.001
 FLOOD_END_TIMEOUT = 30.0
 # The robot side's program for each --robot: the project's Drake simulation, or MuJoCo.
 BRIDGES = {"drake": "pedi_drake.apps.sim_bridge", "mujoco": "pedi_drake.apps.mujoco_bridge"}
-# [m] true trunk height above which the robot counts as standing for `estimator_height_error`.
-STANDING_TRUNK_HEIGHT = 0.2
 
 
 def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[dict]:
@@ -368,6 +367,8 @@ def run_sil(
         "touches": touch_rows,
         "touches_reason": touch_problem,
         "success_by_truth": bool(result["success"]) and not touch_problem,
+        # The robot's feet, which the controller takes to be robot.FOOT_RADIUS [m].
+        "robot_foot_radius_m": float(truth["foot_radius"]),
         "estimator_trunk_position_error": estimator_error(logs, truth),
         "estimator_trunk_height_error": estimator_height_error(logs, truth),
         "start": start_transient(logs, truth),

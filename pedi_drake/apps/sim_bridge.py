@@ -222,12 +222,15 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
     return diagram
 
 
-def write_truth_log(diagram, context, path: Path, scene_names: list[str] = ()) -> Path:
+def write_truth_log(
+    diagram, context, path: Path, scene_names: list[str] = (), foot_radius: float = robot.FOOT_RADIUS
+) -> Path:
     """Writes the bridge's ground truth to `path` (npz): wall_time (N,) [s], p_WB (N, 3) [m],
     quaternion_WB (N, 4) (w, x, y, z), p_WF (N, 4, 3) foot centres FR, FL, RR, RL [m],
     scene_names (the scene's object names, in order) and scene_contact_forces (N, len(scene_names) * 5)
     [N]: the true normal contact forces between each object and each foot / the rest of the robot
-    (`sim.scene_contact_forces`, in the order of pedi_drake.station.scene_contact.scene_contact_index)."""
+    (`sim.scene_contact_forces`, in the order of pedi_drake.station.scene_contact.scene_contact_index),
+    and foot_radius, the simulated feet's [m]."""
     plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     states = diagram.GetSubsystemByName("log.plant_state").FindLog(context).data()
     wall = diagram.GetSubsystemByName("log.wall_clock").FindLog(context).data()[0]
@@ -256,6 +259,7 @@ def write_truth_log(diagram, context, path: Path, scene_names: list[str] = ()) -
         p_WF=p_WF,
         scene_names=np.asarray(list(scene_names), dtype=str),
         scene_contact_forces=forces,
+        foot_radius=foot_radius,
     )
     return path
 
@@ -311,7 +315,8 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if args.truth_log:
             scene_names = [obj.instance_name for obj in scenario.scene]
-            path = write_truth_log(diagram, simulator.get_context(), args.truth_log, scene_names)
+            radius = scenario.model_error.foot_radius
+            path = write_truth_log(diagram, simulator.get_context(), args.truth_log, scene_names, radius)
             print(f"go1_sim_bridge: ground truth written to {path} ({time.time():.3f})", flush=True)
     return 0
 
