@@ -34,6 +34,7 @@ from pedi_drake.batch.engines import RayEngine, SerialEngine
 from pedi_drake.batch.runner import run_study
 from pedi_drake.batch.study import study_from_dict
 from pedi_drake.batch.tasks import TIMING_COLUMNS
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.benchmarks.missions import mission_study
 from pedi_drake.mission.spec import shipped_missions
 
@@ -165,7 +166,7 @@ def main() -> None:
     print(f"load average at start {load[0]:.2f}, at end {report['load_at_end'][0]:.2f} ({os.cpu_count()} cores)")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2) + "\n")
+    out.write_text(json.dumps(stamped(report), indent=2) + "\n")
     print(f"wrote {out}")
 
 

@@ -37,6 +37,7 @@ import time
 from pathlib import Path
 
 from pedi_drake.apps.sil import flood_text, run_sil, slow_calls_text
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.realtime_priority import rt_throttling
 
 DEFAULT_MISSIONS = ("hit_target_front", "open_door", "prong_push_box")
@@ -231,17 +232,19 @@ def main() -> None:
     }
     out.write_text(
         json.dumps(
-            {
-                "scenario_name": args.scenario_name,
-                "scenario_text": args.scenario_text,
-                "separate": args.separate,
-                "callbacks": args.callbacks,
-                "pin": args.pin,
-                "flood_at": args.flood_at,
-                "machine": machine,
-                "summary": summary,
-                "runs": rows,
-            },
+            stamped(
+                {
+                    "scenario_name": args.scenario_name,
+                    "scenario_text": args.scenario_text,
+                    "separate": args.separate,
+                    "callbacks": args.callbacks,
+                    "pin": args.pin,
+                    "flood_at": args.flood_at,
+                    "machine": machine,
+                    "summary": summary,
+                    "runs": rows,
+                }
+            ),
             indent=2,
         )
     )

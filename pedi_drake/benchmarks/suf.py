@@ -23,6 +23,7 @@ import numpy as np
 from pedi_drake.batch.engines import ENGINES, make_engine
 from pedi_drake.batch.runner import run_study
 from pedi_drake.batch.study import load_study
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.exceptions import SufError
 from pedi_drake.resources import studies_dir
 from pedi_drake.suf.design import stance_for
@@ -216,7 +217,9 @@ def main() -> None:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(
-        json.dumps({"scenarios": scenarios, "floors": floors, "paper_ms": PAPER_MS, "height_sweep": sweep}, indent=2)
+        json.dumps(
+            stamped({"scenarios": scenarios, "floors": floors, "paper_ms": PAPER_MS, "height_sweep": sweep}), indent=2
+        )
     )
     print(f"wrote {out}")
 
