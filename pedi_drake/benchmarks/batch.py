@@ -8,7 +8,7 @@
    beyond the task's own work (the first task's worker start-up excluded: the engine is started
    before the clock).
 2. Speed-up: the mission benchmark's study (every listed mission, seed 0 without noise and the
-   noise seeds with it) on Ray and then serially, in one sitting, and whether the two give the
+   noise seeds with it) on Ray and then serially, in one run, and whether the two give the
    same rows (every column but the timing ones). Where a speed-up below the number of workers
    comes from, from each task's own wall time in both engines:
    - `two_at_once_slowdown`: the median over tasks of (its wall time on Ray / in the serial run),

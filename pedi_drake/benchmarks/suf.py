@@ -43,7 +43,7 @@ PAPER_MS = {
 # Fig. 3 (heights swept: studies/suf_height_sweep.yaml): the range called practical (the Go1
 # stands at 0.27-0.28 m).
 PRACTICAL_HEIGHTS = (0.18, 0.26)
-# Speed floors of the SUF issue: at least this many times faster than the paper (teleoperation).
+# Speed floors: at least this many times faster than the paper (teleoperation).
 SPEEDUP_FLOOR = {"exact": 5.0, "affine": 5.0, "quadratic": 5.0, "single": 5.0, "fibonacci": 2.0}
 
 

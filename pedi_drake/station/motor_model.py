@@ -96,8 +96,8 @@ class Go1MotorModel(Diagram):
     The law (`motor_torque`) runs at the plant's rate, every step, so it is built from Drake's
     C++ systems: a selection of the joint states (SparseMatrixGain), the law itself as a
     SymbolicVectorSystem, and a selection of the applied torques. Only the command guard is
-    Python, and it runs once per command. As a Python LeafSystem the law cost about 50 us a
-    plant step, a fifth of the plant's own step.
+    Python, and it runs once per command: a Python LeafSystem for the law would add a Python
+    callback to every plant step.
 
     Inputs: command (60), plant_state (plant positions and velocities).
     Outputs: actuation (plant actuation vector), torque (12, Unitree order) [N m].
