@@ -107,7 +107,7 @@ def _missions(d: dict) -> str:
     runs = sum(row["runs"] for row in summary.values())
     succeeded = sum(row["succeeded"] for row in summary.values())
     worst = max(row["foot_error_max_m"] or 0.0 for row in summary.values())
-    return f"{succeeded} of {runs} runs succeeded; largest final foot error {1e3 * worst:.1f} mm"
+    return f"successful runs: {succeeded} of {runs}; largest final foot error {1e3 * worst:.1f} mm"
 
 
 def _sil(d: dict) -> str:
@@ -115,7 +115,7 @@ def _sil(d: dict) -> str:
     runs = sum(row["runs"] for row in summary.values())
     ok = sum(row["successes"] for row in summary.values())
     met = sum(row["runs_meeting_floors"] for row in summary.values())
-    return f"{ok} of {runs} runs succeeded, {met} met every floor"
+    return f"successful runs: {ok} of {runs}; runs that met every floor: {met}"
 
 
 def _teleop(d: dict) -> str:
@@ -205,7 +205,7 @@ ROWS: tuple[Row, ...] = (
         summary=True,
     ),
     Row(
-        "Hardware path at real time against the simulator bridge (3 missions x 5 runs)",
+        "Hardware path at real time against the simulator bridge (apps.sil, three missions)",
         "sil_floors.json",
         _sil,
         "python -m pedi_drake.benchmarks.sil_floors",
@@ -246,12 +246,14 @@ ROWS: tuple[Row, ...] = (
 
 @dataclasses.dataclass(frozen=True)
 class Measured:
-    """One row as read: its value, or NOT_MEASURED, and the machine and date of its file."""
+    """One row as read: its value, or NOT_MEASURED, the machine and date of its file, and the
+    command that wrote it (the one the file records, else the row's)."""
 
     row: Row
     value: str
     machine: str = ""
     date: str = ""
+    command: str = ""
 
 
 def _machine_name(machine) -> str:
@@ -267,30 +269,36 @@ def measure(rows: tuple[Row, ...] = ROWS, results_dir: Path = RESULTS_DIR) -> li
     for row in rows:
         path = Path(results_dir) / row.source
         if not path.is_file():
-            measured.append(Measured(row, NOT_MEASURED))
+            measured.append(Measured(row, NOT_MEASURED, command=row.command))
             continue
         data = json.loads(path.read_text())
         try:
             value = row.value(data)
         except (KeyError, StopIteration, TypeError) as error:
             raise KeyError(f"{path}: the row {row.figure!r} cannot read its figure ({error!r})") from None
-        measured.append(Measured(row, value, _machine_name(data.get("machine")), str(data.get("date", ""))))
+        machine, date = _machine_name(data.get("machine")), str(data.get("date", ""))
+        measured.append(Measured(row, value, machine, date, str(data.get("command") or row.command)))
     return measured
 
 
 def _table(measured: list[Measured]) -> list[str]:
     lines = ["| figure | value | command |", "|---|---|---|"]
     for m in measured:
-        lines.append(f"| {m.row.figure} | {m.value} | `{m.row.command}` |")
+        lines.append(f"| {m.row.figure} | {m.value} | `{m.command or m.row.command}` |")
     return lines
+
+
+def header_line(measured: list[Measured]) -> str:
+    """The machines and dates the measured rows' files record, in one line."""
+    machines = sorted({m.machine for m in measured if m.machine})
+    dates = sorted({m.date for m in measured if m.date})
+    when = dates[0] if len(dates) == 1 else f"{dates[0]} to {dates[-1]}" if dates else "never"
+    return f"Measured on {'; '.join(machines) or 'no machine yet'}, {when}."
 
 
 def numbers_page(measured: list[Measured]) -> str:
     """docs/numbers.md: a header line naming the machines and dates, then every row."""
-    machines = sorted({m.machine for m in measured if m.machine})
-    dates = sorted({m.date for m in measured if m.date})
-    when = dates[0] if len(dates) == 1 else f"{dates[0]} to {dates[-1]}" if dates else "never"
-    header = f"Measured on {'; '.join(machines) or 'no machine yet'}, {when}."
+    header = header_line(measured)
     not_run = [m.row.command for m in measured if m.value == NOT_MEASURED]
     lines = [
         "# Numbers",
@@ -311,7 +319,7 @@ def numbers_page(measured: list[Measured]) -> str:
 def readme_table(measured: list[Measured]) -> str:
     """README.md's summary table, with its markers."""
     rows = [m for m in measured if m.row.summary]
-    return "\n".join([README_BEGIN, *_table(rows), README_END])
+    return "\n".join([README_BEGIN, header_line(rows), "", *_table(rows), README_END])
 
 
 def with_readme_table(readme: str, table: str) -> str:
