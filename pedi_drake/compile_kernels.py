@@ -4,8 +4,8 @@
 
 Each system compiles its kernels in its constructor, so building the diagrams a run can have
 (the simulation with either whole-body controller, and the controller side of a hardware run)
-fills the cache for this version of the package (see `pedi_drake.jit`): a few minutes of CPU on
-a 2-core machine. Processes started afterwards load the kernels in milliseconds.
+fills the cache for this version of the package (see `pedi_drake.jit`), which takes minutes of
+CPU. Processes started afterwards load the kernels from the cache instead of compiling them.
 
 Run it before starting several processes on an empty cache: test workers, or the workers of a
 batch study (`pedi_drake.batch` does it before the first task). Otherwise every one of them

@@ -6,10 +6,10 @@ live SUF's updates on the controller side. For a system written in Python, pydra
 LeafSystem forwards that question to a Python override of `DoGetWitnessFunctions`, if there
 is one. pybind11 remembers that a method is not overridden only when the attribute it finds is a
 C++ function; when there is no attribute at all, it searches the class, fails and formats an
-AttributeError at every call: about 3 us a system each time, 35 us per mission-manager update
-on the controller side of a hardware run (ten Python systems), and a few percent of a simulated
-step. Naming the C++ method `GetWitnessFunctions` as the attribute makes pybind11 remember after
-the first look that there is no override, and Drake's own answer (no witness functions) is used.
+AttributeError at every call, for every Python system after every unrestricted update: a
+cost paid many times a tick on the controller side of a hardware run. Naming the C++ method
+`GetWitnessFunctions` as the attribute makes pybind11 remember after the first look that there
+is no override, and Drake's own answer (no witness functions) is used.
 """
 
 from pydrake.systems.framework import LeafSystem

@@ -4,7 +4,7 @@ A 2 ms control loop on a general-purpose kernel is late whenever the scheduler g
 something else: another process, a compiler, a browser. Under SCHED_FIFO a thread runs until it
 blocks or a higher real-time priority wants the core; ordinary processes wait. Robot software
 does the same (ros2_control's controller manager asks for SCHED_FIFO priority 50 and warns when
-the OS refuses). What it did to this project's loop, measured, is in go1_driver/README.md.
+the OS refuses). What it changes for the driver's loop is in go1_driver/README.md.
 
 Every thread of the process is raised, not only the caller: the driver's receive thread must
 stamp status messages promptly, and the threads share the GIL, so a normal-priority thread
@@ -12,9 +12,9 @@ holding it would stall the loop behind the machine's other work.
 
 Linux's real-time throttling (`kernel.sched_rt_runtime_us` of every `kernel.sched_rt_period_us`,
 by default 0.95 s of each second) leaves the rest of the machine a share should a loop spin, but
-it also stops, for the rest of the second, real-time threads that need more than that: on a
-slow machine the simulator bridge, which needs most of a core, was stopped for 50 to 70 ms once a
-second, and the driver's status watchdog latched (docs/real_time.md). `rt_throttling()` reads the
+it also stops, for the rest of the second, real-time threads that need more than that: a
+simulator bridge that needs most of a core is stopped for tens of milliseconds once a second,
+long enough for the driver's status watchdog to latch (docs/real_time.md). `rt_throttling()` reads the
 limit; raising a thread warns once while it is on. `sysctl -w kernel.sched_rt_runtime_us=-1`
 lifts it, which a robot computer dedicated to its loops can afford and a shared desktop cannot.
 

@@ -1,9 +1,9 @@
 """Small 3D helpers for code that runs every control tick, in Python and in compiled kernels.
 
-numpy's general routines pay for their generality on 3-vectors: `np.cross` costs about 12 us a
-call (axis handling), the scalar form below about 1 us. Likewise a quaternion's rotation matrix
-through pydrake (Quaternion, RotationMatrix) costs about 5 us, the scalar form 1.4 us. The
-sensors, the estimator and the controllers call these a few times every tick, at 500-1000 Hz.
+numpy's general routines pay for their generality on 3-vectors: `np.cross` spends most of a
+call on axis handling, and a quaternion's rotation matrix through pydrake (Quaternion,
+RotationMatrix) on building objects; the scalar forms below do neither. The sensors, the
+estimator and the controllers call these a few times every tick, at 500-1000 Hz.
 
 Each rotation helper is a compiled kernel (`*_kernel`, for other kernels: the controllers'
 compiled ticks) with a Python function on top that takes any array-like; both are the same code.

@@ -1,8 +1,8 @@
 """The simulator bridge's two status messages, encoded straight into reused byte buffers.
 
 The bridge publishes leg_control_data and state_estimator_data at 500 Hz. Filling the generated
-message objects (lists from numpy slices) and their `encode` (a struct.pack per field) cost about
-60 us a tick on this project's slow machines, in a process that needs most of a core already.
+message objects (lists from numpy slices) and their `encode` (a struct.pack per field) is Python
+work at every tick, in a process that can need most of a core already.
 Every field the bridge fills is at a fixed place in the encoded message (the fingerprint's 8
 bytes, then the fields in declaration order, big-endian), so `StatusEncoder` writes the values
 there through numpy views and hands out copies of the buffers: the same bytes as

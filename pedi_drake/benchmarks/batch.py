@@ -8,7 +8,7 @@
    beyond the task's own work (the first task's worker start-up excluded: the engine is started
    before the clock).
 2. Speed-up: the mission benchmark's study (every listed mission, seed 0 without noise and the
-   noise seeds with it) on Ray and then serially, in one sitting, and whether the two give the
+   noise seeds with it) on Ray and then serially, in one run, and whether the two give the
    same rows (every column but the timing ones). Where a speed-up below the number of workers
    comes from, from each task's own wall time in both engines:
    - `two_at_once_slowdown`: the median over tasks of (its wall time on Ray / in the serial run),
@@ -34,6 +34,7 @@ from pedi_drake.batch.engines import RayEngine, SerialEngine
 from pedi_drake.batch.runner import run_study
 from pedi_drake.batch.study import study_from_dict
 from pedi_drake.batch.tasks import TIMING_COLUMNS
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.benchmarks.missions import mission_study
 from pedi_drake.mission.spec import shipped_missions
 
@@ -165,7 +166,7 @@ def main() -> None:
     print(f"load average at start {load[0]:.2f}, at end {report['load_at_end'][0]:.2f} ({os.cpu_count()} cores)")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2) + "\n")
+    out.write_text(json.dumps(stamped(report), indent=2) + "\n")
     print(f"wrote {out}")
 
 

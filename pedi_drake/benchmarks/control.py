@@ -36,7 +36,7 @@ import numpy as np
 from pedi_drake.benchmarks.demos import demo_scenario, run_demo
 from pedi_drake.evaluation.controller_metrics import ControllerMetrics
 
-# Floors of the whole-body controller issue.
+# Floors the whole-body controller is held to.
 TICK_MEDIAN_FLOOR_MS = 1.0
 REAL_TIME_FACTOR_FLOOR = 1.0
 FOOT_ERROR_FLOOR_M = 0.005

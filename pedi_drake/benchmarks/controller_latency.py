@@ -62,6 +62,7 @@ from pydrake.systems.framework import EventStatus
 
 from pedi_drake.apps.sim_bridge import status_messages
 from pedi_drake.apps.status_sample import STATUS_SIGNALS
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.benchmarks.station import real_time_factor
 from pedi_drake.callback_profile import wrapped_callbacks
 from pedi_drake.control import whole_body_tick
@@ -704,23 +705,25 @@ def main() -> None:
     machine = {"processor": platform.processor() or platform.machine(), "python": platform.python_version()}
     out.write_text(
         json.dumps(
-            {
-                "mission": args.mission,
-                "period_s": args.period,
-                "qp_backend": args.qp_backend,
-                "machine": machine,
-                "loadavg_start": load_start,
-                "loadavg_end": load_end,
-                "bare_plant": {"real_time_factor": baseline_rtf, "ms_per_period": baseline_ms},
-                "replay": rows,
-                "stage_cpu_ms_per_tick": stages,
-                "callback_cpu_ms_per_tick": callbacks,
-                "costliest_ticks": costliest,
-                "costliest_ticks_window_s": window,
-                "part_cpu_ms": parts,
-                "framework_floor_cpu_ms": floor,
-                "simulation": sim,
-            },
+            stamped(
+                {
+                    "mission": args.mission,
+                    "period_s": args.period,
+                    "qp_backend": args.qp_backend,
+                    "machine": machine,
+                    "loadavg_start": load_start,
+                    "loadavg_end": load_end,
+                    "bare_plant": {"real_time_factor": baseline_rtf, "ms_per_period": baseline_ms},
+                    "replay": rows,
+                    "stage_cpu_ms_per_tick": stages,
+                    "callback_cpu_ms_per_tick": callbacks,
+                    "costliest_ticks": costliest,
+                    "costliest_ticks_window_s": window,
+                    "part_cpu_ms": parts,
+                    "framework_floor_cpu_ms": floor,
+                    "simulation": sim,
+                }
+            ),
             indent=2,
         )
     )

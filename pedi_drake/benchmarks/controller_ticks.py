@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake.benchmarks.demos import DEMOS, demo_scenario, simulate_demo
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.whole_body_controller import WholeBodyController
 
@@ -176,7 +177,7 @@ def main() -> None:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     report = {"machine": platform.processor() or platform.machine(), "command": "controller_ticks", "rows": rows}
-    out.write_text(json.dumps(report, indent=2))
+    out.write_text(json.dumps(stamped(report), indent=2))
     print(f"written {out}")
 
 

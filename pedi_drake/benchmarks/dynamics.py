@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake import robot
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.jit import kernel
@@ -127,7 +128,9 @@ def main() -> None:
     print(f"Machine: {platform.processor() or platform.machine()}, Python {platform.python_version()}")
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"unit": "us CPU per call, median", "samples": args.samples, "rows": rows}, indent=2))
+    out.write_text(
+        json.dumps(stamped({"unit": "us CPU per call, median", "samples": args.samples, "rows": rows}), indent=2)
+    )
     print(f"wrote {out}")
 
 

@@ -17,13 +17,13 @@ into the cat must still be touched.
 
 import argparse
 import json
-import platform
 import time
 from pathlib import Path
 
 from pydrake.common.yaml import yaml_load
 
 from pedi_drake.apps.sil import run_sil
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.resources import missions_dir
 from pedi_drake.run import run
 from pedi_drake.scenario import load_scenario
@@ -85,9 +85,8 @@ def main() -> None:
     parser.add_argument("--out", default="benchmarks/results/guarded_touch.json")
     args = parser.parse_args()
     rows = []
-    print(
-        f"{'engine':<8}{'offset [mm]':>12}  {'outcome':<10}{'sensed [N]':>11}{'felt at [mm]':>13}{'true [N]':>10}  as it must"
-    )
+    header = f"{'engine':<8}{'offset [mm]':>12}  {'outcome':<10}{'sensed [N]':>11}{'felt at [mm]':>13}"
+    print(header + f"{'true [N]':>10}  as it must")
     for engine in args.engines:
         for offset in args.offsets:
             row = one_run(engine, offset, Path(args.work) / f"{engine}_{1000 * offset:+.0f}mm")
@@ -105,8 +104,7 @@ def main() -> None:
             )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    machine = {"cpu": platform.processor() or platform.machine(), "python": platform.python_version()}
-    out.write_text(json.dumps({"machine": machine, "date": time.strftime("%Y-%m-%d"), "runs": rows}, indent=2))
+    out.write_text(json.dumps(stamped({"runs": rows}), indent=2))
     print(f"{sum(row['as_it_must'] for row in rows)} of {len(rows)} runs as they must; wrote {out}")
 
 

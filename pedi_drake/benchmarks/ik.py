@@ -29,6 +29,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.solvers import SnoptSolver
 
 from pedi_drake import robot
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.ik.analytic import leg_chain, leg_ik_solutions
 from pedi_drake.ik.fabrik import extended_leg_q, solve_leg_ik
 from pedi_drake.leg_kinematics import foot_position_B
@@ -358,7 +359,7 @@ def main(argv: list[str] | None = None) -> None:
     results = run_benchmark(args.targets, args.seed, workspace_samples=args.workspace_samples, snopt=not args.no_snopt)
     print(format_table(results))
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=1))
+    args.out.write_text(json.dumps(stamped(results), indent=1))
     print(f"wrote {args.out}")
 
 

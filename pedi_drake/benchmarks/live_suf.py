@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.suf import warm_projection as wp
 from pedi_drake.suf.go1_configuration import Go1Stance, stance_problem, teleoperation_stance
 from pedi_drake.suf.live import LiveSuf, LiveSufReading, idle_vector
@@ -165,7 +166,7 @@ def main() -> None:
     print("Floors:", json.dumps(report["floors"]))
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2))
+    out.write_text(json.dumps(stamped(report), indent=2))
     print(f"wrote {out}")
 
 

@@ -21,6 +21,7 @@ from pedi_drake.batch.engines import ENGINES, make_engine
 from pedi_drake.batch.results_file import read_rows
 from pedi_drake.batch.runner import run_study
 from pedi_drake.batch.study import study_from_dict
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.mission.spec import load_mission, shipped_missions
 
 # The obstacle each press of obstacle_sensing touches, from the mission's scene.
@@ -163,7 +164,7 @@ def main() -> None:
         )
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"summary": summary, "runs": results}, indent=2, default=str))
+    out.write_text(json.dumps(stamped({"summary": summary, "runs": results}), indent=2, default=str))
     print(f"wrote {out}")
 
 

@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake.benchmarks.demos import demo_scenario, simulate_demo
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import paper002 as evaluation
@@ -295,7 +296,7 @@ def main() -> None:
         # Written after every case: a long benchmark stopped early keeps what it measured.
         rows.extend(new_rows)
         report = {"machine": platform.processor() or platform.machine(), "rows": rows, "floors": floors(rows)}
-        out.write_text(json.dumps(report, indent=2, default=float))
+        out.write_text(json.dumps(stamped(report), indent=2, default=float))
 
     if not args.skip_demos:
         record(demo_rows())

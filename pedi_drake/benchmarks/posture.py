@@ -34,6 +34,7 @@ from pathlib import Path
 import numpy as np
 from pydrake.common.yaml import yaml_dump, yaml_load
 
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.mission import spec
 from pedi_drake.mission.posture_planner import PLAN_LATENCY, POSTURE_DURATION
@@ -247,7 +248,7 @@ def main() -> None:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     report = {"targets": rows, "lifts": lifts, "methods": methods, "floor": floor}
-    out.write_text(json.dumps(report, indent=1))
+    out.write_text(json.dumps(stamped(report), indent=1))
     print(f"wrote {out}")
 
 

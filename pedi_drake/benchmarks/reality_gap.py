@@ -21,6 +21,7 @@ from pathlib import Path
 
 from pedi_drake.batch.results_file import ROWS_FILE, read_rows
 from pedi_drake.batch.summary import factor_names_of, format_summary, plot_summary, summarise, wilson_interval
+from pedi_drake.benchmarks.machine import stamped
 
 MIN_DRAWS = 30  # draws per mission
 MIN_OVERALL = 0.95  # share of all runs that succeed
@@ -99,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
     report = {"missions": table, "floors": held, "failures": failures(rows), "by_field": summary}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2, default=str) + "\n")
+    out.write_text(json.dumps(stamped(report), indent=2, default=str) + "\n")
     print(f"wrote {out}")
     return 0
 

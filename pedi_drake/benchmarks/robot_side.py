@@ -1,5 +1,5 @@
 """The robot side's cost per 2 ms step: the simulated station in a closed-loop mission and in the
-SIL bridge, against the bare plant measured in the same sitting.
+SIL bridge, against the bare plant measured in the same run.
 
     python -m pedi_drake.benchmarks.robot_side [--mission hit_target_front] [--duration 6]
         [--runs 3] [--cases bare_plant,closed_loop,bridge] [--callbacks]

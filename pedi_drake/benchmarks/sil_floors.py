@@ -41,6 +41,7 @@ import time
 from pathlib import Path
 
 from pedi_drake.apps.sil import BRIDGES, flood_text, run_sil, slow_calls_text
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.realtime_priority import rt_throttling
 from pedi_drake.robot import FOOT_RADIUS
 
@@ -253,17 +254,20 @@ def main() -> None:
     }
     out.write_text(
         json.dumps(
-            {
-                "scenario_name": args.scenario_name,
-                "scenario_text": args.scenario_text,
-                "separate": args.separate,
-                "callbacks": args.callbacks,
-                "pin": args.pin,
-                "flood_at": args.flood_at,
-                "machine": machine,
-                "summary": summary,
-                "runs": rows,
-            },
+            stamped(
+                {
+                    "scenario_name": args.scenario_name,
+                    "scenario_text": args.scenario_text,
+                    "separate": args.separate,
+                    "callbacks": args.callbacks,
+                    "pin": args.pin,
+                    "flood_at": args.flood_at,
+                    "robot": args.robot,
+                    "machine": machine,
+                    "summary": summary,
+                    "runs": rows,
+                }
+            ),
             indent=2,
         )
     )

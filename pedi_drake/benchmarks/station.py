@@ -26,6 +26,7 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.diagram import MakePedipulationDiagram, apply_mission
 from pedi_drake.go1_command import pack_command
 from pedi_drake.mission.spec import load_mission
@@ -123,13 +124,15 @@ def main() -> None:
     machine = {"processor": platform.processor() or platform.machine(), "python": platform.python_version()}
     out.write_text(
         json.dumps(
-            {
-                "runs": args.runs,
-                "duration_s": args.duration,
-                "mission": args.mission,
-                "machine": machine,
-                "cases": rows,
-            },
+            stamped(
+                {
+                    "runs": args.runs,
+                    "duration_s": args.duration,
+                    "mission": args.mission,
+                    "machine": machine,
+                    "cases": rows,
+                }
+            ),
             indent=2,
         )
     )

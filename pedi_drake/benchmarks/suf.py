@@ -23,6 +23,7 @@ import numpy as np
 from pedi_drake.batch.engines import ENGINES, make_engine
 from pedi_drake.batch.runner import run_study
 from pedi_drake.batch.study import load_study
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.exceptions import SufError
 from pedi_drake.resources import studies_dir
 from pedi_drake.suf.design import stance_for
@@ -42,7 +43,7 @@ PAPER_MS = {
 # Fig. 3 (heights swept: studies/suf_height_sweep.yaml): the range called practical (the Go1
 # stands at 0.27-0.28 m).
 PRACTICAL_HEIGHTS = (0.18, 0.26)
-# Speed floors of the SUF issue: at least this many times faster than the paper (teleoperation).
+# Speed floors: at least this many times faster than the paper (teleoperation).
 SPEEDUP_FLOOR = {"exact": 5.0, "affine": 5.0, "quadratic": 5.0, "single": 5.0, "fibonacci": 2.0}
 
 
@@ -216,7 +217,9 @@ def main() -> None:
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(
-        json.dumps({"scenarios": scenarios, "floors": floors, "paper_ms": PAPER_MS, "height_sweep": sweep}, indent=2)
+        json.dumps(
+            stamped({"scenarios": scenarios, "floors": floors, "paper_ms": PAPER_MS, "height_sweep": sweep}), indent=2
+        )
     )
     print(f"wrote {out}")
 

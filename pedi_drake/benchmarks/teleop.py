@@ -32,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake.apps.sil import run_sil
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.evaluation import command_fuzz, random_switches, teleop_square
 from pedi_drake.evaluation.teleop_floors import SCENARIO_TEXT, floor_figures, truth_from_bridge_log
 from pedi_drake.go1_driver.pacing import WAITS
@@ -192,13 +193,15 @@ def main() -> None:
     machine = {"processor": platform.processor() or platform.machine(), "cpus": os.cpu_count()}
     out.write_text(
         json.dumps(
-            {
-                "seed": args.seed,
-                "realtime_priority": args.realtime_priority,
-                "wait": args.wait,
-                "machine": machine,
-                "scenarios": rows,
-            },
+            stamped(
+                {
+                    "seed": args.seed,
+                    "realtime_priority": args.realtime_priority,
+                    "wait": args.wait,
+                    "machine": machine,
+                    "scenarios": rows,
+                }
+            ),
             indent=2,
             default=float,
         )

@@ -33,6 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.cpu_steal import steal_seconds
 from pedi_drake.go1_driver.link import distribution_ms, lateness_against_earliest
 from pedi_drake.realtime_priority import realtime_priority
@@ -179,7 +180,7 @@ def main() -> None:
     report["load_at_end"] = os.getloadavg()
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps(report, indent=2))
+    out.write_text(json.dumps(stamped(report), indent=2))
     print(f"wrote {out}")
 
 

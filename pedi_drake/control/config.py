@@ -62,7 +62,7 @@ class WholeBodyControllerConfig:
 
     # Capture-point prediction horizon of the balance task [s].
     balance_horizon: float = 0.05
-    # Include Jdot_com v in the capture-point prediction (exact, ~70 us a tick more) [-].
+    # Include Jdot_com v in the capture-point prediction (exact, but more work every tick) [-].
     balance_com_bias: bool = False
     # Default safety polygon: the stance contacts' support polygon shrunk by this margin [m].
     safety_margin: float = 0.03

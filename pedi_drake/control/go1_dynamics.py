@@ -3,9 +3,8 @@
 `go1_dynamics(model, base_state, q_joints, v_joints, out)` is a `pedi_drake.jit.kernel`: from the
 state estimate and the measured joints it fills every term of a `RobotSnapshot` (mass matrix,
 bias, contact and trunk Jacobians with their bias accelerations, centre of mass, calf
-orientations) in the plant's own velocity order: about 4 us of CPU from compiled code, 10 us
-called from Python, 20 us for a RobotSnapshot of fresh arrays, against about 250 us for the Drake
-calls of `ControllerModel`'s reference path (`python -m pedi_drake.benchmarks.dynamics`). It is
+orientations) in the plant's own velocity order, far cheaper than the Drake calls of
+`ControllerModel`'s reference path (`python -m pedi_drake.benchmarks.dynamics` measures both). It is
 nopython-callable, so a compiled controller can call it inside its own kernel; `Go1Dynamics` is
 the Python owner of its arrays.
 
@@ -23,7 +22,7 @@ kernel is expressed in W's axes and taken about O, the world-fixed point that co
 trunk origin at this instant (so positions r = p_W* - p_WB stay small whatever p_WB is, and the
 floating base's velocity v_base = [w_WB; v_WB] is itself the trunk's spatial velocity about O).
 Spatial vectors are [angular; linear]:
-    twist V_b = [w_b; v_b(O)] [rad/s, m/s], v_b(O) the velocity of b's material point at O;
+    twist V_b = [w_b; v_b(O)] in [rad/s, m/s], v_b(O) the velocity of b's material point at O;
     a point P of b at r moves with v_P = v_b(O) + w_b x r;
     a revolute joint with unit axis a through r_F has the motion subspace S = [a; r_F x a];
     rigid body inertia about O, body mass m, centre of mass at c, rotational inertia Ibar about

@@ -14,7 +14,7 @@ al. 2014):
 * Inequalities (hard ones and fixed soft ones) are carried down as constraints on z.
 
 Every level QP is dense and small (about 20 to 40 variables for the Go1), so it goes to DAQP,
-a dense active-set solver called directly (about 0.05 to 0.2 ms a solve); see
+a dense active-set solver called directly; see
 `pedi_drake.benchmarks.control` for the measured comparison with MathematicalProgram + OSQP.
 The `dense_qp` backend solves the same exact (semi-definite) problems with
 `pedi_drake.control.dense_qp`, compiled with numba and so callable from compiled code too.

@@ -5,11 +5,11 @@ the measured joints, a `RobotSnapshot` with the mass matrix, bias and gravity te
 Jacobians and their bias accelerations, the trunk Jacobian and the centre of mass. Two paths
 give the same terms to rounding:
 
-* compiled (the default): one call of `go1_dynamics.go1_dynamics` (~20 us with the snapshot),
-  whose parameters are read from the same plant;
+* compiled (the default): one call of `go1_dynamics.go1_dynamics`, whose parameters are read
+  from the same plant;
 * Drake (`compiled=False`, the reference the tests compare against): a plant (from
   `make_go1_plant`, never the simulation's) and a scratch context overwritten from the inputs,
-  then one Drake call per term (~230 us). The context holds no information that survives a tick,
+  then one Drake call per term. The context holds no information that survives a tick,
   so it is a computation workspace, not controller state.
 
 Velocity coordinates are the plant's: v = [w_WB (3, world); v_WB (3, world); joint rates], with
@@ -43,8 +43,8 @@ class ControllerModel:
     from a plant, a scratch context and the contact frames."""
 
     def __init__(self, prongs: ProngDesign | None = None, com_bias: bool = True, compiled: bool = True) -> None:
-        """`com_bias` False returns Jdot_com v as zeros: it cost ~70 us a tick on the Drake path and
-        only enters the capture-point prediction scaled by horizon / omega (below 1 mm at standing
+        """`com_bias` False returns Jdot_com v as zeros: it is costly on the Drake path and only
+        enters the capture-point prediction scaled by horizon / omega (below 1 mm at standing
         speeds); the compiled path honours it too, so both paths give the same commands.
         `compiled` False computes every term with Drake calls (the reference)."""
         self.prongs = prongs

@@ -3,12 +3,12 @@ compiled code.
 
 Paper 002's controller takes the pseudo-inverse of a symmetric positive semi-definite matrix (a
 contact Gram matrix, a task's inverse inertia) five to seven times a tick, on matrices of 2 to 18
-rows. LAPACK's dsyevd costs 3 us on a 3 x 3, 10 us on a 9 x 9 and 30 us on an 18 x 18 on this
-machine, mostly in its setup and its divide-and-conquer machinery, which pays off only for
-matrices in the hundreds. The classical algorithm below (Householder reduction to tridiagonal
-form, then implicit QL iterations with Wilkinson shifts: EISPACK's tred2 and tql2 as published
-in JAMA) takes 0.5 us, 3 us and 15 us on the same, to the same accuracy (eigenvalues to about
-machine epsilon times the largest one, orthonormal eigenvectors).
+rows. On matrices that small LAPACK's dsyevd spends most of its time in its setup and its
+divide-and-conquer machinery, which pays off only for matrices in the hundreds. The classical
+algorithm below (Householder reduction to tridiagonal form, then implicit QL iterations with
+Wilkinson shifts: EISPACK's tred2 and tql2 as published in JAMA) is several times faster there,
+to the same accuracy (eigenvalues to about machine epsilon times the largest one, orthonormal
+eigenvectors); `python -m pedi_drake.benchmarks.dense_qp` measures the solvers built on it.
 
 * `symmetric_eigen(A, w, W)`: A = W^T diag(w) W with w ascending, as LAPACK returns them, and
   the eigenvectors as the rows of W (LAPACK's columns). Reads the lower triangle of A. False (w,

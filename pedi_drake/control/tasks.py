@@ -197,7 +197,7 @@ class JointLimits:
     ) -> InequalityTask:
         T = self.horizon
         q, qd = s.q_joints, s.v_joints
-        # h = [upper; -lower], filled in place (this runs every tick; each numpy call costs ~1 us).
+        # h = [upper; -lower], filled in place: this runs every tick, where each numpy call counts.
         h = np.empty(2 * len(q))
         upper, minus_lower = h[: len(q)], h[len(q) :]
         reach = q + qd * T  # where the joint would coast to

@@ -1,10 +1,10 @@
 """Fast forward kinematics of the four Go1 legs for the state estimator: foot positions and velocities.
 
 The estimator needs every foot's position and Jacobian in the trunk frame at 500 Hz. The general
-`pedi_drake.leg_kinematics` functions build rotation matrices with numpy (~170 us a leg); the Go1's
-legs have the structure hip about x, thigh and calf about y, with unrotated joint frames, so the
-same quantities follow from a few sines and cosines, compiled (`pedi_drake.jit`: about 1 us for
-all four legs). The offsets come from the model through `leg_geometry`, so there is still one
+`pedi_drake.leg_kinematics` functions build rotation matrices with numpy, too slow at that rate;
+the Go1's legs have the structure hip about x, thigh and calf about y, with unrotated joint
+frames, so the same quantities follow from a few sines and cosines, compiled (`pedi_drake.jit`,
+one call for all four legs). The offsets come from the model through `leg_geometry`, so there is still one
 source of truth.
 """
 

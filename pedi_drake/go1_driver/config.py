@@ -49,10 +49,10 @@ class Go1BridgeConfig:
     # Probability that a status tick is not published [-].
     drop_probability: float = 0.0
     # SCHED_FIFO priority [1-99] of the bridge's threads; 0 (the default): the OS's normal
-    # scheduling. The simulated robot needs most of a core on a slow machine of this project's
-    # kind, and Linux lets real-time threads have at most 0.95 s of every second by default
+    # scheduling. The simulated robot can need most of a core on a slow machine, and Linux lets
+    # real-time threads have at most 0.95 s of every second by default
     # (/proc/sys/kernel/sched_rt_runtime_us): a bridge under SCHED_FIFO that needs more is stopped
-    # for the rest of each second, 50 to 70 ms, and the driver's status watchdog latches. At
+    # for the rest of each second, and the driver's status watchdog latches. At
     # normal scheduling the bridge is never stopped so, and the driver's loop, if it runs under
     # SCHED_FIFO, still comes first (docs/real_time.md).
     realtime_priority: int = 0
@@ -73,11 +73,11 @@ class Go1DriverConfig:
     # refuses (no root, CAP_SYS_NICE or `ulimit -r`), the loop runs at normal priority with a
     # warning, and result.json says which it got (see pedi_drake.realtime_priority). Off by
     # default: with it the semi-autonomous mode's posture plans, computed at normal priority,
-    # came too late (docs/real_time.md has the misses with and without).
+    # come late (docs/real_time.md).
     realtime_priority: int = 0
     # How the loop waits for its next period: "sleep" (the OS's timer), "spin" (a busy wait that
     # keeps a core busy for as long as the loop runs, and keeps the loop on time where waking a
-    # sleeping thread is slow, as on this project's virtual machines) or "auto": spin unless the
+    # sleeping thread is slow, as on virtual machines) or "auto": spin unless the
     # loop runs at a real-time priority or the run has an operator or a posture planner, whose
     # work needs that core (pedi_drake/go1_driver/pacing.py, docs/real_time.md).
     wait: str = "auto"

@@ -12,8 +12,8 @@ action would end the process without unwinding, so while the block runs (and nob
 SIGTERM) it raises KeyboardInterrupt instead, the way Ctrl-C does.
 
 The heap that exists when the loop starts (Drake, the diagram, numpy, the mission) is frozen out
-of the garbage collector (gc.freeze): a full collection walks the whole heap, tens to hundreds of
-milliseconds on this kind of machine, so without it the loop misses deadlines whenever one runs.
+of the garbage collector (gc.freeze): a full collection walks the whole heap, which takes many
+control periods, so without it the loop misses deadlines whenever one runs.
 Only objects made during the loop are then collected, in sub-millisecond young collections.
 
 Every thread of the process runs under SCHED_FIFO at the driver's `realtime_priority` while the

@@ -9,11 +9,11 @@ spins where nothing else of the run needs the core (`loop_wait`).
 
 Why a loop would burn a core to wait. A thread that sleeps gives up its CPU, and the CPU goes
 idle; its wake-up at the deadline then waits on everything between the timer and the thread
-running again. On this project's virtual machines that is the host (an idle virtual CPU is
+running again. On a virtual machine that is the host (an idle virtual CPU is
 handed back to it and must be scheduled again) and the guest's scheduler (which may queue the
 woken loop behind the simulator bridge on one CPU while the other sits idle). A thread that
-spins keeps its CPU busy and is running when its deadline comes. docs/real_time.md ("Waiting by
-spinning") has what each costs at real time beside the bridge. The price is a whole core for as
+spins keeps its CPU busy and is running when its deadline comes (docs/real_time.md says how to
+compare the two at real time beside the bridge). The price is a whole core for as
 long as the loop runs, which a run with other work of its own may not want to pay: hence the
 choice, and what "auto" leaves to sleeping.
 """

@@ -36,8 +36,8 @@ Every joint plane here is spanned by two of the leg's basis vectors (see `analyt
 so the projection matrix of Algorithm 1 reduces to taking two coordinates, written as a complex
 number w = z + i x (sagittal joints) or v = y + i z (hip); the angle-axis rotation between two
 projected vectors is then the phase of w_target * conj(w_foot), a signed angle about the joint
-axis (the re-projection of rho on k_j). Plain float and complex arithmetic keeps one solve
-near 20 us in CPython; numpy on 3-vectors costs about 1 us per call and would dominate.
+axis (the re-projection of rho on k_j). Plain float and complex arithmetic keeps a solve
+cheap in CPython, where numpy's per-call overhead on 3-vectors would dominate.
 """
 
 import cmath
@@ -60,7 +60,7 @@ DEFAULT_MAX_ITERATIONS = 50
 # Compensation sweeps per iteration. One sweep (Algorithm 1) is a cyclic-coordinate step and
 # converges linearly (x0.05-0.2 per sweep at the knee), so stopping at the first iterate under a
 # 1 mm tolerance left a mean error near 0.28 mm. Repeating the sweep, until its rotations fall
-# under the skip threshold, costs ~2 us a sweep and brings the mean near 0.1 mm and the mean
+# under the skip threshold, costs little and brings the mean near 0.1 mm and the mean
 # iteration count at 1 cm from 1.4 to 1.0 (python -m pedi_drake.benchmarks.ik).
 _COMPENSATION_SWEEPS = 8
 

@@ -13,7 +13,7 @@ import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
-from pedi_drake.exceptions import UnreachableTarget
+from pedi_drake.exceptions import MissionFileError, UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
 from pedi_drake.mission import spec
@@ -1096,3 +1096,25 @@ assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a
 
 def kind_name(phase) -> str:
     return next(name for name, cls in spec.PHASE_KINDS.items() if isinstance(phase, cls))
+
+
+def register_phase_kind(name: str, spec_class: type[spec.PhaseBase], runner: PhaseRunner) -> None:
+    """Adds a phase kind: mission files may then use `kind: name`, loaded into `spec_class` and
+    run by `runner` (docs/extending.md walks through one).
+
+    `spec_class` is a dataclass deriving from `spec.PhaseBase`, whose fields (each with a default,
+    a comment and a unit) are the phase's mission file fields; the loader checks them against the
+    field types and applies the common value checks (durations > 0, a `leg` among the leg names).
+    `runner` is a stateless `PhaseRunner`. A name or a class already registered raises
+    MissionFileError, so a kind is never silently replaced.
+    """
+    if not name.isidentifier():
+        raise MissionFileError(f"phase kind {name!r}: must be an identifier (it is a mission file's `kind:`)")
+    if name in spec.PHASE_KINDS or spec_class in RUNNERS:
+        raise MissionFileError(f"phase kind {name!r} ({spec_class.__name__}) is already registered")
+    if not (dataclasses.is_dataclass(spec_class) and issubclass(spec_class, spec.PhaseBase)):
+        raise MissionFileError(f"phase kind {name!r}: {spec_class!r} must be a dataclass deriving from PhaseBase")
+    if not isinstance(runner, PhaseRunner):
+        raise MissionFileError(f"phase kind {name!r}: the runner must be a PhaseRunner, got {type(runner).__name__}")
+    spec.PHASE_KINDS[name] = spec_class
+    RUNNERS[spec_class] = runner

@@ -13,7 +13,7 @@ does not depend on how fast the machine is; a real-time run only polls, and the 
 the answer is in.
 
 One worker serves the whole process (`shared_planner`), started by the first mission that needs
-it (in the MissionManager's constructor, so that its start-up, about 2 s, is not in a tick) and
+it (in the MissionManager's constructor, so that its start-up is not in a tick) and
 stopped at exit.
 """
 
@@ -26,8 +26,9 @@ import threading
 
 from pedi_drake.suf.posture import Posture, PostureCase, PostureLimits, PostureResult, optimise_posture
 
-# Diagram time between asking for a posture and taking the answer [s]: about what one
-# optimisation takes on this project's 2-core machine beside a real-time run.
+# Diagram time between asking for a posture and taking the answer [s]: a bound on one
+# optimisation beside a real-time run, so that lock-step simulations see the delay a real-time
+# run would.
 PLAN_LATENCY = 2.0
 # Longest wait for an answer beyond PLAN_LATENCY [s] before the phase fails. Only a real-time run
 # waits so: a lock-step simulation blocks for the worker. The robot holds still meanwhile, so the

@@ -269,5 +269,5 @@ class MissionProgress:
         # Shared, not copied: a progress stored in a Context is never changed in place (the
         # MissionManager changes a `copy()` and stores that), and Drake copies the whole state
         # for every unrestricted update, among them the plant's at each step (its sampled
-        # output ports): about 25 us a copy, twice a control tick.
+        # output ports): a deep copy would be paid twice a control tick.
         return self

@@ -5,7 +5,7 @@ Everything here is computed from the base-state estimate and the joint sensors t
 model, never from simulation ground truth.
 
 The whole-robot quantities (centre of mass, gravity torques) need a Context of the Go1 plant:
-making one costs 0.1 to 1.5 ms, too much for a mission update (a press or a teleoperated foot
+making one is too costly for a mission update (a press or a teleoperated foot
 reads a force estimate at every one), so each thread keeps one to compute in (`_plant_context`);
 every use sets the positions it reads first, so nothing is carried from one use to the next.
 """

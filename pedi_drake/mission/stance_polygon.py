@@ -2,9 +2,9 @@
 controller's `safety_polygon` layout.
 
 The Mission Manager sends it to the whole-body controller at every update (100 Hz), from the
-estimated trunk pose and the measured joints. Built from pydrake poses and small numpy steps it
-cost a tenth of a millisecond an update on this project's machines, in the control loop's tick at
-real time; here it is one compiled call (`pedi_drake.jit`): the feet from the legs' kinematics,
+estimated trunk pose and the measured joints, inside the control loop's tick at real time, so it
+is one compiled call (`pedi_drake.jit`) rather than pydrake poses and small numpy steps, whose
+per-call overhead would dominate: the feet from the legs' kinematics,
 the prong tips from the trunk pose, the hull shrunk by the margin (`polygon.shrink_kernel`), the
 frame at the shrunk polygon's vertex centroid turned to the trunk's heading.
 """

@@ -63,7 +63,7 @@ def workspace_margin(leg: str, p_B: np.ndarray, X_WB: RigidTransform, joint_marg
 
 def _inward_normal(margin, p: np.ndarray) -> np.ndarray | None:
     """Unit gradient of `margin` at `p` (points into the workspace), None where it is not defined."""
-    # Forward differences: each margin costs a closed-form IK (about 0.1-0.5 ms in Python).
+    # Forward differences: each margin costs a closed-form IK, so three evaluations, not a Jacobian.
     here = margin(p)
     gradient = np.zeros(3)
     for k in range(3):

@@ -110,8 +110,8 @@ class Go1MotorModel(Diagram):
     The law (`motor_torque`) runs at the plant's rate, every step, so it is built from Drake's
     C++ systems: a selection of the joint states (SparseMatrixGain), the law itself as a
     SymbolicVectorSystem, and a selection of the applied torques. Only the command guard is
-    Python, and it runs once per command. As a Python LeafSystem the law cost about 50 us a
-    plant step, a fifth of the plant's own step.
+    Python, and it runs once per command: a Python LeafSystem for the law would add a Python
+    callback to every plant step.
 
     `error` (the scenario's model error) scales each motor's torque and limit by its leg's
     strength, delays the guarded command by n = `error.latency_steps(time_step)` plant steps (a

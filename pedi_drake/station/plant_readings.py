@@ -6,9 +6,9 @@ The Go1's IMU, foot force sensors and torque estimate (`go1.imu`, `go1.foot_cont
 together every control tick (by the estimator, the mission manager and the log's hold). One
 output port, `readings` (layout `readings_sizes`), computes them all: one pass over the contact
 results (the pybind calls that cost most), one compiled kernel for the maths, then the sensor
-noise; a C++ Demultiplexer (see `MakeSimulationStation`) splits it into the station's ports. As
-five Python output ports of their own the same values cost about 230 us of CPU a control tick
-(three passes over the contact results, a callback and its Evals per port); as one, a fifth.
+noise; a C++ Demultiplexer (see `MakeSimulationStation`) splits it into the station's ports.
+Five Python output ports of their own would pay three passes over the contact results and a
+callback with its Evals per port, every control tick.
 
 The kernel is the reference functions of `pedi_drake.station.sensors` and
 `pedi_drake.station.scene_contact` operation by operation (the same sums in the same order,

@@ -384,8 +384,8 @@ class LiveSufWorkspace:
 
 
 # The work of the rows (the Go1's dynamics and the equalities eliminated), charged to an update's
-# first `advance` [LP]. Alone, the rows cost what six LPs do (about 35 us of CPU; measured as
-# warm_projection's constants); in the control loop, with its caches cold, they cost what about
+# first `advance` [LP]. Alone, the rows cost what six LPs do (measured as warm_projection's
+# constants); in the control loop, with its caches cold, they cost what about
 # fifteen LPs of a slice do (pedi_drake.benchmarks.suf_offload --replay: the live SUF's handler at
 # its start tick against the ticks after it), and a tick is what the budget is for.
 ROWS_WORK = 15.0

@@ -32,13 +32,13 @@ the update's (pedi_drake.benchmarks.suf_offload --replay, `unrestricted` against
 
 Why slices and not a worker thread: the work is counted, not timed, so a simulation gives the
 same SUF sequence at any machine speed, and the tick's share is bounded whatever the operating
-system does (measured: at most 0.18 ms of a tick, against 0.85 ms for the whole update in one).
+system does (a fraction of what the whole update in one tick costs).
 A thread (the kernels release the GIL) costs the tick less on average, only the hand-over, but
 not a bounded amount: the tick that collects the result waits for the worker, or for the GIL its
-Python holds (once 2.4 ms in two replays, with a core to spare); on this project's 2-core machines
-it shares the loop's core (the simulator bridge has the other), under SCHED_FIFO
-(`go1_driver.realtime_priority`) it would run at the loop's priority, and its result is a period
-older. docs/real_time.md has the measurements (pedi_drake.benchmarks.suf_offload).
+Python holds, even with a core to spare; on a 2-core machine it shares the loop's core (the
+simulator bridge has the other), under SCHED_FIFO (`go1_driver.realtime_priority`) it would run
+at the loop's priority, and its result is a period older. pedi_drake.benchmarks.suf_offload
+measures the designs side by side.
 """
 
 import math

@@ -314,10 +314,10 @@ _POINTS, _TETRAHEDRON, _HULL, _CERTIFY = 0, 1, 2, 3
 # The status of a call that spent its work budget before the projection was done: call again.
 PENDING = -1
 # What the projection's steps cost, in the work unit of `project_within`'s budget: one LP on the
-# Go1's problems, about 5 us of CPU on this project's machines; a vertex's or a facet's check
-# (a small solve) under 0.5 us; a point joined to the hull (or the first tetrahedron) under 1 us
-# [LP]. Measured with pedi_drake.benchmarks.live_suf_slices (each kind of step timed alone), and
-# rounded up: they make a budget of work a budget of time, roughly.
+# Go1's problems; a vertex's or a facet's check (a small solve) under a tenth of that; a point
+# joined to the hull (or the first tetrahedron) under one [LP]. Measured with
+# pedi_drake.benchmarks.live_suf_slices (each kind of step timed alone), and rounded up: they
+# make a budget of work a budget of time, roughly.
 LP_WORK = 1.0
 CHECK_WORK = 0.1
 INSERT_WORK = 0.2
