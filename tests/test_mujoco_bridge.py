@@ -93,14 +93,17 @@ def test_standing_feet_do_not_creep_under_a_steady_push():
     assert np.abs(go1.truth_sample().p_WF - before)[:, :2].max() < 0.003
 
 
-def test_nothing_starts_in_penetration_and_the_start_is_the_drake_pose():
+def test_the_run_starts_at_rest_where_the_scenario_places_the_robot():
     for prongs in (None, ProngDesign()):
-        go1 = MujocoGo1(_scenario(prongs=prongs))
-        assert go1.data.ncon == 0
-        np.testing.assert_allclose(go1.joint_positions(), go1.data.qpos[go1._qpos])
-        mujoco.mj_forward(go1.model, go1.data)
-        lowest = min(go1.truth_sample().p_WF[:, 2]) - 0.023
-        assert 0.0 < lowest < 0.005 or prongs is not None
+        scenario = _scenario(prongs=prongs)
+        scenario.robot.initial_xy = [0.3, -0.2]
+        go1 = MujocoGo1(scenario)
+        assert go1.time == 0.0
+        np.testing.assert_allclose(go1.truth_sample().p_WB[:2], [0.3, -0.2], atol=1e-12)
+        assert np.abs(go1.data.qvel).max() < 0.05  # at rest under the hold
+        assert go1.data.ncon > 0  # on its soft feet (and prongs), not in the air
+        deepest = 0.023 - min(go1.truth_sample().p_WF[:, 2])
+        assert deepest < 0.025  # sunk, not through the floor
 
 
 def test_status_messages_decode_with_the_projects_lcmtypes():
@@ -238,7 +241,9 @@ def test_the_truth_log_has_sim_bridges_keys_and_the_contact_forces(tmp_path):
         bridge.tick()
     path = bridge.truth.write(tmp_path / "truth.npz")
     with np.load(path) as truth:
-        assert set(truth.files) == {"wall_time", "p_WB", "quaternion_WB", "p_WF", "scene_names", "scene_contact_forces"}
+        keys = {"wall_time", "p_WB", "quaternion_WB", "p_WF", "scene_names", "scene_contact_forces", "foot_radius"}
+        assert set(truth.files) == keys
+        assert float(truth["foot_radius"]) == pytest.approx(0.023)
         assert list(truth["scene_names"]) == ["target_panel"]
         assert truth["p_WF"].shape == (4, 4, 3)
         assert truth["scene_contact_forces"].shape == (4, 5)

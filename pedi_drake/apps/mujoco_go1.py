@@ -7,8 +7,9 @@ drive it directly, `pedi_drake.apps.mujoco_bridge` puts it on the wire at wall t
 
 - Initial state: the Drake station's (`pedi_drake.station.initial_state`: lying, level, at the
   scenario's x, y and yaw), raised so that the lowest MuJoCo foot sphere (radius 0.023 m, the
-  project's 0.02 m) starts GROUND_CLEARANCE above the floor: the trunk starts higher by the
-  difference of the radii when the feet carry it, not at all when the prongs do.
+  project's 0.02 m) starts GROUND_CLEARANCE above the floor, then left to come to rest under the
+  hold for SETTLE_TIME and put back at the scenario's x, y (`_settle`): the robot lies at rest
+  where the scenario places it when the run begins.
 - Motors: every physics step applies the wire's law tau = tau_ff + kp (q_des - q) + kd (qd_des -
   qd) from the last command, clamped to the effort limits, with q and qd read from the joint
   sensors at the start of the step (`mj_step1`, then the torques, then `mj_step2`). Before the
@@ -52,6 +53,8 @@ from pedi_drake.station.initial_state import GROUND_CLEARANCE, initial_joint_pos
 from pedi_drake.station.scene_contact import ROBOT_CONTACT_SOURCES
 
 PHYSICS_STEP = 0.001  # [s] (module docstring)
+# The initial pose rests under the hold this long before the run starts [s] (MujocoGo1._settle).
+SETTLE_TIME = 1.0
 MJCF_PATH = models_dir() / "go1" / "go1.xml"
 # Gains with which the robot holds its first measured pose until the first command [N m/rad], [N m s/rad];
 # sim_bridge's HOLD_KP, HOLD_KD.
@@ -206,7 +209,23 @@ class MujocoGo1:
         mujoco.mj_forward(self.model, self.data)
         self.command: np.ndarray | None = None
         self._hold = pack_command(self.data.sensordata[self._q_sensors], 0.0, HOLD_KP, HOLD_KD, 0.0)
+        self._settle()
+        self._hold = pack_command(self.data.sensordata[self._q_sensors], 0.0, HOLD_KP, HOLD_KD, 0.0)
         self.ticks = 0
+
+    def _settle(self) -> None:
+        """Lets the initial pose come to rest under the hold for SETTLE_TIME, then puts the trunk
+        back at the scenario's x, y, and the clock at 0. MuJoCo's soft feet sink under any load
+        and a robot lying on the prongs' line rolls until its feet take it: that motion belongs
+        to how the robot was put down, before the run, not to the run."""
+        pushes, self._pushes = self._pushes, []
+        for _ in range(int(round(SETTLE_TIME / self.model.opt.timestep))):
+            self.step()
+        self._pushes = pushes
+        start = self._free.qposadr[0]
+        self.data.qpos[start : start + 2] = self.scenario.robot.initial_xy
+        self.data.time = 0.0
+        mujoco.mj_forward(self.model, self.data)
 
     @property
     def time(self) -> float:

@@ -118,6 +118,45 @@ def _sil(d: dict) -> str:
     return f"successful runs: {ok} of {runs}; runs that met every floor: {met}"
 
 
+def _sil_mujoco(d: dict) -> str:
+    rows = d["runs"]
+    heights = [row["estimator_trunk_height_error_mm"]["max"] for row in rows]
+    errors = [row["max_true_foot_error_mm"] for row in rows if row["max_true_foot_error_mm"] is not None]
+    return (
+        f"{_sil(d)}; true foot errors at most {max(errors, default=float('nan')):.1f} mm (the feet 3 mm larger); "
+        f"trunk height estimate within {max((h for h in heights if h is not None), default=float('nan')):.1f} mm "
+        "while standing"
+    )
+
+
+def _guarded_touch(d: dict) -> str:
+    rows = d["runs"]
+    cases = []
+    for row in rows:
+        sensed = row["sensed"] or {}
+        outcome = (
+            f"felt {sensed['force_n']:.1f} N at {1e3 * sensed['felt_from_target_m']:+.0f} mm"
+            if sensed.get("confirmed")
+            else "no contact felt"
+            if row["no_contact_felt"]
+            else "failed"
+        )
+        cases.append(f"{row['engine']} {1e3 * row['offset_m']:+.0f} mm: {outcome}")
+    ok = sum(row["as_it_must"] for row in rows)
+    return f"{ok} of {len(rows)} as they must ({'; '.join(cases)})"
+
+
+def _reality_gap(d: dict) -> str:
+    floors = d["floors"]
+    worst = floors["worst_mission"]
+    runs = sum(row["runs"] for row in d["missions"])
+    ok = sum(row["succeeded"] for row in d["missions"])
+    return (
+        f"{ok} of {runs} runs succeeded ({100 * floors['overall']['rate']:.1f} %), the worst mission "
+        f"{worst['mission']} {100 * worst['rate']:.0f} %, at least {floors['draws_per_mission']['min']} draws each"
+    )
+
+
 def _teleop(d: dict) -> str:
     square = _first(d["scenarios"], scenario="square")["square"]
     return f"square: true foot within {1e3 * square['timed_max_m']:.1f} mm of the commanded path"
@@ -209,6 +248,27 @@ ROWS: tuple[Row, ...] = (
         "sil_floors.json",
         _sil,
         "python -m pedi_drake.benchmarks.sil_floors",
+        summary=True,
+    ),
+    Row(
+        "Hardware path at real time against the MuJoCo robot (apps.sil --robot mujoco, five missions)",
+        "sil_floors_mujoco.json",
+        _sil_mujoco,
+        "python -m pedi_drake.benchmarks.sil_floors --robot mujoco --runs 3 --missions hit_target_front "
+        "hit_target_side open_door give_paw prong_push_box --out benchmarks/results/sil_floors_mujoco.json",
+        summary=True,
+    ),
+    Row(
+        "Guarded touch: the target where planned, moved 3 cm away, 1 cm into the object",
+        "guarded_touch.json",
+        _guarded_touch,
+        "python -m pedi_drake.benchmarks.guarded_touch",
+    ),
+    Row(
+        "Every shipped mission against 30 random draws of the reality gap (studies/reality_gap.yaml)",
+        "reality_gap.json",
+        _reality_gap,
+        "python -m pedi_drake.benchmarks.reality_gap",
         summary=True,
     ),
     Row(

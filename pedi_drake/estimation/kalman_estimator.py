@@ -78,12 +78,13 @@ RESTING_HEIGHT_SLACK = 0.03
 # ... and both have held for this many ticks in a row (a load passes through the band as the legs
 # take the weight, without the trunk resting).
 RESTING_TICKS = 50
-# c and s are learnt only while the robot is nearly still: the trunk slower than this [m/s] and
-# every joint slower than this [rad/s]. In a fast motion the joint torques carry the legs' own
-# dynamics, not only the feet's loads, and a falling or rising trunk's kinematics would be taken
-# for feet sinking; then c and s are held, and the feet's heights use them as they are.
-QUASI_STATIC_SPEED = 0.05
-QUASI_STATIC_RATE = 1.0
+# c and s are learnt, and a resting trunk recognised, only while the robot is still: every joint
+# and the trunk turning slower than this [rad/s], by the encoders and the gyro (measurements, not
+# the estimate: a trunk pinned to its resting height by the estimate would otherwise confirm
+# itself). In a motion the joint torques carry the legs' own dynamics, not only the feet's loads,
+# and a rising or sinking trunk's kinematics would be taken for feet sinking; then c and s are
+# held, and the feet's heights use them as they are.
+STILL_RATE = 0.1
 # c is kept within [0, this] [m/N]: no foot lifts under load, and none sinks 2 mm per newton (60 mm
 # under a standing Go1's quarter weight, which no foot of a walking robot does).
 MAX_COMPLIANCE = 2e-3
@@ -632,9 +633,11 @@ def _step_kernel(
     p_BF, J = foot_kinematics_kernel(q, offsets)
     load = _vertical_forces_kernel(R, J, tau).sum()
     rest_height = _resting_height(R, rest_points)
-    still = math.sqrt(x[3] * x[3] + x[4] * x[4] + x[5] * x[5]) < QUASI_STATIC_SPEED
+    still = True
     for i in range(12):
-        still = still and abs(qd[i]) < QUASI_STATIC_RATE
+        still = still and abs(qd[i]) < STILL_RATE
+    for k in range(3):
+        still = still and abs(w_B[k]) < STILL_RATE
     resting = (
         still
         and tips.shape[0] == 0

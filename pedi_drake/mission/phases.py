@@ -63,9 +63,14 @@ SETTLE_DEPTH = 0.03  # [m] ... lowering it by at most this ...
 SETTLE_SPEED = 0.03  # [m/s] ... at this speed, until ...
 SETTLE_SHED = 0.3  # [-] ... the feet have shed this share of their load, ...
 SETTLE_HOLD = 0.3  # [s] ... and resting this long, for the estimator to take the ground's height.
-# A lean's prongs carry load when the feet have shed this fraction of what they carried before [-]:
-# well above the estimate's noise and the descent's own inertial forces (under 2 N).
+# A lean's prongs carry load when the feet have shed this fraction of what they carried before [-]
+# with the legs still: well above the estimate's noise.
 PRONG_LOAD_FRACTION = 0.08
+# A lean's prongs are taken to carry load only with their tips this close to the ground by the
+# estimate [m]: more than the estimate is off by on feet that sink (under 2 cm).
+PRONG_NEAR = 0.03
+# Joint rates below which the legs count as still [rad/s] (`legs_still`).
+LEGS_STILL_RATE = 0.1
 PRONG_SEARCH_DEPTH = 0.03  # [m] a lean goes on down this far below its plan to find the load ...
 PRONG_SEARCH_SPEED = 0.01  # [m/s] ... at this speed
 # A guarded touch starts along its line once the foot is this close to the approach point [m] ...
@@ -222,7 +227,8 @@ class StandUpRunner(PhaseRunner):
 
     From lying (the trunk lower than `LYING_START`) it first settles the trunk on the ground: the
     trunk goes down, by at most `SETTLE_DEPTH`, until the feet have shed `SETTLE_SHED` of their
-    load (the legs' force balance, joint-torque estimate), and rests there for `SETTLE_HOLD`. A
+    load with the legs still (the legs' force balance, joint-torque estimate), and rests there for
+    `SETTLE_HOLD`. A
     trunk resting on the ground is the one rigid thing a robot with feet that sink (rubber, carpet)
     can measure the ground by: the estimator takes the trunk's resting height and the feet's
     kinematics under it as the feet's sink (pedi_drake.estimation.kalman_estimator). A trunk that
@@ -256,7 +262,7 @@ class StandUpRunner(PhaseRunner):
             settle = progress.records[-1].metrics["settle"]
             shed = memo["baseline"] - feet_vertical_load(view)
             settle["feet_load_shed_n"] = shed
-            if shed >= SETTLE_SHED * memo["baseline"]:
+            if shed >= SETTLE_SHED * memo["baseline"] and legs_still(view):
                 p_now, _ = _body_sample(progress, t)
                 _move_body(progress, t, p_now, None, SETTLE_HOLD)
                 settle.update(rested=True, rested_at_s=t)
@@ -985,12 +991,21 @@ def feet_vertical_load(view: RobotView) -> float:
     return float(sum(view.foot_external_force_W(leg)[2] for leg in robot.LEG_NAMES))
 
 
+def legs_still(view: RobotView) -> bool:
+    """Whether every joint turns slower than LEGS_STILL_RATE: only then do the joint torques give
+    the feet's loads alone (in a motion they carry the legs' dynamics and the joints' friction,
+    which on a real Go1 reads as tens of newtons)."""
+    return bool(np.all(np.abs(view.qd) < LEGS_STILL_RATE))
+
+
 class LeanOnProngsRunner(PhaseRunner):
     """Lowers the trunk at its attitude until the named prong tips carry load, then loads them.
 
     The descent aims 5 mm below the height at which the estimate puts the tips on the ground. The
     tips carry load when the feet carry less: the legs' force balance (joint-torque estimate),
-    against what they carried at the phase start, must drop by `PRONG_LOAD_FRACTION` of it. A
+    against what they carried at the phase start, must drop by `PRONG_LOAD_FRACTION` of it, the
+    legs still (the prongs have stopped the trunk) and the tips within PRONG_NEAR of the ground by
+    the estimate. A
     robot whose estimated height is off (soft feet, carpet) reaches that load above or below the
     planned height; if the descent ends without it, the trunk goes on down slowly, by at most
     `PRONG_SEARCH_DEPTH`, and the phase fails if no load is felt by then.
@@ -1025,7 +1040,12 @@ class LeanOnProngsRunner(PhaseRunner):
         prong_load = memo["baseline"] - feet_vertical_load(view)
         metrics = progress.records[-1].metrics
         metrics.update(prong_load_n=prong_load)
-        if prong_load >= PRONG_LOAD_FRACTION * memo["baseline"]:
+        # The descent moves the legs until the prongs stop the trunk: only then is the load theirs,
+        # and only with the tips near the ground by the estimate (the legs' loads swing by more than
+        # the fraction as the descent starts).
+        tips_z = (view.X_WB.rotation().matrix() @ env.prongs.tip_positions_B().T)[2] + view.base.p_WB[2]
+        near = bool(np.all(tips_z[memo["lean"]] < env.prongs.tip_radius + PRONG_NEAR))
+        if prong_load >= PRONG_LOAD_FRACTION * memo["baseline"] and legs_still(view) and near:
             for k in memo["lean"]:
                 progress.references.contacts[4 + k] = 1.0
             # Once loaded, the estimator puts the tips on the ground: the planned goal, 5 mm
