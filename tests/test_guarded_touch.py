@@ -6,10 +6,13 @@ does not, however close the estimate says the foot came. The object is moved aft
 was planned, as a robot whose idea of the world is off would meet it.
 """
 
+import numpy as np
 import pytest
 
+from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.mission.phases import PRONG_LOAD_FRACTION
 from pedi_drake.mission.spec import MissionFileError, load_mission
+from pedi_drake.prongs import ProngDesign
 from pedi_drake.run import run
 from pedi_drake.scenario import load_scenario
 
@@ -96,3 +99,18 @@ def test_a_lean_is_done_when_the_prongs_carry_load(tmp_path):
     (lean,) = result["prong_leans"]
     assert lean["load_felt_at_s"] is not None
     assert lean["prong_load_n"] >= PRONG_LOAD_FRACTION * lean["feet_load_at_start_n"]
+
+
+def test_a_lean_on_legs_with_joint_friction_is_felt_when_the_prongs_meet_the_ground(tmp_path):
+    # Damping and friction in the joints bias the joint-torque loads while the legs move (tens of
+    # newtons as the trunk goes down): the load counts only once the prongs have stopped the trunk.
+    text = "{model_error: {joint_damping: 2.0, joint_friction: 0.2}}"
+    result = _run_mission(tmp_path, LEAN_MISSION, scenario_text=text)
+    assert result["success"], result["reason"]
+    (lean,) = result["prong_leans"]
+    logs = read_run_logs(tmp_path / "out")
+    states = logs["sim.plant_state"]
+    k = int(np.searchsorted(states.times, lean["load_felt_at_s"]))
+    rest = ProngDesign().ground_contact_height()
+    # The Go1 is the plant's only model: its trunk height is q[6] (quaternion first, then position).
+    assert states.data[6, k] < rest + 0.005, (states.data[6, k], rest)

@@ -11,9 +11,10 @@ from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
+from pedi_drake.apps.bridge_options import bridge_scenario
 from pedi_drake.apps.mujoco_bridge import MujocoBridge
 from pedi_drake.apps.mujoco_go1 import HOLD_KD, HOLD_KP, MJCF_PATH, MujocoGo1
-from pedi_drake.apps.sim_bridge import MakeSimBridgeDiagram, bridge_scenario, write_truth_log
+from pedi_drake.apps.sim_bridge import MakeSimBridgeDiagram, write_truth_log
 from pedi_drake.apps.status_sample import SAMPLE
 from pedi_drake.go1_command import pack_command, split_command
 from pedi_drake.go1_driver import constants as c

@@ -32,8 +32,9 @@ from pathlib import Path
 import numpy as np
 from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 
+from pedi_drake.apps.bridge_options import add_bridge_arguments, bridge_settings
 from pedi_drake.apps.mujoco_go1 import MujocoGo1, mujoco_foot_radius
-from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD, bridge_scenario
+from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD
 from pedi_drake.apps.status_encoder import StatusEncoder
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.go1_driver import constants as c
@@ -41,7 +42,6 @@ from pedi_drake.go1_driver.config import Go1BridgeConfig
 from pedi_drake.go1_driver.hardware_station import go1_lcm_url
 from pedi_drake.go1_driver.link import Inbox
 from pedi_drake.realtime_priority import realtime_priority
-from pedi_drake.scenario import load_scenario
 
 # Longest the bridge sleeps between two looks at the socket [s], so a late command is taken
 # within a fraction of a tick.
@@ -141,33 +141,14 @@ def run_paced(bridge: MujocoBridge, duration: float, realtime_rate: float) -> No
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--scenario_file", default=None, help="scenario YAML (default: the shipped one)")
-    parser.add_argument("--scenario_name", default="default")
-    parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto the scenario")
-    parser.add_argument("--duration", type=float, default=math.inf, help="simulated seconds (default: until killed)")
-    parser.add_argument("--lcm_url", default=None, help="override the scenario's bus 'go1' URL")
-    parser.add_argument("--latency", type=float, default=None, help="status latency [s]")
-    parser.add_argument("--drop_probability", type=float, default=None, help="status drop probability [-]")
-    parser.add_argument("--realtime_rate", type=float, default=1.0)
-    parser.add_argument("--mission", default=None, help="add this mission's scene objects and robot variant")
-    parser.add_argument("--truth_log", default=None, help="write the ground truth (npz) here on exit")
+    add_bridge_arguments(parser)
     args = parser.parse_args(argv)
     try:
-        scenario = load_scenario(
-            filename=args.scenario_file, scenario_name=args.scenario_name, scenario_text=args.scenario_text
-        )
-        scenario = bridge_scenario(scenario, args.mission)
-        if not (math.isfinite(args.realtime_rate) and args.realtime_rate > 0.0):
-            raise ConfigError(f"--realtime_rate: must be a positive number, got {args.realtime_rate}")
+        scenario, config = bridge_settings(args)
         robot = MujocoGo1(scenario)
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    config = scenario.go1_driver.bridge
-    if args.latency is not None:
-        config.latency = args.latency
-    if args.drop_probability is not None:
-        config.drop_probability = args.drop_probability
     lcm = DrakeLcm(args.lcm_url or go1_lcm_url(scenario.lcm_buses))
     bridge = MujocoBridge(robot, lcm, config, seed=scenario.random_seed)
     # SIGTERM ends the run like Ctrl-C, so a supervising test or script can stop the bridge cleanly.

@@ -19,7 +19,7 @@ drive it directly, `pedi_drake.apps.mujoco_bridge` puts it on the wire at wall t
   their PD loop faster than the wire (the law is explicit here, and a stiff kd on the calf's
   small inertia, 0.01 kg m^2 of armature plus the link, stays well inside the explicit stability
   bound kd dt / I < 2 at 1 ms for any kd up to ~20 N m s/rad), the soft foot contact (30 ms time
-  constant) is resolved with many steps, and a step of this model costs ~30 us here.
+  constant) is resolved with many steps, and the bridge keeps real time with both on one core.
 - Status (`status_sample`, the layout of pedi_drake.apps.status_sample): joint q, qd from the
   joint sensors, tau_est the applied actuator torque, the IMU's frame quaternion (trunk in world,
   w x y z), gyro and accelerometer (specific force, trunk frame), and each foot's normal contact

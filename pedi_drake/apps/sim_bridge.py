@@ -36,6 +36,7 @@ from pydrake.systems.lcm import LcmInterfaceSystem
 from pydrake.systems.primitives import VectorLogSink
 
 from pedi_drake import robot
+from pedi_drake.apps.bridge_options import add_bridge_arguments, bridge_settings
 from pedi_drake.apps.status_encoder import StatusEncoder
 from pedi_drake.apps.status_sample import (
     IMU_ACCELEROMETER,
@@ -45,7 +46,6 @@ from pedi_drake.apps.status_sample import (
     SAMPLE_SIZE,
     STATUS_SIGNALS,
 )
-from pedi_drake.diagram import apply_mission
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.go1_command import COMMAND_SIZE, pack_command
 from pedi_drake.go1_driver import constants as c
@@ -55,9 +55,8 @@ from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimato
 from pedi_drake.go1_driver.link import Inbox
 from pedi_drake.go1_driver.status_receiver import MakeLcmReceiver, ReceiverChannel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
-from pedi_drake.mission.spec import load_mission
 from pedi_drake.realtime_priority import realtime_priority
-from pedi_drake.scenario import Scenario, load_scenario
+from pedi_drake.scenario import Scenario
 from pedi_drake.station_interface import MakeStation
 from pedi_drake.wall_clock import WallClock
 
@@ -264,39 +263,15 @@ def write_truth_log(
     return path
 
 
-def bridge_scenario(scenario: Scenario, mission: str | None) -> Scenario:
-    """`scenario` with the mission's scene objects and robot variant, as the controller side has them."""
-    if not mission:
-        return scenario
-    return apply_mission(scenario, load_mission(mission))
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--scenario_file", default=None, help="scenario YAML (default: the shipped one)")
-    parser.add_argument("--scenario_name", default="default")
-    parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto the scenario")
-    parser.add_argument("--duration", type=float, default=math.inf, help="simulated seconds (default: until killed)")
-    parser.add_argument("--lcm_url", default=None, help="override the scenario's bus 'go1' URL")
-    parser.add_argument("--latency", type=float, default=None, help="status latency [s]")
-    parser.add_argument("--drop_probability", type=float, default=None, help="status drop probability [-]")
-    parser.add_argument("--realtime_rate", type=float, default=1.0)
-    parser.add_argument("--mission", default=None, help="add this mission's scene objects and robot variant")
-    parser.add_argument("--truth_log", default=None, help="write the ground truth (npz) here on exit")
+    add_bridge_arguments(parser)
     args = parser.parse_args(argv)
     try:
-        scenario = load_scenario(
-            filename=args.scenario_file, scenario_name=args.scenario_name, scenario_text=args.scenario_text
-        )
-        scenario = bridge_scenario(scenario, args.mission)
+        scenario, config = bridge_settings(args)
     except ConfigError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    config = scenario.go1_driver.bridge
-    if args.latency is not None:
-        config.latency = args.latency
-    if args.drop_probability is not None:
-        config.drop_probability = args.drop_probability
     lcm = DrakeLcm(args.lcm_url or go1_lcm_url(scenario.lcm_buses))
     diagram = MakeSimBridgeDiagram(scenario, lcm, config)
     simulator = Simulator(diagram)

@@ -43,7 +43,8 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import EventStatus
 
 from pedi_drake import robot
-from pedi_drake.apps.sim_bridge import MakeSimBridgeDiagram, bridge_scenario
+from pedi_drake.apps.bridge_options import bridge_scenario
+from pedi_drake.apps.sim_bridge import MakeSimBridgeDiagram
 from pedi_drake.benchmarks.controller_latency import _callback_table, callback_timers
 from pedi_drake.benchmarks.station import bare_plant_simulator
 from pedi_drake.diagram import MakePedipulationDiagram
