@@ -72,7 +72,7 @@ MAX_SINK = 0.03
 # The trunk rests on the ground, its feet loaded, when the feet carry between these shares of the
 # robot's weight (below the lower one the legs are limp or in the air, and the feet's sink, which
 # the resting trunk measures, is not there to measure) ...
-RESTING_LOAD_SHARES = (0.2, 0.8)
+RESTING_LOAD_SHARES = (0.02, 0.8)
 # ... it is at most this far above the height at which its lowest point touches the ground [m] ...
 RESTING_HEIGHT_SLACK = 0.03
 # ... and both have held for this many ticks in a row (a load passes through the band as the legs
@@ -292,7 +292,8 @@ def _measurement_rows(in_contact, num_tips, use_height, noise_std, vertical_forc
     `noise_std`: the config's foot position [m], foot velocity [m/s], ground height [m] and resting
     velocity [m/s] noises; `vertical_forces` (4,) the feet's loads [N]. Rows: every foot's position
     relative to the trunk, the stance feet's trunk velocities, their heights with their sink
-    (`use_height`: p_WF,z + s + c F; with `learn_sink` false, p_WF,z alone, s and c held), each
+    (`use_height`: p_WF,z + s + c F; with `learn_sink` false, p_WF,z alone, s and c held, and s
+    held too unless the trunk rests or a prong tip is loaded), each
     loaded tip's trunk velocity and height, with nothing loaded the resting trunk's horizontal
     velocity, and the resting trunk's height (`resting_trunk`).
     """
@@ -332,7 +333,10 @@ def _measurement_rows(in_contact, num_tips, use_height, noise_std, vertical_forc
                 columns[row, 0], coefficients[row, 0] = 6 + 3 * i + 2, 1.0
                 if learn_sink:
                     columns[row, 1], coefficients[row, 1] = COMPLIANCE, vertical_forces[i]
-                    columns[row, 2], coefficients[row, 2] = SINK, 1.0
+                    # s only against something rigid on the ground: the feet alone cannot tell it
+                    # from a higher floor, and would move it by whatever else they get wrong.
+                    if resting_trunk or num_tips > 0:
+                        columns[row, 2], coefficients[row, 2] = SINK, 1.0
                 noise[row] = ground_height**2
                 row += 1
     for _ in range(num_tips):  # tip velocity (3) and height (1)
@@ -517,10 +521,11 @@ def _update_kernel(
     columns, coefficients, noise = _measurement_rows(
         in_contact, tips_B.shape[0], use_height, noise_std, forces, resting_trunk, learn_sink
     )
+    # The held parts of each foot's sink (s, c F) go into the measurement itself.
+    holds_sink = not (learn_sink and (resting_trunk or tips_B.shape[0] > 0))
     sinks = np.zeros(4)
-    if not learn_sink:
-        for i in range(4):
-            sinks[i] = x[SINK] + x[COMPLIANCE] * forces[i]
+    for i in range(4):
+        sinks[i] = (x[SINK] if holds_sink else 0.0) + (0.0 if learn_sink else x[COMPLIANCE] * forces[i])
     y = _measurements_kernel(
         R_WB,
         w_B,

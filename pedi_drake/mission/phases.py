@@ -225,13 +225,13 @@ class PhaseRunner:
 class StandUpRunner(PhaseRunner):
     """Raises the trunk to `height` over the centroid of the four feet.
 
-    From lying (the trunk lower than `LYING_START`) it first settles the trunk on the ground: the
-    trunk goes down, by at most `SETTLE_DEPTH`, until the feet have shed `SETTLE_SHED` of their
-    load with the legs still (the legs' force balance, joint-torque estimate), and rests there for
-    `SETTLE_HOLD`. A
-    trunk resting on the ground is the one rigid thing a robot with feet that sink (rubber, carpet)
-    can measure the ground by: the estimator takes the trunk's resting height and the feet's
-    kinematics under it as the feet's sink (pedi_drake.estimation.kalman_estimator). A trunk that
+    From lying (the trunk lower than `LYING_START`, or resting on its prongs) it first settles the
+    trunk on the ground: the trunk goes down, by at most `SETTLE_DEPTH`, until the feet have shed
+    `SETTLE_SHED` of their load with the legs still (the legs' force balance, joint-torque
+    estimate), and rests there for `SETTLE_HOLD`. A trunk resting on the ground is the one rigid
+    thing a robot with feet that sink (rubber, carpet) can measure the ground by: the estimator
+    takes the trunk's resting height and the feet's kinematics under it as the feet's sink
+    (pedi_drake.estimation.kalman_estimator). A trunk that
     meets no ground within the depth (its legs at their limits) stands up without it.
     """
 
@@ -239,7 +239,13 @@ class StandUpRunner(PhaseRunner):
         t = view.time
         memo = progress.memo
         memo.update(rise_at=t, rose_at=None)
-        if view.base.p_WB[2] < LYING_START:
+        # Lying: low on the folded legs, or resting on the prong tips.
+        lying = LYING_START if env.prongs is None else max(LYING_START, env.prongs.ground_contact_height() + 0.03)
+        if view.base.p_WB[2] < lying:
+            if env.prongs is not None:
+                # Lying on the prongs: they carry the trunk until it rises (the estimator pins
+                # their tips to the ground, the controller shares the load with them).
+                progress.references.contacts[4:] = 1.0
             p_now, _ = _body_sample(progress, t)
             _move_body(progress, t, p_now - [0.0, 0.0, SETTLE_DEPTH], None, SETTLE_DEPTH / SETTLE_SPEED)
             baseline = feet_vertical_load(view)
@@ -249,6 +255,7 @@ class StandUpRunner(PhaseRunner):
     @staticmethod
     def _rise(phase, progress, view) -> None:
         t = view.time
+        progress.references.contacts[4:] = 0.0
         feet = np.array(list(view.feet_W().values()))
         p_goal = _trunk_target_for_com(view, view.base.p_WB.copy(), feet[:, :2].mean(axis=0))
         p_goal[2] = phase.height
