@@ -214,14 +214,12 @@ ROWS: tuple[Row, ...] = (
         "station.json",
         _station,
         "python -m pedi_drake.benchmarks.station --runs 3",
-        summary=True,
     ),
     Row(
         "Live SUF along a teleoperated path (warm-started, compiled)",
         "live_suf.json",
         _live_suf,
         "python -m pedi_drake.benchmarks.live_suf",
-        summary=True,
     ),
     Row(
         "SUF methods, paper 003 Table I, teleoperation stance (median)",
