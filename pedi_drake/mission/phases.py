@@ -13,6 +13,7 @@ import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
+from pedi_drake.estimation.kalman_estimator import STILL_RATE
 from pedi_drake.exceptions import MissionFileError, UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
@@ -69,8 +70,6 @@ PRONG_LOAD_FRACTION = 0.08
 # A lean's prongs are taken to carry load only with their tips this close to the ground by the
 # estimate [m]: more than the estimate is off by on feet that sink (under 2 cm).
 PRONG_NEAR = 0.03
-# Joint rates below which the legs count as still [rad/s] (`legs_still`).
-LEGS_STILL_RATE = 0.1
 PRONG_SEARCH_DEPTH = 0.03  # [m] a lean goes on down this far below its plan to find the load ...
 PRONG_SEARCH_SPEED = 0.01  # [m/s] ... at this speed
 # A guarded touch starts along its line once the foot is this close to the approach point [m] ...
@@ -999,10 +998,10 @@ def feet_vertical_load(view: RobotView) -> float:
 
 
 def legs_still(view: RobotView) -> bool:
-    """Whether every joint turns slower than LEGS_STILL_RATE: only then do the joint torques give
-    the feet's loads alone (in a motion they carry the legs' dynamics and the joints' friction,
-    which on a real Go1 reads as tens of newtons)."""
-    return bool(np.all(np.abs(view.qd) < LEGS_STILL_RATE))
+    """Whether every joint turns slower than the estimator's STILL_RATE: only then do the joint
+    torques give the feet's loads alone (in a motion they carry the legs' dynamics and the joints'
+    friction, which on a real Go1 reads as tens of newtons)."""
+    return bool(np.all(np.abs(view.qd) < STILL_RATE))
 
 
 class LeanOnProngsRunner(PhaseRunner):
