@@ -20,9 +20,9 @@ a carpet's pile do);
   tip likewise (it does not move and touches the ground); with no foot and no prong loaded the
   trunk rests on the ground (lying): v_WB = 0; and while the trunk rests on the ground with the
   feet loaded (the feet carry a share of the weight within `RESTING_LOAD_SHARES`, the trunk lower
-  than `RESTING_HEIGHT_SLACK` above its resting height, no prong loaded, for `RESTING_TICKS`),
-  p_WB,z = the height at which its lowest rigid point (a corner of the trunk's box, a prong tip)
-  touches flat ground.
+  than `RESTING_HEIGHT_SLACK` above its resting height, for `RESTING_TICKS`; a robot without
+  prongs, whose prong tips the mission schedules instead), p_WB,z = the height at which its
+  lowest box corner touches flat ground.
 
 The height rows make c observable wherever the feet carry different loads (the trunk's centre of
 mass is never exactly amid them, a lifted leg moves its load onto the others): the IMU fixes the
@@ -72,7 +72,7 @@ MAX_SINK = 0.03
 # The trunk rests on the ground, its feet loaded, when the feet carry between these shares of the
 # robot's weight (below the lower one the legs are limp or in the air, and the feet's sink, which
 # the resting trunk measures, is not there to measure) ...
-RESTING_LOAD_SHARES = (0.02, 0.8)
+RESTING_LOAD_SHARES = (0.02, 0.95)
 # ... it is at most this far above the height at which its lowest point touches the ground [m] ...
 RESTING_HEIGHT_SLACK = 0.03
 # ... and both have held for this many ticks in a row (a load passes through the band as the legs
@@ -521,11 +521,20 @@ def _update_kernel(
     columns, coefficients, noise = _measurement_rows(
         in_contact, tips_B.shape[0], use_height, noise_std, forces, resting_trunk, learn_sink
     )
-    # The held parts of each foot's sink (s, c F) go into the measurement itself.
+    # The held parts of each foot's sink (s, c F) go into the measurement itself, and a held state
+    # is decorrelated from the others first, so that no row moves it through its covariance (a
+    # block-diagonal P stays positive definite).
     holds_sink = not (learn_sink and (resting_trunk or tips_B.shape[0] > 0))
     sinks = np.zeros(4)
     for i in range(4):
         sinks[i] = (x[SINK] if holds_sink else 0.0) + (0.0 if learn_sink else x[COMPLIANCE] * forces[i])
+    P = P.copy()
+    for held, index in ((holds_sink, SINK), (not learn_sink, COMPLIANCE)):
+        if held:
+            for k in range(P.shape[0]):
+                if k != index:
+                    P[index, k] = 0.0
+                    P[k, index] = 0.0
     y = _measurements_kernel(
         R_WB,
         w_B,
@@ -643,9 +652,10 @@ def _step_kernel(
         still = still and abs(qd[i]) < STILL_RATE
     for k in range(3):
         still = still and abs(w_B[k]) < STILL_RATE
+    # A robot with prongs rests on them: the mission schedules their tips (rows of their own).
     resting = (
         still
-        and tips.shape[0] == 0
+        and tips_B.shape[0] == 0
         and RESTING_LOAD_SHARES[0] * weight < load < RESTING_LOAD_SHARES[1] * weight
         and x[2] < rest_height + RESTING_HEIGHT_SLACK
     )
