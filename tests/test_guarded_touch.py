@@ -98,7 +98,7 @@ def test_a_lean_is_done_when_the_prongs_carry_load(tmp_path):
     assert result["success"], result["reason"]
     (lean,) = result["prong_leans"]
     assert lean["load_felt_at_s"] is not None
-    assert lean["prong_load_n"] >= PRONG_LOAD_FRACTION * lean["feet_load_at_start_n"]
+    assert lean["prong_load_n"] >= PRONG_LOAD_FRACTION * lean["feet_load_before_n"]
 
 
 def test_a_lean_on_legs_with_joint_damping_is_felt_when_the_prongs_meet_the_ground(tmp_path):

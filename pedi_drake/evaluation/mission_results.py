@@ -170,18 +170,19 @@ def sensed_touches(progress: MissionProgress) -> list[dict]:
 
 
 def prong_leans(progress: MissionProgress) -> list[dict]:
-    """Each lean_on_prongs as the robot sensed it: the feet's vertical load at its start [N] (the
-    joint-torque estimate), the load the prongs took off them when the lean was judged loaded (or
-    at its end) [N], and when the load was felt [s] (null: never)."""
+    """Each lean_on_prongs as the robot sensed it: the most the feet carried before the prongs
+    took load [N] (their summed vertical load, joint-torque estimate), the load the prongs took
+    off them when the lean was judged loaded (or at its end) [N], and when the load was felt [s]
+    (null: never)."""
     return [
         {
             "phase": record.name,
-            "feet_load_at_start_n": record.metrics["feet_load_at_start_n"],
+            "feet_load_before_n": record.metrics["feet_load_before_n"],
             "prong_load_n": record.metrics.get("prong_load_n"),
             "load_felt_at_s": record.metrics.get("load_felt_at_s"),
         }
         for record in progress.records
-        if record.kind == "lean_on_prongs" and "feet_load_at_start_n" in record.metrics
+        if record.kind == "lean_on_prongs" and "feet_load_before_n" in record.metrics
     ]
 
 

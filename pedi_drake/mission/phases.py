@@ -251,7 +251,7 @@ class StandUpRunner(PhaseRunner):
             _move_body(progress, t, p_now - [0.0, 0.0, SETTLE_DEPTH], None, SETTLE_DEPTH / SETTLE_SPEED)
             baseline = feet_vertical_load(view)
             memo.update(rise_at=None, settle_end=t + SETTLE_DEPTH / SETTLE_SPEED, baseline=baseline)
-            progress.records[-1].metrics.update(settle=dict(feet_load_at_start_n=baseline, rested=False))
+            progress.records[-1].metrics.update(settle=dict(feet_load_before_n=baseline, rested=False))
 
     @staticmethod
     def _rise(phase, progress, view) -> None:
@@ -268,7 +268,10 @@ class StandUpRunner(PhaseRunner):
         t, memo = view.time, progress.memo
         if memo["rise_at"] is None:
             settle = progress.records[-1].metrics["settle"]
-            shed = memo["baseline"] - feet_vertical_load(view)
+            load = feet_vertical_load(view)
+            memo["baseline"] = max(memo["baseline"], load)  # as the lean's baseline
+            settle["feet_load_before_n"] = memo["baseline"]
+            shed = memo["baseline"] - load
             settle["feet_load_shed_n"] = shed
             if shed >= SETTLE_SHED * memo["baseline"] and legs_still(view):
                 p_now, _ = _body_sample(progress, t)
@@ -1039,14 +1042,19 @@ class LeanOnProngsRunner(PhaseRunner):
         _move_body(progress, view.time, goal, None, phase.duration)
         baseline = feet_vertical_load(view)
         progress.memo.update(goal=goal, loaded=False, lean=lean, baseline=baseline, searching=False)
-        progress.records[-1].metrics.update(feet_load_at_start_n=baseline)
+        progress.records[-1].metrics.update(feet_load_before_n=baseline)
 
     def step(self, phase, progress, view, env):
         t, memo = view.time, progress.memo
         if memo["loaded"]:
             return SUCCEEDED if t >= memo["t_loaded"] else RUNNING
-        prong_load = memo["baseline"] - feet_vertical_load(view)
+        # What the feet carried before the prongs took any: the most they have carried in the
+        # phase (at its first tick the motors may not have taken the weight yet).
+        load = feet_vertical_load(view)
+        memo["baseline"] = max(memo["baseline"], load)
+        prong_load = memo["baseline"] - load
         metrics = progress.records[-1].metrics
+        metrics["feet_load_before_n"] = memo["baseline"]
         metrics.update(prong_load_n=prong_load)
         # The descent moves the legs until the prongs stop the trunk: only then is the load theirs,
         # and only with the tips near the ground by the estimate (the legs' loads swing by more than
