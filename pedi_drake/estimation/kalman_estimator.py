@@ -67,7 +67,7 @@ GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
 NUM_STATES = 20
 COMPLIANCE = 18  # index of the feet's compliance c [m/N] in x
 SINK = 19  # index of the feet's sink s [m] in x
-# s is kept within [0, this] [m]: no foot lifts under load, and none sinks further than its radius.
+# s is kept within +-this [m]: no foot sinks further than its radius.
 MAX_SINK = 0.03
 # The trunk rests on the ground, its feet loaded, when the feet carry between these shares of the
 # robot's weight (below the lower one the legs are limp or in the air, and the feet's sink, which
@@ -85,8 +85,8 @@ RESTING_TICKS = 50
 # and a rising or sinking trunk's kinematics would be taken for feet sinking; then c and s are
 # held, and the feet's heights use them as they are.
 STILL_RATE = 0.1
-# c is kept within [0, this] [m/N]: no foot lifts under load, and none sinks 2 mm per newton (60 mm
-# under a standing Go1's quarter weight, which no foot of a walking robot does).
+# c is kept within +-this [m/N]: no foot sinks 2 mm per newton (60 mm under a standing Go1's
+# quarter weight, which no foot of a walking robot does).
 MAX_COMPLIANCE = 2e-3
 # Layout of the filter's discrete state: [initialised flag, x (20), P (20 x 20) row by row, ticks the
 # trunk has rested].
@@ -513,7 +513,7 @@ def _update_kernel(
     positions in the trunk frame [m] and radii [m]; `resting_height` [m]: the height of a trunk
     resting on the ground (`_resting_height`), 0 when it does not rest; `learn_sink`: whether the
     feet's heights correct c and s (else they are held). The compliance and the sink are kept
-    within [0, MAX_COMPLIANCE] and [0, MAX_SINK].
+    within +-MAX_COMPLIANCE and +-MAX_SINK.
     """
     p_BF, J = foot_kinematics_kernel(q, offsets)
     forces = _vertical_forces_kernel(R_WB, J, tau)
@@ -552,8 +552,11 @@ def _update_kernel(
         noise.shape[0],
     )
     x, P, corrected = _correct_kernel(x, P, columns, coefficients, noise, y)
-    x[COMPLIANCE] = min(max(x[COMPLIANCE], 0.0), MAX_COMPLIANCE)
-    x[SINK] = min(max(x[SINK], 0.0), MAX_SINK)
+    # Bounds against a runaway only, not at zero: with every foot under about the same load, s and
+    # c F are told apart by the priors alone, and cutting one off at zero each tick would let the
+    # other drift along the pair's sum.
+    x[COMPLIANCE] = min(max(x[COMPLIANCE], -MAX_COMPLIANCE), MAX_COMPLIANCE)
+    x[SINK] = min(max(x[SINK], -MAX_SINK), MAX_SINK)
     return x, P, corrected
 
 
