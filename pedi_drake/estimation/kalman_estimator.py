@@ -71,8 +71,9 @@ SINK = 19  # index of the feet's sink s [m] in x
 MAX_SINK = 0.03
 # The trunk rests on the ground, its feet loaded, when the feet carry between these shares of the
 # robot's weight (below the lower one the legs are limp or in the air, and the feet's sink, which
-# the resting trunk measures, is not there to measure) ...
-RESTING_LOAD_SHARES = (0.02, 0.95)
+# the resting trunk measures, is not there to measure; above the upper one the trunk may be on its
+# feet alone: the joint-torque loads of a robot lying on its folded legs read 85 % of its weight) ...
+RESTING_LOAD_SHARES = (0.02, 0.7)
 # ... it is at most this far above the height at which its lowest point touches the ground [m] ...
 RESTING_HEIGHT_SLACK = 0.03
 # ... and both have held for this many ticks in a row (a load passes through the band as the legs
