@@ -129,7 +129,7 @@ def _sil_mujoco(d: dict) -> str:
     errors = ", ".join(f"{mission} {error:.1f}" for mission, error in worst.items())
     ok = sum(row["success"] for row in rows)
     return (
-        f"succeeded by the engine's truth (touches by its contact forces): {ok} of {len(rows)}; worst true "
+        f"runs a success by the engine's truth (touches by its contact forces): {ok} of {len(rows)}; worst true "
         f"foot error per mission [mm] (the robot's feet 3 mm larger): {errors}; trunk height estimate "
         f"while standing: median at most {max(m for m in medians if m is not None):.1f} mm, "
         f"largest {max(m for m in largest if m is not None):.1f} mm"
@@ -159,7 +159,7 @@ def _reality_gap(d: dict) -> str:
     runs = sum(row["runs"] for row in d["missions"])
     ok = sum(row["succeeded"] for row in d["missions"])
     return (
-        f"{ok} of {runs} runs succeeded ({100 * floors['overall']['rate']:.1f} %), the worst mission "
+        f"successful runs: {ok} of {runs} ({100 * floors['overall']['rate']:.1f} %), the worst mission "
         f"{worst['mission']} {100 * worst['rate']:.0f} %, at least {floors['draws_per_mission']['min']} draws each"
     )
 
