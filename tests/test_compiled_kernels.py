@@ -131,16 +131,17 @@ def _random_filter_inputs(rng):
     quaternion = rng.normal(size=4)
     quaternion /= np.linalg.norm(quaternion)
     R = rotation_matrix_wxyz(quaternion)
-    A = rng.normal(size=(18, 18))
-    P = 1e-3 * A @ A.T + 1e-4 * np.eye(18)
-    return R, rng.normal(0, 1, 3), rng.normal(0, 3, 3), rng.normal(0, 1, 18), P
+    n = ke.NUM_STATES
+    A = rng.normal(size=(n, n))
+    P = 1e-3 * A @ A.T + 1e-4 * np.eye(n)
+    return R, rng.normal(0, 1, 3), rng.normal(0, 3, 3), rng.normal(0, 1, n), P
 
 
 def test_kalman_kernels_equal_their_python_source():
     rng = np.random.default_rng(RNG_SEED)
     tips = np.array([[0.1, 0.05, -0.1, 0.01], [0.1, -0.05, -0.1, 0.01]])  # position [m], radius [m]
     noise_std = np.array([0.003, 0.05, 0.003, 0.05])
-    process_std = np.array([0.005, 0.5, 0.002, 1.0])
+    process_std = np.array([0.005, 0.5, 0.002, 1.0, 2e-5, 1e-4])
     p_BI = ke.imu_offset_B()
     for k in range(500):
         R, w, f, x, P = _random_filter_inputs(rng)
@@ -152,12 +153,16 @@ def test_kalman_kernels_equal_their_python_source():
         for compiled, reference in zip(ke._predict_kernel(*args), ke._predict_kernel.py_func(*args), strict=True):
             np.testing.assert_allclose(compiled, reference, rtol=0, atol=1e-14)
         num_tips = 2 * (k % 2)
-        args = (contact, num_tips, True, noise_std)
+        loads = rng.uniform(0, 40, 4)
+        resting, learn = bool(k % 3 == 0), bool(k % 5 != 0)
+        args = (contact, num_tips, True, noise_std, loads, resting, learn)
         rows = ke._measurement_rows(*args)
         for compiled, reference in zip(rows, ke._measurement_rows.py_func(*args), strict=True):
             np.testing.assert_array_equal(compiled, reference)
         p_BF, J = leg_odometry.foot_kinematics_B(q)
-        args = (R, w, p_BF, J, qd, contact, rolling, True, True, 0.02, tips[:num_tips], len(rows[2]))
+        sinks = rng.uniform(0, 0.02, 4)
+        rest = 0.057 if resting else 0.0
+        args = (R, w, p_BF, J, qd, contact, rolling, True, True, 0.02, tips[:num_tips], rest, sinks, len(rows[2]))
         y = ke._measurements_kernel(*args)
         np.testing.assert_allclose(y, ke._measurements_kernel.py_func(*args), rtol=0, atol=1e-14)
         compiled, reference = ke._correct_kernel(x, P, *rows, y), ke._correct_kernel.py_func(x, P, *rows, y)
@@ -182,7 +187,7 @@ def test_imu_kernel_normalises_the_quaternion_as_the_shared_rotation_does():
 
 
 def _measurement_matrix(columns: np.ndarray, coefficients: np.ndarray) -> np.ndarray:
-    """The dense H (m, 18) of a measurement model in the form of `_measurement_rows`."""
+    """The dense H (m, NUM_STATES) of a measurement model in the form of `_measurement_rows`."""
     H = np.zeros((len(columns), ke.NUM_STATES))
     for row, (cols, coefs) in enumerate(zip(columns, coefficients, strict=True)):
         for col, coef in zip(cols, coefs, strict=True):
@@ -207,42 +212,55 @@ def test_kalman_correction_is_the_textbook_update():
         x_new, P_new, corrected = ke._correct_kernel(x, P, columns, coefficients, noise, y)
         assert corrected
         np.testing.assert_allclose(x_new, x + K @ (y - H @ x), rtol=1e-9, atol=1e-12)
-        np.testing.assert_allclose(P_new, (np.eye(18) - K @ H) @ P, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(P_new, (np.eye(ke.NUM_STATES) - K @ H) @ P, rtol=1e-9, atol=1e-12)
         np.testing.assert_array_equal(P_new, P_new.T)
 
 
 def test_kalman_measurement_rows_are_the_filter_measurement_model():
     """Every contact pattern: the rows' H against the model written out (feet relative to the trunk,
-    the stance feet's trunk velocity and height, the tips' velocity and height, or resting)."""
+    the stance feet's trunk velocity and height with their sink s + c F, the tips' velocity and
+    height, the resting trunk's horizontal velocity, and a resting trunk's height)."""
     noise_std = np.array([0.003, 0.05, 0.004, 0.06])
+    loads = np.array([10.0, 20.0, 30.0, 40.0])
+    n = ke.NUM_STATES
     for pattern in range(16):
         contact = np.array([pattern >> i & 1 for i in range(4)], dtype=bool)
         for num_tips in (0, 1, 2):
-            columns, coefficients, noise = ke._measurement_rows(contact, num_tips, True, noise_std)
-            H = _measurement_matrix(columns, coefficients)
-            stance = np.flatnonzero(contact)
-            expected, variances = [], []
-            for i in range(4):
-                for k in range(3):
-                    row = np.zeros(18)
-                    row[k], row[6 + 3 * i + k] = -1.0, 1.0
-                    expected.append(row)
-                    variances.append(0.003**2 * (1.0 if contact[i] else 4.0))
-            velocity = list(np.eye(18)[3:6])
-            for _ in stance:
-                expected += velocity
-                variances += [0.05**2] * 3
-            for i in stance:
-                expected.append(np.eye(18)[6 + 3 * i + 2])
-                variances.append(0.004**2)
-            for _ in range(num_tips):
-                expected += velocity + [np.eye(18)[2]]
-                variances += [0.05**2] * 3 + [0.004**2]
-            if not len(stance) and not num_tips:
-                expected += velocity[:2]
-                variances += [0.06**2] * 2
-            np.testing.assert_array_equal(H, np.array(expected))
-            np.testing.assert_array_equal(noise, variances)
+            for resting_trunk in (False, True):
+                for learn in (False, True):
+                    rows = ke._measurement_rows(contact, num_tips, True, noise_std, loads, resting_trunk, learn)
+                    columns, coefficients, noise = rows
+                    H = _measurement_matrix(columns, coefficients)
+                    stance = np.flatnonzero(contact)
+                    expected, variances = [], []
+                    for i in range(4):
+                        for k in range(3):
+                            row = np.zeros(n)
+                            row[k], row[6 + 3 * i + k] = -1.0, 1.0
+                            expected.append(row)
+                            variances.append(0.003**2 * (1.0 if contact[i] else 4.0))
+                    velocity = list(np.eye(n)[3:6])
+                    for _ in stance:
+                        expected += velocity
+                        variances += [0.05**2] * 3
+                    for i in stance:
+                        row = np.eye(n)[6 + 3 * i + 2].copy()
+                        if learn:  # c F always; s only against a rigid reference
+                            row[ke.COMPLIANCE] = loads[i]
+                            row[ke.SINK] = 1.0 if (resting_trunk or num_tips) else 0.0
+                        expected.append(row)
+                        variances.append(0.004**2)
+                    for _ in range(num_tips):
+                        expected += velocity + [np.eye(n)[2]]
+                        variances += [0.05**2] * 3 + [0.004**2]
+                    if not len(stance) and not num_tips:
+                        expected += velocity[:2]
+                        variances += [0.06**2] * 2
+                    if resting_trunk:
+                        expected.append(np.eye(n)[2])
+                        variances.append(0.004**2)
+                    np.testing.assert_array_equal(H, np.array(expected))
+                    np.testing.assert_array_equal(noise, variances)
 
 
 def test_kalman_step_kernel_equals_its_python_source():
@@ -260,8 +278,9 @@ def test_kalman_step_kernel_equals_its_python_source():
         schedule = np.zeros(0) if k % 3 == 0 else (rng.uniform(size=6) > 0.3).astype(float)
         compiled = [s.copy() for s in state]
         reference = [s.copy() for s in state]
-        updated = ke._step_kernel(*compiled, imu, q, qd, force, schedule, *constants)
-        assert updated == ke._step_kernel.py_func(*reference, imu, q, qd, force, schedule, *constants)
+        tau = rng.normal(0, 3, 12)
+        updated = ke._step_kernel(*compiled, imu, q, qd, tau, force, schedule, *constants)
+        assert updated == ke._step_kernel.py_func(*reference, imu, q, qd, tau, force, schedule, *constants)
         for a, b in zip(compiled, reference, strict=True):
             np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
         state = compiled

@@ -32,12 +32,12 @@ from pedi_drake.station.scene_contact import ROBOT_CONTACT_SOURCES, scene_contac
 
 MISSION = "operator/press_estop_button"
 SCRIPT = missions_dir() / "operator" / "press_estop_button.ops"
-# [s]: the script asks for the autonomous mode at 18.8 s; the leg is back on the ground by about 22 s.
-END = 23.5
-# The press step of the shipped script (down 7 cm at 2 cm/s from 8.94 s) cut to 1 s: the foot stops
+# [s]: the script asks for the autonomous mode at 19.8 s; the leg is back on the ground by about 23 s.
+END = 24.5
+# The press step of the shipped script (down 7 cm at 2 cm/s from 9.94 s) cut to 1 s: the foot stops
 # 2 cm lower, still above the cap, holds, and the rest of the script brings it back.
-PRESS_STEP = "8.94   none        0     0  -0.02"
-STOPS_SHORT = PRESS_STEP + "\n9.94   none        0     0  0"
+PRESS_STEP = "9.94   none        0     0  -0.02"
+STOPS_SHORT = PRESS_STEP + "\n10.94  none        0     0  0"
 
 
 def _run(script: str, name: str) -> dict:

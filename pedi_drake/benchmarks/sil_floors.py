@@ -70,7 +70,7 @@ def meets_floors(row: dict) -> bool:
         and row["success"]
         and row["latched"] is None
         and error is not None
-        and error < FOOT_ERROR_FLOOR_MM + row["foot_radius_difference_mm"]
+        and error < FOOT_ERROR_FLOOR_MM + row.get("foot_radius_difference_mm", 0.0)
         and row["deadline_misses_per_1000"] < MISSES_FLOOR_PER_1000
         and row["longest_miss_ms"] <= LONGEST_MISS_FLOOR_MS
     )
