@@ -9,6 +9,7 @@ import numpy as np  # noqa: E402 (the backend must be chosen before matplotlib i
 import pytest
 
 from pedi_drake import robot  # noqa: E402
+from pedi_drake.mission import phases, spec  # noqa: E402
 
 # Tests that judge wall-clock behaviour (real-time bridges, watchdogs, signals at chosen moments)
 # or use every core themselves (a local Ray, a browser): `.ci/run` runs them on their own after
@@ -67,3 +68,15 @@ def execute_notebook(tmp_path, monkeypatch):
         return [o for cell in nb.cells if cell.cell_type == "code" for o in cell.outputs]
 
     return execute
+
+
+@pytest.fixture
+def phase_tables_restored():
+    """The phase kind and runner tables (mission.spec.PHASE_KINDS, mission.phases.RUNNERS) as they
+    were before the test, whatever it registered."""
+    kinds, runners = dict(spec.PHASE_KINDS), dict(phases.RUNNERS)
+    yield
+    spec.PHASE_KINDS.clear()
+    spec.PHASE_KINDS.update(kinds)
+    phases.RUNNERS.clear()
+    phases.RUNNERS.update(runners)

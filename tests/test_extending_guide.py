@@ -9,9 +9,7 @@ registers is removed again afterwards, so no other test sees it.
 import re
 from pathlib import Path
 
-import pytest
-
-from pedi_drake.mission import phases, spec
+from pedi_drake.mission import spec
 
 GUIDE = Path(__file__).resolve().parents[1] / "docs" / "extending.md"
 
@@ -21,24 +19,13 @@ def python_blocks(text: str) -> list[str]:
     return re.findall(r"^```python\n(.*?)^```", text, flags=re.DOTALL | re.MULTILINE)
 
 
-@pytest.fixture
-def registered_kinds_restored():
-    """PHASE_KINDS and RUNNERS as they were before the test, whatever it registered."""
-    kinds, runners = dict(spec.PHASE_KINDS), dict(phases.RUNNERS)
-    yield
-    spec.PHASE_KINDS.clear()
-    spec.PHASE_KINDS.update(kinds)
-    phases.RUNNERS.clear()
-    phases.RUNNERS.update(runners)
-
-
 def test_the_guide_has_a_block_per_extension():
     # A phase kind (two), a mission file, a task, a scenario field (two), a scene object, an
     # operator source and a benchmark.
     assert len(python_blocks(GUIDE.read_text())) == 9
 
 
-def test_every_python_block_of_the_guide_runs(tmp_path, monkeypatch, registered_kinds_restored):
+def test_every_python_block_of_the_guide_runs(tmp_path, monkeypatch, phase_tables_restored):
     monkeypatch.chdir(tmp_path)
     namespace = {"__name__": "extending_guide"}
     for k, block in enumerate(python_blocks(GUIDE.read_text())):

@@ -22,17 +22,7 @@ class PauseRunner(phases.PhaseRunner):
         return SUCCEEDED
 
 
-@pytest.fixture
-def tables_restored():
-    kinds, runners = dict(spec.PHASE_KINDS), dict(phases.RUNNERS)
-    yield
-    spec.PHASE_KINDS.clear()
-    spec.PHASE_KINDS.update(kinds)
-    phases.RUNNERS.clear()
-    phases.RUNNERS.update(runners)
-
-
-def test_a_registered_kind_loads_from_a_mission_file(tmp_path, tables_restored):
+def test_a_registered_kind_loads_from_a_mission_file(tmp_path, phase_tables_restored):
     phases.register_phase_kind("pause", Pause, PauseRunner())
     path = tmp_path / "pause.yaml"
     path.write_text("phases:\n  - {kind: stand_up}\n  - {kind: pause, duration: 0.5}\n")
@@ -42,7 +32,7 @@ def test_a_registered_kind_loads_from_a_mission_file(tmp_path, tables_restored):
     assert isinstance(phases.RUNNERS[Pause], PauseRunner)
 
 
-def test_a_registered_kind_gets_the_common_value_checks(tmp_path, tables_restored):
+def test_a_registered_kind_gets_the_common_value_checks(tmp_path, phase_tables_restored):
     phases.register_phase_kind("pause", Pause, PauseRunner())
     path = tmp_path / "pause.yaml"
     path.write_text("phases:\n  - {kind: pause, duration: -1.0}\n")
@@ -50,7 +40,7 @@ def test_a_registered_kind_gets_the_common_value_checks(tmp_path, tables_restore
         spec.load_mission(str(path))
 
 
-def test_an_existing_kind_is_never_replaced(tables_restored):
+def test_an_existing_kind_is_never_replaced(phase_tables_restored):
     with pytest.raises(MissionFileError, match="already registered"):
         phases.register_phase_kind("reach", Pause, PauseRunner())
     phases.register_phase_kind("pause", Pause, PauseRunner())
@@ -66,7 +56,7 @@ def test_an_existing_kind_is_never_replaced(tables_restored):
         ("plain", Pause, object(), "PhaseRunner"),
     ],
 )
-def test_a_malformed_registration_is_refused(name, spec_class, runner, pattern, tables_restored):
+def test_a_malformed_registration_is_refused(name, spec_class, runner, pattern, phase_tables_restored):
     with pytest.raises(MissionFileError, match=pattern):
         phases.register_phase_kind(name, spec_class, runner)
     assert name not in spec.PHASE_KINDS
