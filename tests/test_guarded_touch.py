@@ -101,10 +101,10 @@ def test_a_lean_is_done_when_the_prongs_carry_load(tmp_path):
     assert lean["prong_load_n"] >= PRONG_LOAD_FRACTION * lean["feet_load_before_n"]
 
 
-def test_a_lean_on_legs_with_joint_damping_is_felt_when_the_prongs_meet_the_ground(tmp_path):
-    # Damping in the joints biases the joint-torque loads while the legs move (tens of
+def test_a_lean_on_legs_with_joint_damping_and_friction_is_felt_when_the_prongs_meet_the_ground(tmp_path):
+    # Damping and friction in the joints bias the joint-torque loads while the legs move (tens of
     # newtons as the trunk goes down): the load counts only once the prongs have stopped the trunk.
-    text = "{model_error: {joint_damping: 2.0}}"
+    text = "{model_error: {joint_damping: 2.0, joint_friction: 0.2}}"
     result = _run_mission(tmp_path, LEAN_MISSION, scenario_text=text)
     assert result["success"], result["reason"]
     (lean,) = result["prong_leans"]
