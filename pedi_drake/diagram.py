@@ -25,6 +25,7 @@ from pydrake.systems.primitives import ConstantValueSource, Demultiplexer, Matri
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.references import BODY_REFERENCE_SIZE, LEG_REFERENCE_SIZE
 from pedi_drake.control.stand_controller import StandController
+from pedi_drake.control.trunk_load_compensation import TrunkLoadCompensator
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
 from pedi_drake.estimation.kalman_estimator import KalmanEstimator
@@ -321,7 +322,15 @@ def MakePedipulationDiagram(
             )
             builder.Connect(manager.GetOutputPort("references"), split.get_input_port())
             body_reference, leg_reference = split.get_output_port(0), split.get_output_port(1)
-            builder.Connect(body_reference, controller.GetInputPort("body_reference"))
+            compensator = builder.AddNamedSystem(
+                "trunk_load",
+                TrunkLoadCompensator(scenario.trunk_load_compensation, system.config.period, system.num_contacts),
+            )
+            builder.Connect(body_reference, compensator.body_reference_port)
+            builder.Connect(base_state, compensator.base_state_port)
+            builder.Connect(manager.GetOutputPort("contact_set"), compensator.contact_set_port)
+            builder.Connect(compensator.GetOutputPort("body_reference"), controller.GetInputPort("body_reference"))
+            extra_logs["trunk_load.learnt"] = compensator.GetOutputPort("learnt")
             builder.Connect(leg_reference, controller.GetInputPort("leg_reference"))
             for name in ("contact_set", "safety_polygon", "friction"):
                 builder.Connect(manager.GetOutputPort(name), controller.GetInputPort(name))

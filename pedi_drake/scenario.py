@@ -25,6 +25,7 @@ from pedi_drake.control.config import (
     StandControllerConfig,
     WholeBodyControllerConfig,
 )
+from pedi_drake.control.trunk_load_compensation import TrunkLoadCompensationConfig
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.exceptions import ProngDesignError, ScenarioError
 from pedi_drake.go1_driver.config import Go1DriverConfig
@@ -215,6 +216,12 @@ class Scenario:
     whole_body: WholeBodyControllerConfig = dataclasses.field(default_factory=WholeBodyControllerConfig)
     # Settings of paper 002's projected-impedance controller.
     projected_impedance: ProjectedImpedanceConfig = dataclasses.field(default_factory=ProjectedImpedanceConfig)
+    # Integral action on the trunk's tracking under a mission: learns the load the controllers'
+    # model does not know (payload, weak motors, joint friction); see
+    # pedi_drake.control.trunk_load_compensation.
+    trunk_load_compensation: TrunkLoadCompensationConfig = dataclasses.field(
+        default_factory=TrunkLoadCompensationConfig
+    )
     # The foot force estimate of press phases (a mission file may set its own): "joint_torque"
     # (quasi-static, from the estimated joint torques; any controller) or "impedance" (Eq. 11 of
     # paper 002, from the foot's impedance error; controller: projected_impedance only).
@@ -315,6 +322,8 @@ class Scenario:
         for i, push in enumerate(self.pushes):
             for field, problem in push.problems():
                 need(False, f"pushes[{i}].{field}", problem)
+        for field, problem in self.trunk_load_compensation.problems():
+            need(False, f"trunk_load_compensation.{field}", problem)
         for field, problem in self.model_error.problems(self.plant_config):
             need(False, f"model_error.{field}", problem)
         if self.robot.prongs is not None:
