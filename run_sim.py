@@ -21,7 +21,7 @@ Examples:
 """
 
 # The stop handlers go in before pydrake loads (seconds): a Ctrl-C even then ends the run cleanly.
-from pedi_drake.interrupt import EXIT_INTERRUPTED, StopRequest  # noqa: I001
+from pedi_drake.runtime.interrupt import EXIT_INTERRUPTED, StopRequest  # noqa: I001
 
 STOP = StopRequest().install()
 

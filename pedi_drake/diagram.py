@@ -29,11 +29,9 @@ from pedi_drake.control.trunk_load_compensation import TrunkLoadCompensator
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.estimation.ground_truth import GroundTruthEstimator
 from pedi_drake.estimation.kalman_estimator import KalmanEstimator
-from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.go1_driver.pacing import loop_wait
 from pedi_drake.ik.leg_ik_system import LegIkSystem
-from pedi_drake.log_hold import LogHold
 from pedi_drake.mission.mission_manager import MissionManager, needs_posture_planner
 from pedi_drake.mission.spec import MissionSpec, load_mission
 from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE
@@ -43,10 +41,12 @@ from pedi_drake.operator.meshcat_panel import MeshcatOperatorPanel
 from pedi_drake.operator.message_stream import MessagePlayer, TimedMessage
 from pedi_drake.operator.operator_input import OperatorInput
 from pedi_drake.run_checks import control_period
+from pedi_drake.run_logs import SignalLog
+from pedi_drake.runtime.log_hold import LogHold
+from pedi_drake.runtime.wall_clock import WallClock
 from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
 from pedi_drake.station_interface import MakeStation
 from pedi_drake.suf.live_suf_system import LiveSufSystem
-from pedi_drake.wall_clock import WallClock
 
 # Signals logged by every run (name -> exported port of the diagram).
 LOGGED_SIGNALS = (

@@ -11,7 +11,11 @@ saturated at the joint's effort limit. The LCM wire order differs (see the drive
 is converted in `pedi_drake.go1_driver.constants` and nowhere else.
 """
 
+import math
+
 import numpy as np
+
+from pedi_drake.runtime.jit import kernel
 
 COMMAND_SIZE = 60
 
@@ -40,6 +44,30 @@ def pd_torque(command: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
     return tau_ff + kp * (q_des - q) + kd * (qd_des - qd)
 
 
+# Where each block of the command starts (each is 12 long).
+Q_DES, QD_DES, KP, KD, TAU_FF = 0, 12, 24, 36, 48
+
+
+@kernel
+def write_held_command(last_command: np.ndarray, q_measured: np.ndarray, kd_min: float, out: np.ndarray) -> None:
+    """`held_command` into `out` (60,), for the compiled controller ticks."""
+    out[:] = last_command
+    started = False
+    for i in range(12):
+        started |= out[KP + i] != 0.0 or out[TAU_FF + i] != 0.0
+    measured = True
+    for i in range(12):
+        measured &= math.isfinite(q_measured[i])
+    if not started and measured:
+        out[Q_DES : Q_DES + 12] = q_measured
+    out[QD_DES : QD_DES + 12] = 0.0
+    for i in range(12):
+        out[KD + i] = max(out[KD + i], kd_min)
+    for i in range(COMMAND_SIZE):
+        if not math.isfinite(out[i]):
+            out[i] = 0.0
+
+
 def held_command(last_command: np.ndarray, q_measured: np.ndarray, kd_min: float) -> np.ndarray:
     """The command a controller sends on a tick it cannot compute one (failed QP, bad input).
 
@@ -47,9 +75,6 @@ def held_command(last_command: np.ndarray, q_measured: np.ndarray, kd_min: float
     damping. Before any good command (no position gain and no torque in `last_command`) the
     position targets are the measured joints. Non-finite entries become 0, so this never sends NaN.
     """
-    command = np.array(last_command, dtype=float)
-    if not np.any(command[24:36]) and not np.any(command[48:60]) and np.all(np.isfinite(q_measured)):
-        command[0:12] = q_measured
-    command[12:24] = 0.0
-    command[36:48] = np.maximum(command[36:48], kd_min)
-    return np.nan_to_num(command, nan=0.0, posinf=0.0, neginf=0.0)
+    out = np.empty(COMMAND_SIZE)
+    write_held_command(np.asarray(last_command, dtype=float), np.asarray(q_measured, dtype=float), float(kd_min), out)
+    return out

@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 
 @kernel

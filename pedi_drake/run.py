@@ -4,7 +4,7 @@
 `run(scenario=..., name=..., out_dir=...)` does both; it is what run_sim.py, the mission
 benchmark, the tests and the notebooks call. It writes result.json (keys: docs/results.md),
 replay.html, PNG plots and the logged signals (logs.npz, read back with
-`pedi_drake.evaluation.run_logs.read_run_logs`).
+`pedi_drake.run_logs.read_run_logs`).
 """
 
 import contextlib
@@ -21,12 +21,12 @@ from pydrake.systems.framework import Context, EventStatus
 from pedi_drake.diagram import MakePedipulationDiagram, PedipulationDiagram, apply_mission
 from pedi_drake.evaluation.judge import judge_run, write_run
 from pedi_drake.evaluation.out_dir import claim_out_dir
-from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.go1_driver.hardware_run import hardware_run
 from pedi_drake.go1_driver.pacing import SpinPacedMonitor
-from pedi_drake.interrupt import StopRequest
 from pedi_drake.mission.progress import FAILED, RUNNING, SUCCEEDED, MissionProgress
 from pedi_drake.operator.message_stream import TimedMessage
+from pedi_drake.run_logs import SignalLog
+from pedi_drake.runtime.interrupt import StopRequest
 from pedi_drake.scenario import Scenario
 from pedi_drake.viz.meshcat_camera import frame_scene
 
@@ -86,7 +86,7 @@ def simulate(
     `realtime_rate` paces a hardware run (below 1 only against the simulator bridge run at the
     same rate: a slow-motion run for a machine too slow for both processes in real time), and a
     simulation with an operator.
-    `stop`: once its reason is set (by a signal, see `pedi_drake.interrupt`) the simulation ends at
+    `stop`: once its reason is set (by a signal, see `pedi_drake.runtime.interrupt`) the simulation ends at
     the current time and the record says why (`interrupted`).
     `operator_messages`: a scripted operator's stream (pedi_drake.operator.message_stream), played
     in lock step on an in-process bus; the simulation then runs as fast as it can.

@@ -28,7 +28,7 @@ from pydrake.common.eigen_geometry import AngleAxis
 from pydrake.math import RotationMatrix
 
 from pedi_drake.exceptions import PediError
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 # Kinds of packed trajectories (the first entry of every `packed` array) and their layouts:
 # QUINTIC  [kind, m, n, m x (t0, duration, start (n), end (n))]: rest-to-rest quintics, one after

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 
 def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""pedi_drake.callback_profile: the calls and collections a run at real time keeps to explain its late ticks."""
+"""pedi_drake.measuring.callback_profile: what a run at real time keeps to explain its late ticks."""
 
 import gc
 import mmap
@@ -8,7 +8,7 @@ import numpy as np
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, LeafSystem
 
-from pedi_drake.callback_profile import slow_calls
+from pedi_drake.measuring.callback_profile import slow_calls
 
 PERIOD = 0.002  # [s]
 SLOW_AT = 0.010  # [s] the tick whose update computes for BUSY

@@ -2,7 +2,7 @@
 
 import pytest
 
-from pedi_drake.compile_kernels import CONTROLLERS, compile_kernels, main, schedule, uses_prongs, variants
+from pedi_drake.apps.compile_kernels import CONTROLLERS, compile_kernels, main, schedule, uses_prongs, variants
 
 
 def test_the_workers_start_on_one_variant_of_each_controller_and_contact_count():

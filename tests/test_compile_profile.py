@@ -4,7 +4,7 @@ import numba
 import numpy as np
 import pytest
 
-from pedi_drake.compile_kernels import compile_profile, main
+from pedi_drake.apps.compile_kernels import compile_profile, main
 
 
 def _fresh_kernels():

@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from test_whole_body_controller import standing_controller, tick
 
-from pedi_drake import jit
 from pedi_drake.control import whole_body_tick
 from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, WholeBodyController
 from pedi_drake.run import simulate
+from pedi_drake.runtime import jit
 from pedi_drake.scenario import load_scenario
 
 # Largest difference allowed per command block [rad, rad/s, N m/rad, N m s/rad, N m], for the

@@ -1,4 +1,4 @@
-"""The compiled kernels (pedi_drake.jit) against their own plain-Python source on random inputs.
+"""The compiled kernels (pedi_drake.runtime.jit) against their own plain-Python source on random inputs.
 
 With numba a kernel runs as machine code; `.py_func` is the same function run by the
 interpreter, the reference. Both must agree: bit for bit where the kernel does elementwise float
@@ -9,11 +9,12 @@ LAPACK (the Kalman correction).
 import numpy as np
 import pytest
 
-from pedi_drake import jit, robot
+from pedi_drake import robot
 from pedi_drake.estimation import kalman_estimator as ke
 from pedi_drake.estimation import leg_odometry
 from pedi_drake.go1_driver import safety
 from pedi_drake.go1_driver.config import Go1SafetyConfig
+from pedi_drake.runtime import jit
 from pedi_drake.vector3 import rotation_matrix_wxyz
 
 RNG_SEED = 20261202

@@ -1,8 +1,8 @@
-"""pedi_drake.cpu_steal: the hypervisor's stolen time from /proc/stat."""
+"""pedi_drake.measuring.cpu_steal: the hypervisor's stolen time from /proc/stat."""
 
 import os
 
-from pedi_drake.cpu_steal import steal_seconds
+from pedi_drake.measuring.cpu_steal import steal_seconds
 
 
 def test_steal_is_read_from_the_cpu_line(tmp_path):

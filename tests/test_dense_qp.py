@@ -20,7 +20,6 @@ import daqp
 import numpy as np
 import pytest
 
-from pedi_drake import jit
 from pedi_drake.benchmarks.dense_qp import DEFAULT_FIXTURE, load_qps, objective, solution_is_unique
 from pedi_drake.control import dense_qp
 from pedi_drake.control.dense_qp import (
@@ -33,7 +32,8 @@ from pedi_drake.control.dense_qp import (
     solve,
     solve_qp,
 )
-from pedi_drake.jit import kernel
+from pedi_drake.runtime import jit
+from pedi_drake.runtime.jit import kernel
 
 RNG_SEED = 20261202
 STATIONARITY = 1e-7
@@ -401,7 +401,7 @@ def test_it_runs_as_plain_python_without_numba():
     script = textwrap.dedent(
         """
         import numpy as np
-        from pedi_drake import jit
+        from pedi_drake.runtime import jit
         from pedi_drake.control import dense_qp
         assert not jit.ENABLED
         rng = np.random.default_rng(0)

@@ -19,9 +19,9 @@ from pydrake.multibody.plant import MultibodyPlant
 from pedi_drake import robot
 from pedi_drake.control import go1_dynamics as gd
 from pedi_drake.control.robot_model import ControllerModel
-from pedi_drake.jit import python_records
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.resources import models_dir
+from pedi_drake.runtime.jit import python_records
 from pedi_drake.scenario import load_scenario
 
 RNG_SEED = 20261203

@@ -9,11 +9,11 @@ was planned, as a robot whose idea of the world is off would meet it.
 import numpy as np
 import pytest
 
-from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.mission.phases import PRONG_LOAD_FRACTION
 from pedi_drake.mission.spec import MissionFileError, load_mission
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.run import run
+from pedi_drake.run_logs import read_run_logs
 from pedi_drake.scenario import load_scenario
 
 # hit_target_front's cardboard cat: its front face is where the mission's target puts the foot.

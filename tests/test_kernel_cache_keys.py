@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from pedi_drake import jit
+from pedi_drake.runtime import jit
 
 PACKAGE = Path(jit.__file__).resolve().parent
 KERNEL_MODULES = sorted(path for path in PACKAGE.rglob("*.py") if "@kernel" in path.read_text())

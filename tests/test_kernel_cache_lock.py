@@ -5,7 +5,7 @@ import time
 
 import pytest
 
-from pedi_drake import jit
+from pedi_drake.runtime import jit
 
 caching = pytest.importorskip("numba.core.caching")
 

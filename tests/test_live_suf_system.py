@@ -13,9 +13,9 @@ from pydrake.systems.primitives import ConstantVectorSource, LogVectorOutput
 from pedi_drake.evaluation.live_suf import update_samples
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.scenario import load_scenario
-from pedi_drake.suf.go1_configuration import teleoperation_stance
 from pedi_drake.suf.live import LiveSuf, LiveSufReading, idle_vector, without_timing
 from pedi_drake.suf.live_suf_system import LiveSufSystem, slot_at, suf_request_vector
+from pedi_drake.suf.stances import teleoperation_stance
 
 PERIOD, OFFSET, TICK = 0.01, 0.004, 0.002
 PUSH = np.array([-1.0, 0.0, 0.0])

@@ -17,6 +17,7 @@ from pedi_drake.exceptions import UnreachableTarget
 from pedi_drake.mission.phases import (
     LegToPedipulationRunner,
     MissionEnvironment,
+    PedipulationLift,
     ReachRunner,
     posture_request,
     target_anchor,
@@ -157,7 +158,7 @@ def _planning_lift(lift, request, planner):
     view = _view(X_WB, _feet_on_the_ground())
     progress = MissionProgress(references=References.holding(X_WB.translation(), X_WB.rotation(), 0.0, 0))
     progress.records.append(_record(lift.name))
-    progress.memo.update(stage="plan", request=request, t_due=0.0)
+    progress.memo["lift"] = PedipulationLift("plan", 0.0, request=request)
     env = MissionEnvironment(None, planner=planner)
     return progress, view, env
 
@@ -175,7 +176,7 @@ def test_a_mission_lift_with_no_feasible_posture_takes_the_fixed_one(paw_plan):
     assert LegToPedipulationRunner().step(lift, progress, view, env) == RUNNING
     posture = progress.records[-1].metrics["posture"]
     assert posture["taken"] == "fixed" and "the fixed posture is taken" in posture["fallback"]
-    assert progress.memo["stage"] == "shift"
+    assert progress.memo["lift"].stage == "shift"
     # The trunk goes to the fixed posture's position; no anchor: the reach uses the trunk as it is.
     end = progress.references.body_position.sample(10.0).position
     np.testing.assert_allclose(end, request.start.p_WB, atol=1e-12)
@@ -222,12 +223,12 @@ def test_a_late_posture_plan_is_waited_for_without_counting_against_the_timeout(
     runner = LegToPedipulationRunner()
     progress.phase_start = -PLAN_LATENCY  # asked at -2 s, due at 0 s
     assert runner.step(lift, progress, _at(view, 4.0), env) == RUNNING
-    assert progress.plan_wait == 4.0 and progress.memo["stage"] == "plan"
+    assert progress.plan_wait == 4.0 and progress.memo["lift"].stage == "plan"
     assert runner.step(lift, progress, _at(view, 9.0), env) == RUNNING
     # 11 s since the phase started, of which 9 s waiting: the timeout sees the 2 s of PLAN_LATENCY.
     assert progress.plan_wait == 9.0 and progress.phase_time(9.0) == PLAN_LATENCY
     assert runner.step(lift, progress, _at(view, 9.5), env) == RUNNING
-    assert progress.memo["stage"] == "shift"
+    assert progress.memo["lift"].stage == "shift"
     assert progress.plan_wait == 9.5 and progress.records[-1].metrics["posture"]["plan_wait_s"] == 9.5
 
 

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
 
-from pedi_drake import jit, robot
+from pedi_drake import robot
 from pedi_drake.control import compiled_projected_dynamics as cpd
 from pedi_drake.control import projected_dynamics as pd
 from pedi_drake.control import projected_impedance_tick, references
@@ -30,6 +30,7 @@ from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, STATUS_OK
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.exceptions import ConfigError, QpInfeasible, ScenarioError
 from pedi_drake.mission.spec import missions_dir
+from pedi_drake.runtime import jit
 from pedi_drake.scenario import RobotConfig, load_scenario
 from pedi_drake.station.initial_state import initial_trunk_pose
 

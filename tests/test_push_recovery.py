@@ -12,7 +12,7 @@ from pedi_drake import robot
 from pedi_drake.benchmarks.demos import simulate_demo
 from pedi_drake.evaluation.judge import judge_pushes
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT
-from pedi_drake.evaluation.run_logs import SignalLog
+from pedi_drake.run_logs import SignalLog
 from pedi_drake.scenario import Push, RobotConfig
 from pedi_drake.station.initial_state import initial_trunk_pose
 

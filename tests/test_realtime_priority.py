@@ -7,7 +7,7 @@ import threading
 import pytest
 
 from pedi_drake.exceptions import ScenarioError
-from pedi_drake.realtime_priority import priority_problem, realtime_priority, rt_throttling
+from pedi_drake.runtime.realtime_priority import priority_problem, realtime_priority, rt_throttling
 from pedi_drake.scenario import load_scenario
 
 # CAP_SYS_NICE's bit in /proc/self/status's CapEff.

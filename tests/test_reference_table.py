@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from pydrake.math import RollPitchYaw, RotationMatrix
 
-from pedi_drake import jit, robot
+from pedi_drake import robot
 from pedi_drake.control import references as controller_refs
 from pedi_drake.exceptions import PediError
 from pedi_drake.mission import reference_table as rt
@@ -16,6 +16,7 @@ from pedi_drake.mission.progress import (
     LegTrajectory,
     References,
 )
+from pedi_drake.runtime import jit
 from pedi_drake.trajectory import (
     CircularPath,
     PiecewiseQuintic,

@@ -82,7 +82,7 @@ def test_sigterm_mid_simulation_writes_what_ran_and_exits_130(tmp_path):
     result = json.loads((out / "result.json").read_text())
     assert result["interrupted"] is True and result["interrupt_reason"] == "SIGTERM received"
     assert 2.0 <= result["sim_time_s"] < 30.0
-    from pedi_drake.evaluation.run_logs import read_run_logs
+    from pedi_drake.run_logs import read_run_logs
 
     logs = read_run_logs(out)
     assert abs(logs["base_state"].times[-1] - result["sim_time_s"]) < 0.01  # the logs hold what ran
@@ -91,7 +91,7 @@ def test_sigterm_mid_simulation_writes_what_ran_and_exits_130(tmp_path):
 def test_a_second_signal_aborts_and_gives_back_the_previous_handlers():
     import pytest
 
-    from pedi_drake.interrupt import StopRequest
+    from pedi_drake.runtime.interrupt import StopRequest
 
     before = signal.getsignal(signal.SIGINT)
     stop = StopRequest().install()

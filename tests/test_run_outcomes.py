@@ -10,11 +10,11 @@ import pytest
 from pedi_drake.evaluation.judge import STAND_HEIGHT_TOLERANCE, _stand_reason, commanded_stand_height
 from pedi_drake.evaluation.out_dir import OWNED_FILES
 from pedi_drake.evaluation.result_file import rounded_result
-from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.mission.phases import target_problem
 from pedi_drake.mission.progress import RUNNING, SUCCEEDED, MissionProgress, PhaseRecord
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.run import phase_label, run
+from pedi_drake.run_logs import read_run_logs
 from pedi_drake.scenario import load_scenario
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 
 from pedi_drake.apps.sil import bridge_pace, start_transient
-from pedi_drake.evaluation.run_logs import SignalLog
+from pedi_drake.run_logs import SignalLog
 
 PERIOD = 0.002  # [s]
 

@@ -3,8 +3,8 @@
 import numpy as np
 
 from pedi_drake.apps.sil import estimator_height_error, truth_touches
-from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.mission.spec import Touch
+from pedi_drake.run_logs import SignalLog
 
 PERIOD = 0.002  # [s] controller tick
 

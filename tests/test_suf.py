@@ -9,16 +9,16 @@ from scipy.optimize import linprog
 
 from pedi_drake.exceptions import SufError
 from pedi_drake.friction import friction_pyramid_rows
-from pedi_drake.suf.go1_configuration import (
+from pedi_drake.suf.methods import METHODS, fibonacci_sphere, smallest_unrejectable_force
+from pedi_drake.suf.problem import RejectableForceProblem
+from pedi_drake.suf.ray_program import RfpLinearProgram
+from pedi_drake.suf.stances import (
     Go1Stance,
     prong_manipulation_stance,
     stance_problem,
     teleoperation_stance,
     with_prongs_at_height,
 )
-from pedi_drake.suf.methods import METHODS, fibonacci_sphere, smallest_unrejectable_force
-from pedi_drake.suf.problem import RejectableForceProblem
-from pedi_drake.suf.ray_program import RfpLinearProgram
 
 MASS, G, MU = 2.0, 9.81, 0.5
 

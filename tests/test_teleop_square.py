@@ -9,8 +9,9 @@ pedi_drake.benchmarks.teleop --scenarios square`. Run with -s to see the figures
 
 import pytest
 
+from pedi_drake.benchmarks.teleop import lock_step_run
 from pedi_drake.evaluation import teleop_square
-from pedi_drake.evaluation.teleop_floors import floor_figures, lock_step_run
+from pedi_drake.evaluation.teleop_floors import floor_figures
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
 
 MAX_ERROR = 0.01  # [m] the floor

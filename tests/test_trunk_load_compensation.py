@@ -13,9 +13,9 @@ from pedi_drake.control.trunk_load_compensation import (
     TrunkLoadCompensationConfig,
     TrunkLoadCompensator,
 )
-from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.run import run
+from pedi_drake.run_logs import read_run_logs
 from pedi_drake.scenario import load_scenario
 
 PERIOD = 0.002  # [s]

@@ -16,10 +16,10 @@ from pedi_drake.benchmarks.live_suf import teleoperated_path
 from pedi_drake.benchmarks.suf import random_stance
 from pedi_drake.exceptions import SufError
 from pedi_drake.suf import warm_projection as wp
-from pedi_drake.suf.go1_configuration import stance_problem, teleoperation_stance
 from pedi_drake.suf.live import LiveSuf, LiveSufReading, idle_vector, rfp_rows, without_timing
 from pedi_drake.suf.methods import suf_exact, suf_single
 from pedi_drake.suf.problem import ContactPoint, build_problem
+from pedi_drake.suf.stances import stance_problem, teleoperation_stance
 
 RELATIVE_TOLERANCE = 1e-3  # the floor: equal to the cold exact SUF within 0.1 %
 

@@ -41,7 +41,7 @@ from pedi_drake.go1_driver import constants as c
 from pedi_drake.go1_driver.config import Go1BridgeConfig
 from pedi_drake.go1_driver.hardware_station import go1_lcm_url
 from pedi_drake.go1_driver.link import Inbox
-from pedi_drake.realtime_priority import realtime_priority
+from pedi_drake.runtime.realtime_priority import realtime_priority
 
 # Longest the bridge sleeps between two looks at the socket [s], so a late command is taken
 # within a fraction of a tick.

@@ -30,7 +30,7 @@ vertical trunk error against the truth while standing (`estimator_trunk_height_e
 `python -m pedi_drake.apps.teleop_lcm --lcm_log FILE --start_on_feedback` on the same bus, which
 plays the log's messages on the controller's clock (the scenario needs `operator: {source: lcm}`).
 
-`--callbacks` times the controller side's Python callbacks (pedi_drake.callback_profile) and keeps
+`--callbacks` times the controller side's Python callbacks (pedi_drake.measuring.callback_profile) and keeps
 those over 1 ms of the loop's CPU time, and the garbage collections over 1 ms, each with its
 diagram time: beside the driver's stalls (their tick times and the loop's CPU time in each), what
 a late tick computed, and the page faults the loop thread took in each call. The timers add a
@@ -66,16 +66,16 @@ from pydrake.common.yaml import yaml_load
 from pedi_drake import robot
 from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD
 from pedi_drake.apps.status_flood import expected_rejections, number_problem
-from pedi_drake.callback_profile import slow_calls
-from pedi_drake.cpu_steal import steal_seconds
 from pedi_drake.evaluation.estimator_accuracy import STANDING_TRUNK_HEIGHT
-from pedi_drake.evaluation.run_logs import read_run_logs
 from pedi_drake.evaluation.touches import judge_touches
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.go1_driver.link import lateness_against_earliest
+from pedi_drake.measuring.callback_profile import slow_calls
+from pedi_drake.measuring.cpu_steal import steal_seconds
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.run import run
 from pedi_drake.run_checks import check_out_dir
+from pedi_drake.run_logs import read_run_logs
 from pedi_drake.scenario import apply_scenario_text, lcm_url_is_valid, load_scenario
 
 GROUP = "239.255.76.67"
@@ -243,7 +243,7 @@ def run_sil(
     `records`: the controller side's RunRecord is appended to it (pedi_drake.run.run).
     `callbacks`: the controller side's Python callbacks that took more than SLOW_CALL of the loop's
     CPU time, and the collections longer than it, go into the result (`sil.slow_calls`,
-    pedi_drake.callback_profile): what the late ticks computed.
+    pedi_drake.measuring.callback_profile): what the late ticks computed.
     `pin`: the bridge runs on this process's last CPU and the controller side on the others
     (`pinned_cpus`), so that neither is moved onto the other's CPU.
     `flood_at`, `flood_duration`, `flood_rate`: a flood of malformed status messages `flood_at` [s]
@@ -381,7 +381,7 @@ def run_sil(
     }
     if steal_before is not None and steal_after is not None:
         # What the hypervisor took from this machine's CPUs while the controller side ran (both
-        # processes' cores): time a thread may have been charged as its own (pedi_drake.cpu_steal).
+        # processes' cores): time a thread may have been charged as its own (pedi_drake.measuring.cpu_steal).
         result["sil"]["cpu_steal_ms"] = 1e3 * (steal_after - steal_before)
     if callbacks:
         result["sil"]["slow_calls"] = calls.summary()

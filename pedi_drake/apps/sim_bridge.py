@@ -55,10 +55,10 @@ from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimato
 from pedi_drake.go1_driver.link import Inbox
 from pedi_drake.go1_driver.status_receiver import MakeLcmReceiver, ReceiverChannel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
-from pedi_drake.realtime_priority import realtime_priority
+from pedi_drake.runtime.realtime_priority import realtime_priority
+from pedi_drake.runtime.wall_clock import WallClock
 from pedi_drake.scenario import Scenario
 from pedi_drake.station_interface import MakeStation
-from pedi_drake.wall_clock import WallClock
 
 # Period of the ground-truth log [s].
 TRUTH_LOG_PERIOD = 0.01

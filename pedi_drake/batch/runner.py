@@ -4,9 +4,9 @@ import sys
 import time
 from pathlib import Path
 
+from pedi_drake.apps.compile_kernels import compile_kernels, default_jobs
 from pedi_drake.batch.results_file import ResultsFile, code_version
 from pedi_drake.batch.study import Study
-from pedi_drake.compile_kernels import compile_kernels, default_jobs
 
 
 class Progress:
@@ -52,7 +52,7 @@ def run_study(study: Study, folder: Path, engine, *, resume: bool = False, quiet
     if todo:
         if study.kind == "mission":
             # Compiled once here: workers starting together on an empty cache would each compile
-            # the same kernels (see pedi_drake.compile_kernels).
+            # the same kernels (see pedi_drake.apps.compile_kernels).
             compile_kernels(default_jobs())
         engine.run(todo, on_row, code_version())
     return results

@@ -64,7 +64,6 @@ from pedi_drake.apps.sim_bridge import status_messages
 from pedi_drake.apps.status_sample import STATUS_SIGNALS
 from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.benchmarks.station import real_time_factor
-from pedi_drake.callback_profile import wrapped_callbacks
 from pedi_drake.control import whole_body_tick
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.diagram import MakePedipulationDiagram
@@ -76,14 +75,15 @@ from pedi_drake.go1_driver.hardware_station import hardware_link
 from pedi_drake.go1_driver.safety import Go1SafetyFilter
 from pedi_drake.go1_driver.status_receiver import Go1LcmReceiver
 from pedi_drake.ik.leg_ik_system import LegIkSystem
+from pedi_drake.measuring.callback_profile import wrapped_callbacks
 from pedi_drake.mission import mission_manager
 from pedi_drake.mission.mission_manager import MissionManager
 from pedi_drake.mission.phases import RUNNERS
 from pedi_drake.mission.progress import MissionProgress
 from pedi_drake.run import simulate
+from pedi_drake.runtime.wall_clock import WallClock
 from pedi_drake.scenario import apply_scenario_text, load_scenario
 from pedi_drake.suf.live_suf_system import LiveSufSystem
-from pedi_drake.wall_clock import WallClock
 
 # The controller side's stages in the order of a tick, each with the event handlers (and the
 # outputs computed every tick) of its systems.
@@ -409,7 +409,7 @@ def stage_timers(ticks: int):
 
 @contextlib.contextmanager
 def callback_timers(ticks: int):
-    """While active, systems built get every Python callback (pedi_drake.callback_profile.DECLARATIONS)
+    """While active, systems built get every Python callback (pedi_drake.measuring.callback_profile.DECLARATIONS)
     timed: yields ({"System.port" or "System periodic ...": (ticks,) CPU ms}, the same of call
     counts), with "tick" to be set to the running tick (Replay.run does). A callback that
     evaluates another's output is charged its own time only. The timers add about a

@@ -42,7 +42,7 @@ import daqp
 import numpy as np
 
 from pedi_drake.control import dense_qp, hqp
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 DEFAULT_FIXTURE = Path(__file__).resolve().parents[2] / "tests" / "fixtures" / "controller_qps.npz"
 CONTROLLER_REFERENCE = DEFAULT_FIXTURE.with_name("controller_side_reference.npz")

@@ -30,8 +30,8 @@ from pedi_drake import robot
 from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.robot_model import ControllerModel
-from pedi_drake.jit import kernel
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.runtime.jit import kernel
 
 NUM_STATES = 64
 SEED = 20261203

@@ -31,9 +31,9 @@ import numpy as np
 
 from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.suf import warm_projection as wp
-from pedi_drake.suf.go1_configuration import Go1Stance, stance_problem, teleoperation_stance
 from pedi_drake.suf.live import LiveSuf, LiveSufReading, idle_vector
 from pedi_drake.suf.methods import suf_exact
+from pedi_drake.suf.stances import Go1Stance, stance_problem, teleoperation_stance
 
 SQUARE_SIDE = 0.08  # [m]
 HEIGHT_SWING = 0.01  # [m]

@@ -16,7 +16,7 @@ machine may be shared). Each run is judged against the floors a hardware swap is
 fewer than MISSES_FLOOR_PER_1000 deadline misses per 1000 ticks and none longer than
 LONGEST_MISS_FLOOR_MS), and the summary counts the runs that met them. The JSON's
 `machine.rt_throttling` is the share of each second Linux lets real-time threads run (None: not
-throttled; see pedi_drake.realtime_priority).
+throttled; see pedi_drake.runtime.realtime_priority).
 
 `--callbacks` runs each mission with `apps.sil --callbacks`: every run also keeps the controller
 side's callbacks and garbage collections over 1 ms (`slow_calls`), and the summary prints, per
@@ -42,8 +42,8 @@ from pathlib import Path
 
 from pedi_drake.apps.sil import BRIDGES, flood_text, run_sil, slow_calls_text
 from pedi_drake.benchmarks.machine import stamped
-from pedi_drake.realtime_priority import rt_throttling
 from pedi_drake.robot import FOOT_RADIUS
+from pedi_drake.runtime.realtime_priority import rt_throttling
 
 DEFAULT_MISSIONS = ("hit_target_front", "open_door", "prong_push_box")
 

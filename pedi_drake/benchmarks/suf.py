@@ -27,9 +27,9 @@ from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.exceptions import SufError
 from pedi_drake.resources import studies_dir
 from pedi_drake.suf.design import stance_for
-from pedi_drake.suf.go1_configuration import Go1Stance, stance_problem, with_prongs_at_height
 from pedi_drake.suf.methods import METHODS, smallest_unrejectable_force
 from pedi_drake.suf.ray_program import RfpLinearProgram
+from pedi_drake.suf.stances import Go1Stance, stance_problem, with_prongs_at_height
 from pedi_drake.viz.suf_plots import plot_accuracy, plot_rfp, plot_suf_vs_height
 
 # Paper 003, Table I [ms] (i7-7830X): teleoperation, manipulation.

@@ -23,6 +23,7 @@ controller's loop busy-wait for its periods (the driver's `wait`, pedi_drake/go1
 """
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -33,15 +34,46 @@ import numpy as np
 
 from pedi_drake.apps.sil import run_sil
 from pedi_drake.benchmarks.machine import stamped
-from pedi_drake.evaluation import command_fuzz, random_switches, teleop_square
-from pedi_drake.evaluation.teleop_floors import SCENARIO_TEXT, floor_figures, truth_from_bridge_log
+from pedi_drake.evaluation import command_fuzz, judge, random_switches, teleop_square
+from pedi_drake.evaluation.teleop_floors import (
+    SCENARIO_TEXT,
+    Truth,
+    floor_figures,
+    truth_from_bridge_log,
+    truth_from_plant_log,
+)
 from pedi_drake.go1_driver.pacing import WAITS
+from pedi_drake.mission import spec
 from pedi_drake.mission.spec import load_mission
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
-from pedi_drake.operator.message_stream import write_lcm_log
-from pedi_drake.scenario import apply_scenario_text, load_scenario
+from pedi_drake.operator.message_stream import TimedMessage, write_lcm_log
+from pedi_drake.run import simulate
+from pedi_drake.run_logs import SignalLog
+from pedi_drake.scenario import Scenario, apply_scenario_text, load_scenario
 
 SCENARIOS = ("square", "fuzz", "switches")
+
+
+@dataclasses.dataclass
+class LockStepRun:
+    """A simulated run of an operator's stream: its result (result.json's content), logs and truth."""
+
+    result: dict
+    logs: dict[str, SignalLog]
+    truth: Truth
+    scenario: Scenario
+    mission: spec.MissionSpec
+
+
+def lock_step_run(mission: str, messages: list[TimedMessage], duration: float) -> LockStepRun:
+    """Runs `mission` in simulation for `duration` [s] with `messages` played in lock step."""
+    scenario = apply_scenario_text(
+        load_scenario(scenario_text=SCENARIO_TEXT), f"{{mission: {mission}, simulation_duration: {duration}}}"
+    )
+    record = simulate(scenario=scenario, name=mission, quiet=True, replay=False, operator_messages=messages)
+    plant = record.built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
+    truth = truth_from_plant_log(plant, record.logs["sim.plant_state"])
+    return LockStepRun(judge.judge_run(record), record.logs, truth, scenario, record.built.mission)
 
 
 def _load() -> list[str] | None:

@@ -34,9 +34,9 @@ from pathlib import Path
 import numpy as np
 
 from pedi_drake.benchmarks.machine import stamped
-from pedi_drake.cpu_steal import steal_seconds
 from pedi_drake.go1_driver.link import distribution_ms, lateness_against_earliest
-from pedi_drake.realtime_priority import realtime_priority
+from pedi_drake.measuring.cpu_steal import steal_seconds
+from pedi_drake.runtime.realtime_priority import realtime_priority
 
 LATE_REPORTED = 0.005  # [s] lateness counted per minute
 

@@ -38,7 +38,7 @@ from pedi_drake.control.small_linalg import (
     multiply,
     multiply_transposed,
 )
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 STATUS_OK, STATUS_INFEASIBLE, STATUS_NUMERICAL = 0, 1, 2
 # The tall least-squares step is accepted only when its Cholesky factor's diagonal spreads less

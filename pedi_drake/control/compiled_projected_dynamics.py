@@ -20,7 +20,8 @@ import numpy as np
 from pedi_drake.control import dense_qp
 from pedi_drake.control.small_decompositions import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
 from pedi_drake.control.small_linalg import multiply, multiply_transposed
-from pedi_drake.jit import kernel
+from pedi_drake.friction import write_pyramid_faces
+from pedi_drake.runtime.jit import kernel
 
 # Status of `contact_forces`.
 CONTACT_FORCES_OK, CONTACT_FORCES_INFEASIBLE = 0, 1
@@ -452,10 +453,7 @@ def contact_forces(
         row = 6 * c
         G[row, z] = -1.0
         G[row + 1, z] = 1.0
-        G[row + 2, x], G[row + 2, z] = 1.0, -friction
-        G[row + 3, x], G[row + 3, z] = -1.0, -friction
-        G[row + 4, x + 1], G[row + 4, z] = 1.0, -friction
-        G[row + 5, x + 1], G[row + 5, z] = -1.0, -friction
+        write_pyramid_faces(G, row + 2, x, friction)
         g[row] = -f_min * ramp[c]
         g[row + 1] = f_max * ramp[c]
         for i in range(2, 6):

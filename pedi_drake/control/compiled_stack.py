@@ -23,7 +23,8 @@ from pedi_drake.control import dense_qp, references
 from pedi_drake.control.config import WholeBodyControllerConfig
 from pedi_drake.control.stacks import SLIDING_SPEED
 from pedi_drake.control.tasks import GRAVITY
-from pedi_drake.jit import kernel, new_record
+from pedi_drake.friction import pyramid_slope, write_pyramid_faces
+from pedi_drake.runtime.jit import kernel, new_record
 from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rotation_matrix_kernel
 
 STACK_PAPER000, STACK_PAPER003 = 0, 1
@@ -270,17 +271,14 @@ def build_levels(
     level = _close_level(table, level, row, hard, soft)
 
     # Feasibility: force limits and friction, torque limits, joint limits (hard); capture point (soft).
-    slope = friction / math.sqrt(2.0) if p.inscribed else friction
+    slope = pyramid_slope(friction, p.inscribed)
     for i in range(nc):
         for r in range(6):
             hard_G[hard + r, :] = 0.0
         f = nv + 3 * i
         hard_G[hard, f + 2] = -1.0
         hard_G[hard + 1, f + 2] = 1.0
-        hard_G[hard + 2, f], hard_G[hard + 2, f + 2] = 1.0, -slope
-        hard_G[hard + 3, f], hard_G[hard + 3, f + 2] = -1.0, -slope
-        hard_G[hard + 4, f + 1], hard_G[hard + 4, f + 2] = 1.0, -slope
-        hard_G[hard + 5, f + 1], hard_G[hard + 5, f + 2] = -1.0, -slope
+        write_pyramid_faces(hard_G, hard + 2, f, slope)
         hard_h[hard] = -p.f_min * ramp[i]
         hard_h[hard + 1] = p.f_max * ramp[i]
         for r in range(2, 6):

@@ -109,7 +109,7 @@ import math
 import numpy as np
 
 from pedi_drake.control.small_linalg import cholesky_in_place
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 # Status codes returned by `solve_dense_qp_kernel`.
 OPTIMAL = 1

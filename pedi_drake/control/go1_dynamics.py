@@ -1,6 +1,6 @@
 """Compiled rigid-body dynamics of the Go1 as the whole-body controllers see it, in one call.
 
-`go1_dynamics(model, base_state, q_joints, v_joints, out)` is a `pedi_drake.jit.kernel`: from the
+`go1_dynamics(model, base_state, q_joints, v_joints, out)` is a `pedi_drake.runtime.jit.kernel`: from the
 state estimate and the measured joints it fills every term of a `RobotSnapshot` (mass matrix,
 bias, contact and trunk Jacobians with their bias accelerations, centre of mass, calf
 orientations) in the plant's own velocity order, far cheaper than the Drake calls of
@@ -61,8 +61,8 @@ from pydrake.multibody.tree import BodyIndex, JointActuatorIndex, JointIndex
 from pedi_drake import robot
 from pedi_drake.control.robot_snapshot import RobotSnapshot
 from pedi_drake.exceptions import PediError
-from pedi_drake.jit import kernel, new_record
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.runtime.jit import kernel, new_record
 
 
 def contact_points(prongs: ProngDesign | None) -> tuple[tuple[str, np.ndarray], ...]:

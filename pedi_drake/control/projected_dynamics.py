@@ -87,6 +87,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from pedi_drake.exceptions import QpInfeasible
+from pedi_drake.friction import write_pyramid_faces
 
 # Default relative tolerance of the SVD pseudo-inverses: singular values below this times the
 # largest one are treated as zero [-].
@@ -300,16 +301,9 @@ def constraint_free_torque(
 def friction_pyramid_rows(num_contacts: int, mu_eff: float) -> np.ndarray:
     """G (6 k, 3 k) of G lam <= g for each contact: -f_z, f_z, +-f_x - mu f_z, +-f_y - mu f_z
     (read-only; cached, it changes only with the friction and the number of contacts)."""
-    local = np.array(
-        [
-            [0.0, 0.0, -1.0],
-            [0.0, 0.0, 1.0],
-            [1.0, 0.0, -mu_eff],
-            [-1.0, 0.0, -mu_eff],
-            [0.0, 1.0, -mu_eff],
-            [0.0, -1.0, -mu_eff],
-        ]
-    )
+    local = np.zeros((6, 3))
+    local[0, 2], local[1, 2] = -1.0, 1.0
+    write_pyramid_faces(local, 2, 0, mu_eff)
     G = np.kron(np.eye(num_contacts), local)
     G.flags.writeable = False
     return G

@@ -60,6 +60,7 @@ from pedi_drake.control.whole_body_controller import (
 )
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, QpInfeasible
+from pedi_drake.friction import pyramid_slope
 from pedi_drake.go1_command import held_command, initial_command
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.leg_kinematics import foot_jacobian_B, foot_position_B
@@ -418,7 +419,7 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             share = self.total_weight / max(float(ramp[held_idx].sum()), 1e-6)
             force_share = np.zeros(3 * len(held_idx))
             force_share[2::3] = ramp[held_idx] * share
-            mu = float(mu_x[0]) / np.sqrt(2.0) if c.friction_pyramid_inscribed else float(mu_x[0])
+            mu = pyramid_slope(float(mu_x[0]), c.friction_pyramid_inscribed)
             problem = pd.ContactForceProblem(
                 Jc=Jc,
                 r=s.M @ free.vdot + s.h,

@@ -15,7 +15,7 @@ impedance), diagnostics (`projected_impedance_controller.projected_diagnostics_l
 
 Nothing raises: a non-finite input ends the tick as STATUS_BAD_INPUT, a failed decomposition or
 an infeasible contact QP as STATUS_QP_FAILED, both holding the last good command with damping
-(`whole_body_tick.held_command`), with the status the Python path reports.
+(`go1_command.write_held_command`), with the status the Python path reports.
 """
 
 import math
@@ -30,9 +30,11 @@ from pedi_drake.control.compiled_stack import (
 )
 from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.tasks import GRAVITY
-from pedi_drake.control.whole_body_tick import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED, held_command
+from pedi_drake.control.whole_body_tick import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
-from pedi_drake.jit import kernel, new_record
+from pedi_drake.friction import pyramid_slope
+from pedi_drake.go1_command import write_held_command
+from pedi_drake.runtime.jit import kernel, new_record
 from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rotation_matrix_kernel
 
 # Slices of the diagnostics vector the tick writes, in this order (projected_diagnostics_layout).
@@ -169,7 +171,7 @@ def _all_finite(x: np.ndarray) -> bool:
 def _fail(tp, status, last_command, q, last_diag, ramp, record_ramp, command, diag) -> float:
     """The held command and the failure's diagnostics (ProjectedImpedanceController._fail); the
     ramps, when `record_ramp`, as the tick advanced them."""
-    held_command(last_command, q, tp.failure_kd, command)
+    write_held_command(last_command, q, tp.failure_kd, command)
     d = tp.diagnostics
     diag[:] = last_diag
     diag[d[_STATUS]] = status
@@ -520,7 +522,7 @@ def projected_impedance_tick(
     force_share = np.zeros(3 * num_held)
     for a in range(num_held):
         force_share[3 * a + 2] = held_ramp[a] * share
-    friction = mu_x[0] / math.sqrt(2.0) if tp.inscribed else mu_x[0]
+    friction = pyramid_slope(mu_x[0], tp.inscribed)
     r = np.empty(nv)
     for i in range(nv):
         value = s.h[i]

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 _EPSILON = 2.0**-52
 # QL sweeps allowed per eigenvalue before giving up (JAMA sets none; 30 is EISPACK's limit and

@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 # A downdated row norm is recomputed once its square has lost half of float64's digits (LAPACK's
 # tol3z, sqrt(machine epsilon)).

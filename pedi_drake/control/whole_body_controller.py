@@ -42,10 +42,10 @@ from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError, PediError, QpInfeasible
 from pedi_drake.go1_command import held_command, initial_command
-from pedi_drake.jit import new_record
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.polygon import polygon_halfplanes
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.runtime.jit import new_record
 from pedi_drake.vector3 import orientation_error_W
 
 STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0

@@ -29,8 +29,9 @@ from pedi_drake.control.compiled_stack import (
 )
 from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.references import SAFETY_POLYGON_MAX_VERTICES
-from pedi_drake.jit import kernel
+from pedi_drake.go1_command import write_held_command
 from pedi_drake.polygon import halfplanes_kernel
+from pedi_drake.runtime.jit import kernel
 from pedi_drake.vector3 import orientation_error_kernel, rotation_matrix_kernel
 
 STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT, STATUS_CONTACTS_RELAXED = 0.0, 1.0, 2.0, 3.0
@@ -116,28 +117,8 @@ def _all_finite(x: np.ndarray) -> bool:
 
 
 @kernel
-def held_command(last_command: np.ndarray, q_measured: np.ndarray, kd_min: float, out: np.ndarray) -> None:
-    """go1_command.held_command into `out` (60,): the last good command, zero rate targets, at least
-    `kd_min` damping, the measured joints as targets before any good command, never NaN."""
-    out[:] = last_command
-    started = False
-    for i in range(24, 36):
-        started |= out[i] != 0.0
-    for i in range(48, 60):
-        started |= out[i] != 0.0
-    if not started and _all_finite(q_measured):
-        out[0:12] = q_measured
-    out[12:24] = 0.0
-    for i in range(36, 48):
-        out[i] = max(out[i], kd_min)
-    for i in range(60):
-        if not math.isfinite(out[i]):
-            out[i] = 0.0
-
-
-@kernel
 def _fail(tp, status, last_command, q, diag_in, out_command, out_diag) -> float:
-    held_command(last_command, q, tp.failure_kd, out_command)
+    write_held_command(last_command, q, tp.failure_kd, out_command)
     d = tp.diagnostics
     out_diag[:] = diag_in
     out_diag[d[_STATUS]] = status

@@ -58,9 +58,9 @@ from pedi_drake import robot
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
-from pedi_drake.jit import kernel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.runtime.jit import kernel
 from pedi_drake.vector3 import rotation_matrix_kernel
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]

@@ -3,7 +3,7 @@
 The estimator needs every foot's position and Jacobian in the trunk frame at 500 Hz. The general
 `pedi_drake.leg_kinematics` functions build rotation matrices with numpy, too slow at that rate;
 the Go1's legs have the structure hip about x, thigh and calf about y, with unrotated joint
-frames, so the same quantities follow from a few sines and cosines, compiled (`pedi_drake.jit`,
+frames, so the same quantities follow from a few sines and cosines, compiled (`pedi_drake.runtime.jit`,
 one call for all four legs). The offsets come from the model through `leg_geometry`, so there is still one
 source of truth.
 """
@@ -15,8 +15,8 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.exceptions import PediError
-from pedi_drake.jit import kernel
 from pedi_drake.leg_kinematics import leg_geometry
+from pedi_drake.runtime.jit import kernel
 
 
 @functools.lru_cache(maxsize=1)

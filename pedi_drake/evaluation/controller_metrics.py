@@ -20,10 +20,10 @@ from pedi_drake.control.references import LEG_BLOCK, LEG_MODE_NONE
 from pedi_drake.control.whole_body_controller import diagnostics_layout
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation.push_response import push_response
-from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.exceptions import PediError
 from pedi_drake.mission import spec
 from pedi_drake.mission.progress import SUCCEEDED
+from pedi_drake.run_logs import SignalLog
 
 GRAVITY = 9.81  # [m/s^2]
 FORCE_JUMP_AFTER = 0.1  # [s] the contact forces settle from their zero initial guess before this

@@ -3,7 +3,7 @@
 import numpy as np
 
 from pedi_drake import robot
-from pedi_drake.evaluation.run_logs import SignalLog
+from pedi_drake.run_logs import SignalLog
 
 # [m] true trunk height above which the robot counts as standing for the height error.
 STANDING_TRUNK_HEIGHT = 0.2

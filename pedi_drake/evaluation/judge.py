@@ -18,7 +18,6 @@ from pedi_drake.evaluation.live_suf import live_suf_summary, update_samples
 from pedi_drake.evaluation.off_trunk import judge_off_trunk, off_trunk_trace
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_response
 from pedi_drake.evaluation.result_file import write_result
-from pedi_drake.evaluation.run_logs import SignalLog, write_run_logs
 from pedi_drake.evaluation.touches import judge_touches
 from pedi_drake.fall import fell_during, first_fallen_sample
 from pedi_drake.go1_driver.hardware_station import hardware_link
@@ -26,6 +25,7 @@ from pedi_drake.go1_driver.safety import driver_report
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
 from pedi_drake.operator.meshcat_panel import MeshcatOperatorPanel
 from pedi_drake.run_checks import control_period
+from pedi_drake.run_logs import SignalLog, write_run_logs
 from pedi_drake.viz import plots
 from pedi_drake.viz.suf_plots import plot_live_suf
 

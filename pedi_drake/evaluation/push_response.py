@@ -20,7 +20,7 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.evaluation.mission_results import FOOT_ON_GROUND, foot_positions_W, foot_slides
-from pedi_drake.evaluation.run_logs import SignalLog
+from pedi_drake.run_logs import SignalLog
 from pedi_drake.scenario import Push
 from pedi_drake.station.disturbance import push_force_W
 

@@ -16,9 +16,9 @@ The truth (`Truth`: the true trunk and feet over diagram time, which no controll
 from the simulated plant's logged state (`truth_from_plant_log`) or from the simulator bridge's
 truth log, put on the controller's diagram time through the wall clock both logged
 (`truth_from_bridge_log`). `floor_figures` gives the figures every scenario shares; the
-scenario's own come from its module. `lock_step_run` runs a scenario in simulation, the operator
-in lock step on an in-process bus (the benchmark, pedi_drake.benchmarks.teleop, runs it at real
-time over UDP instead).
+scenario's own come from its module. The runs themselves are pedi_drake.benchmarks.teleop's:
+`lock_step_run` in simulation with the operator in lock step on an in-process bus, the benchmark
+at real time over UDP.
 """
 
 import dataclasses
@@ -26,17 +26,14 @@ import dataclasses
 import numpy as np
 
 from pedi_drake import robot
-from pedi_drake.evaluation import judge
 from pedi_drake.evaluation.reference_steps import command_step, rate_limit_table, reference_steps
-from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.evaluation.teleop_violations import teleop_violations
 from pedi_drake.fall import fell_during
 from pedi_drake.go1_driver.safety import SafetyLimits
 from pedi_drake.mission import spec
 from pedi_drake.mission.mission_manager import MISSION_PERIOD
-from pedi_drake.operator.message_stream import TimedMessage
-from pedi_drake.run import simulate
-from pedi_drake.scenario import Scenario, apply_scenario_text, load_scenario
+from pedi_drake.run_logs import SignalLog
+from pedi_drake.scenario import Scenario
 
 # Samples of the plant's state the truth takes (every 5th of the 2 ms log: the bridge's 100 Hz).
 PLANT_LOG_STRIDE = 5
@@ -115,25 +112,3 @@ def floor_figures(
         "deadline_misses_per_1000": None if loop is None else loop["deadline_misses_per_1000"],
         "ticks": None if loop is None else loop["ticks"],
     }
-
-
-@dataclasses.dataclass
-class LockStepRun:
-    """A simulated run of an operator's stream: its result (result.json's content), logs and truth."""
-
-    result: dict
-    logs: dict[str, SignalLog]
-    truth: Truth
-    scenario: Scenario
-    mission: spec.MissionSpec
-
-
-def lock_step_run(mission: str, messages: list[TimedMessage], duration: float) -> LockStepRun:
-    """Runs `mission` in simulation for `duration` [s] with `messages` played in lock step."""
-    scenario = apply_scenario_text(
-        load_scenario(scenario_text=SCENARIO_TEXT), f"{{mission: {mission}, simulation_duration: {duration}}}"
-    )
-    record = simulate(scenario=scenario, name=mission, quiet=True, replay=False, operator_messages=messages)
-    plant = record.built.diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
-    truth = truth_from_plant_log(plant, record.logs["sim.plant_state"])
-    return LockStepRun(judge.judge_run(record), record.logs, truth, scenario, record.built.mission)

@@ -29,9 +29,9 @@ from pydrake.math import RigidTransform
 from pedi_drake import robot
 from pedi_drake.control.references import LEG_BLOCK, LEG_MODE_FOOT
 from pedi_drake.estimation.base_state import BaseState
-from pedi_drake.evaluation.run_logs import SignalLog
 from pedi_drake.mission import spec
 from pedi_drake.mission.teleop_bounds import workspace_margin
+from pedi_drake.run_logs import SignalLog
 
 VIOLATIONS = ("workspace", "speed", "force", "nonfinite_command")
 ROUNDING = 1e-9  # [-] relative

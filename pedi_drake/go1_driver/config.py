@@ -71,7 +71,7 @@ class Go1DriverConfig:
     # SCHED_FIFO priority [1-99] of every thread of the driver's wall-clock loop (controller
     # side; the simulator bridge has its own, `bridge.realtime_priority`); 0: the OS's normal scheduling. Where the OS
     # refuses (no root, CAP_SYS_NICE or `ulimit -r`), the loop runs at normal priority with a
-    # warning, and result.json says which it got (see pedi_drake.realtime_priority). Off by
+    # warning, and result.json says which it got (see pedi_drake.runtime.realtime_priority). Off by
     # default: with it the semi-autonomous mode's posture plans, computed at normal priority,
     # come late (docs/real_time.md).
     realtime_priority: int = 0

@@ -16,7 +16,7 @@ from pedi_drake.go1_driver.lcmtypes import (
     rc_command_lcmt,
     state_estimator_lcmt,
 )
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 # Channels (controller <-> robot bridge).
 COMMAND_CHANNEL = "pd_plustau_targets"

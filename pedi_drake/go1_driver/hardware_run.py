@@ -17,7 +17,7 @@ control periods, so without it the loop misses deadlines whenever one runs.
 Only objects made during the loop are then collected, in sub-millisecond young collections.
 
 Every thread of the process runs under SCHED_FIFO at the driver's `realtime_priority` while the
-block runs, where the OS allows it (see pedi_drake.realtime_priority); the link's report says
+block runs, where the OS allows it (see pedi_drake.runtime.realtime_priority); the link's report says
 which scheduling the loop had.
 
 The interpreter's thread switch interval is shortened (SWITCH_INTERVAL) while the loop runs: the
@@ -34,7 +34,7 @@ import threading
 from pydrake.systems.framework import Diagram
 
 from pedi_drake.go1_driver.hardware_station import hardware_link
-from pedi_drake.realtime_priority import realtime_priority
+from pedi_drake.runtime.realtime_priority import realtime_priority
 
 # [s] how long a thread computing in Python may keep the GIL while another waits for it.
 SWITCH_INTERVAL = 0.0005

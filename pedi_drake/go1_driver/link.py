@@ -336,7 +336,7 @@ class Go1Link:
         self._looks = {"loop": 0, "thread": 0}
         # The pace of the loop against the wall clock (the Simulator's target real-time rate).
         self.realtime_rate = 1.0
-        # The loop's scheduling while it ran (see pedi_drake.realtime_priority), for the report.
+        # The loop's scheduling while it ran (see pedi_drake.runtime.realtime_priority), for the report.
         self.scheduling = "normal scheduling"
         # CPU time the loop spent busy-waiting for its periods (go1_driver.wait: spin) [s]: not
         # counted as the loop's work in the report's stalls.

@@ -22,7 +22,7 @@ import time
 
 from pydrake.systems.framework import EventStatus
 
-from pedi_drake.jit import ENABLED, kernel
+from pedi_drake.runtime.jit import ENABLED, kernel
 
 WAITS = ("auto", "sleep", "spin")
 NANOSECONDS_PER_SECOND = 1_000_000_000

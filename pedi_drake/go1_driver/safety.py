@@ -28,8 +28,8 @@ from pedi_drake import robot
 from pedi_drake.go1_command import COMMAND_SIZE
 from pedi_drake.go1_driver.config import Go1SafetyConfig
 from pedi_drake.go1_driver.constants import COMMAND_OFFSET, STATUS_CHANNELS
-from pedi_drake.jit import kernel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
+from pedi_drake.runtime.jit import kernel
 
 _log = logging.getLogger(__name__)
 

@@ -38,8 +38,8 @@ from pydrake.systems.framework import BasicVector, Context, DiscreteValues, Even
 
 from pedi_drake import robot
 from pedi_drake.ik.fabrik import DEFAULT_MAX_ITERATIONS, solve_leg_ik
-from pedi_drake.jit import kernel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
+from pedi_drake.runtime.jit import kernel
 
 # Layout of the discrete state vector.
 _TARGET_B = slice(0, 3)  # trunk-frame target of the last solve [m] (NaN before the first one)

@@ -526,7 +526,8 @@ class MissionManager(LeafSystemWithoutWitnesses):
         """Whether a failed phase was the semi-autonomous lift still planning (nothing moved: no
         posture reaches the target): the target is then refused and the mission resumes."""
         phase = phases[progress.index]
-        planning = isinstance(phase, spec.LegToPedipulation) and progress.memo.get("stage") == "plan"
+        lift = progress.memo.get("lift")
+        planning = isinstance(phase, spec.LegToPedipulation) and lift is not None and lift.stage == "plan"
         if progress.interlude_mode != semi_autonomous.SEMI_AUTONOMOUS or not planning:
             return False
         progress.records[-1].status = "refused"

@@ -8,6 +8,7 @@ MissionProgress they are given (held in the MissionManager's Context).
 
 import dataclasses
 import math
+from typing import Literal
 
 import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
@@ -503,6 +504,36 @@ def _posture_metrics(request: PostureRequest, result) -> dict:
     }
 
 
+@dataclasses.dataclass(frozen=True)
+class PedipulationLift:
+    """Where a leg_to_pedipulation phase is: waiting for the posture planner ("plan"), the trunk
+    shifting over the other supports ("shift"), the foot's load ramping out ("release"), the leg
+    lifting to its working position ("lift"). Each stage waits until `until` [s] at least."""
+
+    stage: Literal["plan", "shift", "release", "lift"]
+    until: float  # [s] when the stage's wait ends (the plan is due, the trunk or the ramp is done)
+    request: PostureRequest | None = None  # "plan": the question asked of the planner
+    p_work_B: np.ndarray | None = None  # "release", "lift": the foot's working position, trunk frame [m]
+
+    def __deepcopy__(self, memo) -> "PedipulationLift":
+        return self  # a value, shared by the progress's copies (see pedi_drake.mission.progress)
+
+
+@dataclasses.dataclass(frozen=True)
+class FootPlacing:
+    """Where a leg_to_support phase is: the IK of its path being solved ("plan"), the foot coming
+    down on its footprint ("place", done on touch or at `until`), its load ramping in ("load"),
+    the trunk re-centring over the four feet ("centre")."""
+
+    stage: Literal["plan", "place", "load", "centre"]
+    footprint_W: np.ndarray  # where the foot is placed, world frame [m]
+    until: float = 0.0  # [s] when the stage's wait ends
+    t_above: float = 0.0  # [s] when the foot is above its footprint: touches count after it
+
+    def __deepcopy__(self, memo) -> "FootPlacing":
+        return self  # a value, shared by the progress's copies (see pedi_drake.mission.progress)
+
+
 class LegToPedipulationRunner(PhaseRunner):
     """Place the trunk (the fixed shift of the CoM over the other supports, or the optimal
     posture), release the contact, lift the foot to work height."""
@@ -524,30 +555,31 @@ class LegToPedipulationRunner(PhaseRunner):
                 raise UnreachableTarget(f"{phase.name}: posture: optimal needs the posture planner")
             request = posture_request(phase, view, env, refs.contacts, goal, R_now)
             env.planner.ask(request)
-            progress.memo.update(stage="plan", request=request, t_due=view.time + PLAN_LATENCY)
+            progress.memo["lift"] = PedipulationLift("plan", view.time + PLAN_LATENCY, request=request)
             return
         _move_body(progress, view.time, goal, None, SHIFT_DURATION)
-        progress.memo.update(stage="shift", t_shifted=view.time + SHIFT_DURATION)
+        progress.memo["lift"] = PedipulationLift("shift", view.time + SHIFT_DURATION)
 
     def step(self, phase, progress, view, env):
         t, leg = view.time, phase.leg
-        memo, refs = progress.memo, progress.references
+        refs = progress.references
         k = robot.LEG_NAMES.index(leg)
-        if memo["stage"] == "plan":
-            result = env.planner.answer(memo["request"], wait=env.wait_for_plans) if t >= memo["t_due"] else None
+        lift: PedipulationLift = progress.memo["lift"]
+        if lift.stage == "plan":
+            result = env.planner.answer(lift.request, wait=env.wait_for_plans) if t >= lift.until else None
             if result is None:
-                if t >= memo["t_due"]:
+                if t >= lift.until:
                     # Late (a loaded machine, or the worker beside real-time loops): the robot holds
                     # still, which the phase's timeout does not count; a planner that never answers
                     # ends the phase.
-                    progress.plan_wait = t - memo["t_due"]
+                    progress.plan_wait = t - lift.until
                     if progress.plan_wait > PLAN_WAIT_LIMIT:
                         late = f"no posture plan {PLAN_WAIT_LIMIT:.0f} s after it was due"
                         return _fail(progress, f"{phase.name}: {late}")
                 return RUNNING
             if progress.plan_wait > 0.0:
-                progress.plan_wait = t - memo["t_due"]  # held still until this update too
-            metrics = _posture_metrics(memo["request"], result)
+                progress.plan_wait = t - lift.until  # held still until this update too
+            metrics = _posture_metrics(lift.request, result)
             metrics["plan_wait_s"] = progress.plan_wait
             progress.records[-1].metrics.update(leg=leg, posture=metrics)
             if not result.best.feasible:
@@ -558,37 +590,39 @@ class LegToPedipulationRunner(PhaseRunner):
                 # The mission's own posture, which it runs without the optimiser: the trunk shifts
                 # as a fixed lift's does (position only: a later body_rotate turns it).
                 metrics.update(taken="fixed", fallback=f"{why}: the fixed posture is taken")
-                _move_body(progress, t, np.asarray(memo["request"].start.p_WB), None, SHIFT_DURATION)
-                memo.update(stage="shift", t_shifted=t + SHIFT_DURATION)
+                _move_body(progress, t, np.asarray(lift.request.start.p_WB), None, SHIFT_DURATION)
+                progress.memo["lift"] = PedipulationLift("shift", t + SHIFT_DURATION)
                 return RUNNING
             metrics.update(taken="optimal", fallback="")
             posture = result.best.posture
             progress.pre_posture[leg] = _body_sample(progress, t)
-            anchor = target_anchor(phase, memo["request"].start)
+            anchor = target_anchor(phase, lift.request.start)
             if anchor is not None:
                 progress.target_anchors[leg] = anchor
             # A body_rotate among the targets turns the trunk later (about its origin): only the
             # position is taken now.
             R_goal = None if phase.goal.attitude is not None else RotationMatrix(RollPitchYaw(*posture.rpy))
             _move_body(progress, t, np.asarray(posture.p_WB), R_goal, POSTURE_DURATION)
-            memo.update(stage="shift", t_shifted=t + POSTURE_DURATION)
-        elif memo["stage"] == "shift" and t >= memo["t_shifted"]:
+            progress.memo["lift"] = PedipulationLift("shift", t + POSTURE_DURATION)
+        elif t < lift.until:
+            return RUNNING
+        elif lift.stage == "shift":
             refs.contacts[k] = 0.0
             # The working pose's joint angles are asked now, to be there when the force has ramped away.
             p_work_B = working_position_B(leg, phase.working_depth)
             _ask_ik(progress, view, view.X_WB, {leg: [p_work_B]}, phase.name)
-            memo.update(stage="release", t_release=t, p_work_B=p_work_B)
-        elif memo["stage"] == "release" and t >= memo["t_release"] + CONTACT_RAMP_WAIT:
+            progress.memo["lift"] = PedipulationLift("release", t + CONTACT_RAMP_WAIT, p_work_B=p_work_B)
+        elif lift.stage == "release":
             solutions = _ik_solutions(progress)
             if solutions is None:
                 return RUNNING
-            lift = PiecewiseQuintic.through(
+            trajectory = PiecewiseQuintic.through(
                 np.array([joint_reference_start(progress, view, leg), solutions[leg][0]]), t, [phase.duration]
             )
-            refs.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, lift)
-            memo.update(stage="lift", t_lift_end=t + phase.duration)
-        elif memo["stage"] == "lift" and t >= memo["t_lift_end"]:
-            error = float(np.linalg.norm(view.foot_B(leg) - memo["p_work_B"]))
+            refs.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
+            progress.memo["lift"] = dataclasses.replace(lift, stage="lift", until=t + phase.duration)
+        elif lift.stage == "lift":
+            error = float(np.linalg.norm(view.foot_B(leg) - lift.p_work_B))
             if error < 0.01:
                 progress.records[-1].metrics["working_position_error_m"] = error
                 return SUCCEEDED
@@ -930,12 +964,13 @@ class LegToSupportRunner(PhaseRunner):
         above = ground + [0.0, 0.0, 0.05]
         X_BW = view.X_WB.inverse()
         _ask_ik(progress, view, view.X_WB, {leg: [X_BW @ above, X_BW @ ground]}, phase.name)
-        progress.memo.update(stage="plan", footprint_W=ground)
+        progress.memo["placing"] = FootPlacing("plan", footprint_W=ground)
 
     def step(self, phase, progress, view, env):
-        t, leg, memo, refs = view.time, phase.leg, progress.memo, progress.references
+        t, leg, refs = view.time, phase.leg, progress.references
         k = robot.LEG_NAMES.index(leg)
-        if memo["stage"] == "plan":
+        placing: FootPlacing = progress.memo["placing"]
+        if placing.stage == "plan":
             solutions = _ik_solutions(progress)
             if solutions is None:
                 return RUNNING
@@ -946,22 +981,28 @@ class LegToSupportRunner(PhaseRunner):
                 [phase.duration, 0.6 * phase.duration],
             )
             refs.legs[leg] = LegTrajectory(LEG_MODE_JOINTS, trajectory)
-            memo.update(stage="place", t_above=t + phase.duration, t_down=t + 1.6 * phase.duration)
+            progress.memo["placing"] = dataclasses.replace(
+                placing, stage="place", t_above=t + phase.duration, until=t + 1.6 * phase.duration + 0.3
+            )
             return RUNNING
-        # A touch counts only on the way down from above the footprint: before that, the foot
-        # sensor may still feel whatever the foot was pushing (an obstacle, a box).
-        touched = t >= memo["t_above"] and view.foot_force[k] > CONTACT_FORCE_THRESHOLD
-        if memo["stage"] == "place" and (touched or t >= memo["t_down"] + 0.3):
+        if placing.stage == "place":
+            # A touch counts only on the way down from above the footprint: before that, the foot
+            # sensor may still feel whatever the foot was pushing (an obstacle, a box).
+            touched = t >= placing.t_above and view.foot_force[k] > CONTACT_FORCE_THRESHOLD
+            if not (touched or t >= placing.until):
+                return RUNNING
             placed = view.foot_W(leg)
             progress.records[-1].metrics.update(
                 leg=leg,
                 placed_W=placed.tolist(),
-                placement_error_m=float(np.linalg.norm(placed[:2] - memo["footprint_W"][:2])),
+                placement_error_m=float(np.linalg.norm(placed[:2] - placing.footprint_W[:2])),
             )
             refs.legs.pop(leg, None)
             refs.contacts[k] = 1.0
-            memo.update(stage="load", t_loaded=t + CONTACT_RAMP_WAIT)
-        elif memo["stage"] == "load" and t >= memo["t_loaded"]:
+            progress.memo["placing"] = dataclasses.replace(placing, stage="load", until=t + CONTACT_RAMP_WAIT)
+        elif t < placing.until:
+            return RUNNING
+        elif placing.stage == "load":
             supports = _support_points_W(view, env, refs.contacts)
             p_now, _ = _body_sample(progress, t)
             goal = p_now if _on_prongs(refs) else _trunk_target_for_com(view, p_now, supports[:, :2].mean(axis=0))
@@ -972,8 +1013,8 @@ class LegToSupportRunner(PhaseRunner):
             if p_before is not None:
                 goal[2] = p_before[2]
             _move_body(progress, t, goal, R_before, duration)
-            memo.update(stage="centre", t_centred=t + duration)
-        elif memo["stage"] == "centre" and t >= memo["t_centred"]:
+            progress.memo["placing"] = dataclasses.replace(placing, stage="centre", until=t + duration)
+        elif placing.stage == "centre":
             return SUCCEEDED if view.foot_force[k] > CONTACT_FORCE_THRESHOLD else RUNNING
         return RUNNING
 

@@ -26,8 +26,8 @@ import numpy as np
 from pedi_drake import robot
 from pedi_drake.control.references import BODY_REFERENCE_SIZE, LEG_BLOCK, LEG_REFERENCE_SIZE
 from pedi_drake.exceptions import PediError
-from pedi_drake.jit import kernel
 from pedi_drake.mission.progress import LEG_MODE_FOOT, References
+from pedi_drake.runtime.jit import kernel
 from pedi_drake.trajectory import sample_rotation_into, sample_vector_into, smooth_start_kernel
 
 _LEG_HEADER = 8  # mode, kp, kd, calf flag, calf rotation (3), packed size

@@ -3,7 +3,7 @@ controller's `safety_polygon` layout.
 
 The Mission Manager sends it to the whole-body controller at every update (100 Hz), from the
 estimated trunk pose and the measured joints, inside the control loop's tick at real time, so it
-is one compiled call (`pedi_drake.jit`) rather than pydrake poses and small numpy steps, whose
+is one compiled call (`pedi_drake.runtime.jit`) rather than pydrake poses and small numpy steps, whose
 per-call overhead would dominate: the feet from the legs' kinematics,
 the prong tips from the trunk pose, the hull shrunk by the margin (`polygon.shrink_kernel`), the
 frame at the shrunk polygon's vertex centroid turned to the trunk's heading.
@@ -16,8 +16,8 @@ import numpy as np
 from pedi_drake.control.references import SAFETY_POLYGON_MAX_VERTICES, SAFETY_POLYGON_SIZE
 from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
 from pedi_drake.exceptions import PediError
-from pedi_drake.jit import kernel
 from pedi_drake.polygon import shrink_kernel
+from pedi_drake.runtime.jit import kernel
 from pedi_drake.vector3 import rotation_matrix_kernel
 
 _NO_TIPS = np.zeros((0, 3))

@@ -24,15 +24,15 @@ from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation.box_lift import box_corners_B, box_lift_trace
 from pedi_drake.evaluation.judge import judge_run, scene_graph_inspector, write_run
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_series
+from pedi_drake.reproduce.box_lift_plots import plot_box_lift
+from pedi_drake.reproduce.push_plots import plot_push_response
 from pedi_drake.reproduce.report import Comparison, Section
 from pedi_drake.resources import studies_dir
 from pedi_drake.run import simulate
 from pedi_drake.scenario import load_scenario
 from pedi_drake.suf.design import optimise_design, stance_for
-from pedi_drake.suf.go1_configuration import stance_problem
 from pedi_drake.suf.methods import METHODS, smallest_unrejectable_force
-from pedi_drake.viz.box_lift_plots import plot_box_lift
-from pedi_drake.viz.push_plots import plot_push_response
+from pedi_drake.suf.stances import stance_problem
 from pedi_drake.viz.suf_plots import plot_accuracy, plot_rfp, plot_suf_vs_height
 
 PUBLISHED_PRONG_BENEFIT = 35.0  # [%] the most prongs add at practical heights (ANYmal)

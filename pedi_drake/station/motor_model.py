@@ -28,8 +28,8 @@ from pydrake.systems.primitives import (
 from pedi_drake import robot
 from pedi_drake.exceptions import PediError
 from pedi_drake.go1_command import COMMAND_SIZE, pd_torque
-from pedi_drake.jit import kernel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
+from pedi_drake.runtime.jit import kernel
 from pedi_drake.station.model_error import FRICTION_VELOCITY_BAND, ModelErrorConfig
 
 # Command entries are clipped to this magnitude before the motor law, so that no product or sum of

@@ -25,8 +25,8 @@ from pydrake.multibody.plant import ContactResults, MultibodyPlant
 from pydrake.systems.framework import BasicVector, Context
 
 from pedi_drake import robot
-from pedi_drake.jit import kernel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
+from pedi_drake.runtime.jit import kernel
 from pedi_drake.scenario import SensorNoiseConfig
 from pedi_drake.station.scene_contact import ROBOT_CONTACT_SOURCES
 from pedi_drake.vector3 import axis_angle_matrix, rotation_matrix_kernel

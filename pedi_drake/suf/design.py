@@ -16,8 +16,8 @@ import numpy as np
 from scipy.optimize import minimize
 
 from pedi_drake.exceptions import SufError
-from pedi_drake.suf.go1_configuration import Go1Stance, stance_problem, with_prongs_at_height
 from pedi_drake.suf.methods import smallest_unrejectable_force
+from pedi_drake.suf.stances import Go1Stance, stance_problem, with_prongs_at_height
 
 FEET_X_RANGE = (0.12, 0.28)  # [m]
 FEET_Y_RANGE = (0.08, 0.20)  # [m]

@@ -21,7 +21,7 @@ slivers that point inwards: the hull may be non-convex by at most `eps` at an ed
 the projection's certification tolerance. Each face records its plane, so coplanar triangles of
 one facet of the polytope share (a, b) to rounding.
 
-All functions are `pedi_drake.jit.kernel`s (callable from compiled code); an insertion allocates
+All functions are `pedi_drake.runtime.jit.kernel`s (callable from compiled code); an insertion allocates
 only its small scratch (the seen faces and the horizon).
 """
 
@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 
 # Returns of `insert_point`.
 INSERTED = 1

@@ -49,8 +49,8 @@ import numpy as np
 from pedi_drake import robot
 from pedi_drake.control.go1_dynamics import Go1Dynamics, go1_dynamics
 from pedi_drake.friction import friction_pyramid_rows
-from pedi_drake.jit import kernel
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.runtime.jit import kernel
 from pedi_drake.suf import hull3d
 from pedi_drake.suf import warm_projection as wp
 from pedi_drake.suf.ray_program import RAY_CAP

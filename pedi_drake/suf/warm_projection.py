@@ -31,7 +31,7 @@ path where the robot moves a few millimetres per tick:
    depends only on the problem and the budgets, so a caller that spreads a projection over its
    control ticks stays deterministic.
 
-Everything from the rows on is one `pedi_drake.jit.kernel` call (nopython, nogil) per call of
+Everything from the rows on is one `pedi_drake.runtime.jit.kernel` call (nopython, nogil) per call of
 `project_within`, so a caller in a control loop pays no Python per LP. `suf_exact_warm` is the Python entry point on a
 RejectableForceProblem; pedi_drake.suf.live builds the rows from the robot's state in compiled
 code too.
@@ -45,7 +45,7 @@ import numpy as np
 
 from pedi_drake.control import dense_qp
 from pedi_drake.exceptions import SufError
-from pedi_drake.jit import kernel
+from pedi_drake.runtime.jit import kernel
 from pedi_drake.suf import hull3d
 from pedi_drake.suf.methods import Polytope, SufResult
 from pedi_drake.suf.problem import RejectableForceProblem

@@ -1,10 +1,10 @@
 """Compiles the kernels of the package's diagrams into numba's disk cache, once, in this process.
 
-    python -m pedi_drake.compile_kernels
+    python -m pedi_drake.apps.compile_kernels
 
 Each system compiles its kernels in its constructor, so building the diagrams a run can have
 (the simulation with either whole-body controller, and the controller side of a hardware run)
-fills the cache for this version of the package (see `pedi_drake.jit`), which takes minutes of
+fills the cache for this version of the package (see `pedi_drake.runtime.jit`), which takes minutes of
 CPU. Processes started afterwards load the kernels from the cache instead of compiling them.
 
 Run it before starting several processes on an empty cache: test workers, or the workers of a
@@ -19,7 +19,7 @@ which gives every controller's tick a second signature, and the two whole-body t
 largest compiles of all. The workers start on those (`schedule`), then take the next variant as
 each finishes.
 
-    python -m pedi_drake.compile_kernels --profile
+    python -m pedi_drake.apps.compile_kernels --profile
 
 also prints what the time went to: every kernel compiled at the top level (called from Python,
 not from another kernel), with the signatures it was compiled for and the seconds they took,
@@ -39,8 +39,8 @@ import sys
 import time
 from collections.abc import Callable
 
-from pedi_drake import jit
 from pedi_drake.go1_driver.pacing import spin_until
+from pedi_drake.runtime import jit
 from pedi_drake.scenario import load_scenario
 
 _log = logging.getLogger(__name__)

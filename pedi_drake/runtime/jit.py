@@ -44,7 +44,7 @@ except ImportError:  # pragma: no cover - numba is a dependency; this keeps a br
 ENABLED = numba is not None and os.environ.get("PEDI_DRAKE_JIT", "1") != "0"
 
 
-_PACKAGE = Path(__file__).resolve().parent
+_PACKAGE = Path(__file__).resolve().parents[1]
 
 
 def _module_file(name: str) -> Path | None:
