@@ -41,7 +41,8 @@ from pedi_drake.run_checks import check_duration, check_out_dir, check_scene_geo
 from pedi_drake.scenario import MISSION_CONTROLLERS, default_scenario_file, load_scenario  # noqa: E402
 
 ERROR_FILE = "error.txt"
-# The mission of `--teleop` when neither --mission nor the scenario names one.
+# The mission of `--teleop` unless --mission names another: the default scenario's mission is
+# autonomous and would never hand the foot to the panel.
 TELEOP_MISSION = "operator/teleop_foot"
 
 
@@ -52,7 +53,7 @@ def _prepare(args):
     )
     if args.teleop:
         scenario.operator.source = "meshcat"
-        if args.mission is None and not scenario.mission:
+        if args.mission is None:
             args.mission = TELEOP_MISSION
     mission = None
     if args.mission is not None:
@@ -89,7 +90,8 @@ def _prepare(args):
     return scenario, name, out_dir
 
 
-def main() -> int:
+def command_line() -> argparse.ArgumentParser:
+    """run_sim.py's options."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument(
         "--mission",
@@ -113,8 +115,8 @@ def main() -> int:
         "--teleop",
         action="store_true",
         help="Drive the foot from a panel in the Meshcat page (operator source meshcat: foot velocity sliders, "
-        f"teleop / autonomous / E-stop buttons; implies --meshcat; the mission {TELEOP_MISSION} unless one is "
-        "given). The simulation then runs in real time.",
+        f"teleop / autonomous / E-stop buttons; implies --meshcat; the mission {TELEOP_MISSION} unless --mission "
+        "names another). The simulation then runs in real time.",
     )
     parser.add_argument(
         "--hardware",
@@ -126,7 +128,11 @@ def main() -> int:
         default=None,
         help="Also write the run's diagram (its systems and their wiring) to this Graphviz file.",
     )
-    args = parser.parse_args()
+    return parser
+
+
+def main() -> int:
+    args = command_line().parse_args()
     try:
         scenario, name, out_dir = _prepare(args)
     except ConfigError as error:

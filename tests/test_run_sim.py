@@ -1,5 +1,6 @@
 """run_sim.py from the command line: exit codes and the files it writes."""
 
+import importlib.util
 import json
 import re
 import subprocess
@@ -62,3 +63,20 @@ def test_run_sim_graphviz_draws_the_run_wired_station_to_controller(tmp_path):
         ("controller", "station"),
     ):
         assert edge in edges, (edge, sorted(edges))
+
+
+def _prepared(*argv: str):
+    spec = importlib.util.spec_from_file_location("run_sim_script", REPO / "run_sim.py")
+    script = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(script)
+    return script, script._prepare(script.command_line().parse_args(list(argv)))
+
+
+def test_teleop_runs_the_teleoperated_mission_as_the_readme_starts_it():
+    script, (scenario, _, _) = _prepared("--teleop")
+    assert scenario.mission == script.TELEOP_MISSION and scenario.operator.source == "meshcat"
+
+
+def test_teleop_with_a_mission_runs_that_mission_under_the_panel():
+    _, (scenario, _, _) = _prepared("--teleop", "--mission", "give_paw")
+    assert scenario.mission == "give_paw" and scenario.operator.source == "meshcat"
