@@ -364,11 +364,16 @@ def write_run(record, result: dict, out_dir: Path) -> None:
         leg = mission_results.pedipulation_leg(logs["mission.leg_reference"].data)
         if leg is not None:
             velocity = logs["go1.velocity_measured"].data
+            plots.plot_leg_command(
+                command.times, command.data, position.data, velocity, leg, result["phases"], out_dir / "leg_command.png"
+            )
+            reference = logs["mission.leg_reference"]
+            n = min(reference.data.shape[1], position.data.shape[1], velocity.shape[1])
             plots.plot_leg_tracking(
-                command.times,
-                command.data,
-                position.data,
-                velocity,
+                reference.times[:n],
+                reference.data[:, :n],
+                position.data[:, :n],
+                velocity[:, :n],
                 leg,
                 result["phases"],
                 out_dir / "leg_tracking.png",

@@ -27,6 +27,7 @@ OWNED_FILES = (
     "joint_positions.png",
     "foot_forces.png",
     "leg_tracking.png",
+    "leg_command.png",
     "mission_errors.png",
     "live_suf.png",
     "sil.json",

@@ -6,6 +6,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from pedi_drake import robot
+from pedi_drake.control.references import LEG_BLOCK, LEG_MODE_JOINTS
 
 
 def plot_joint_tracking(t: np.ndarray, q_des: np.ndarray, q_meas: np.ndarray, path: Path, title: str = "") -> Path:
@@ -53,22 +54,16 @@ def _shade_phases(ax, phases: list[dict]) -> None:
             ax.axvspan(phase["t_start"], phase["t_end"], color="0.92", zorder=0)
 
 
-def plot_leg_tracking(t, command, position, velocity, leg: str, phases: list[dict], path: Path) -> Path:
-    """The pedipulation leg's joint positions and velocities, desired vs measured (paper 000, Figs. 3, 4).
-
-    `command` is the logged go1.command (60, N); `position`, `velocity` are (12, N).
-    """
-    k0 = 3 * robot.LEG_NAMES.index(leg)
+def _leg_joint_figure(t, desired, measured, leg: str, phases: list[dict], what: str, path: Path) -> Path:
+    """The leg's three joints, positions and velocities: `desired` (6, N) against `measured` (6, N),
+    positions first [rad, rad/s]; NaN in `desired` where there is none."""
     fig, axes = plt.subplots(3, 2, figsize=(12, 8), sharex=True)
     for j, kind in enumerate(robot.JOINT_KINDS):
-        k = k0 + j
-        for col, (desired, measured, unit) in enumerate(
-            ((command[k], position[k], "rad"), (command[12 + k], velocity[k], "rad/s"))
-        ):
+        for col, unit in enumerate(("rad", "rad/s")):
             ax = axes[j, col]
             _shade_phases(ax, phases)
-            ax.plot(t, desired, color="tab:blue", label="desired")
-            ax.plot(t, measured[: len(t)], color="tab:red", linewidth=0.8, label="measured")
+            ax.plot(t, desired[3 * col + j], color="tab:blue", label=what)
+            ax.plot(t, measured[3 * col + j], color="tab:red", linewidth=0.8, label="measured")
             ax.set_ylabel(f"{leg}_{kind} [{unit}]")
             ax.grid(alpha=0.3)
     axes[0, 0].set_title("joint positions")
@@ -80,6 +75,33 @@ def plot_leg_tracking(t, command, position, velocity, leg: str, phases: list[dic
     fig.savefig(path, dpi=90)
     plt.close(fig)
     return Path(path)
+
+
+def plot_leg_tracking(t, leg_reference, position, velocity, leg: str, phases: list[dict], path: Path) -> Path:
+    """The pedipulation leg's joints, the mission's joint reference against the measurement
+    (paper 000, Figs. 3 and 4): the tracking error the controller leaves.
+
+    `leg_reference` is the logged mission.leg_reference (48, N); `position`, `velocity` are the
+    measured joints (12, N), sampled at the same times `t`. The reference is drawn where the
+    mission drives the leg's joints (LEG_MODE_JOINTS); while it drives the foot in task space
+    there is no joint reference, and the gap is left blank.
+    """
+    i = robot.LEG_NAMES.index(leg)
+    block = leg_reference[i * LEG_BLOCK : (i + 1) * LEG_BLOCK]
+    joints = np.round(block[0]) == LEG_MODE_JOINTS
+    desired = np.where(joints, block[1:7], np.nan)
+    measured = np.vstack([position[3 * i : 3 * i + 3], velocity[3 * i : 3 * i + 3]])
+    return _leg_joint_figure(t, desired, measured, leg, phases, "mission reference", path)
+
+
+def plot_leg_command(t, command, position, velocity, leg: str, phases: list[dict], path: Path) -> Path:
+    """The pedipulation leg's go1.command targets (q_des, qd_des) against the measurement. The
+    whole-body controllers keep q_des within a few hundredths of a radian of the measured joints
+    (their torque does the tracking), so this plot shows the command, not the tracking error."""
+    i = robot.LEG_NAMES.index(leg)
+    desired = np.vstack([command[3 * i : 3 * i + 3], command[12 + 3 * i : 12 + 3 * i + 3]])
+    measured = np.vstack([position[3 * i : 3 * i + 3], velocity[3 * i : 3 * i + 3]])
+    return _leg_joint_figure(t, desired, measured, leg, phases, "go1.command", path)
 
 
 def plot_mission_errors(t, states, body_reference, status, plant, result: dict, path: Path) -> Path:
