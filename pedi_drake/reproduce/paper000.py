@@ -2,7 +2,8 @@
 
 Published: 180 of 200 targets reached at 1 cm, 4 mm mean error, 1.76 mean iterations (FABRIK
 with the compensation phase, targets in a 30 cm cube 20 cm below and 10 cm in front of the FR
-shoulder); the real robot's missions reached their targets within 0.031 to 0.075 m.
+shoulder); the real robot's missions reached their targets within 0.031 to 0.075 m, each
+mission's error given on its own (Section IV-B).
 """
 
 import statistics
@@ -13,9 +14,19 @@ from pedi_drake.reproduce.report import Comparison, Section
 from pedi_drake.run import run
 from pedi_drake.scenario import load_scenario
 
-# The real robot's mission errors [m] (paper 000 Section IV-B).
-PUBLISHED_MISSION_ERRORS = (0.031, 0.075)
-MISSIONS = ("hit_target_front", "hit_target_behind", "hit_target_side", "open_door", "give_paw")
+# The real robot's foot error of each mission [m] (paper 000 Section IV-B: the office door, the
+# cardboard cat in front, behind and on the robot's back, the human, and the mean over the
+# obstacles' targets); None: a mission of ours the paper does not report (the cat beside it).
+PUBLISHED_MISSION_ERRORS = {
+    "hit_target_front": (0.032, "largest"),
+    "hit_target_behind": (0.031, "largest"),
+    "hit_target_side": (None, "largest"),
+    "remove_object_from_back": (0.075, "largest"),
+    "open_door": (0.059, "largest"),
+    "give_paw": (0.062, "largest"),
+    "obstacle_sensing": (0.041, "mean"),
+}
+MISSIONS = tuple(PUBLISHED_MISSION_ERRORS)
 
 
 def reproduce(folder: Path, *, quick: bool = False) -> Section:
@@ -54,12 +65,14 @@ def reproduce(folder: Path, *, quick: bool = False) -> Section:
         result = run(scenario=scenario, name=mission, out_dir=folder / mission, quiet=True, replay=False)
         mission_errors = [r["error"] for r in result["foot_errors_m"]]
         errors += mission_errors
-        worst = max(mission_errors) if mission_errors else float("nan")
+        published, statistic = PUBLISHED_MISSION_ERRORS[mission]
+        ours = (max if statistic == "largest" else statistics.mean)(mission_errors) if mission_errors else float("nan")
+        outcome = "succeeded" if result["success"] else "FAILED: " + result["reason"]
         section.comparisons.append(
             Comparison(
-                f"mission {mission}: largest foot error",
-                f"{1000 * PUBLISHED_MISSION_ERRORS[0]:.0f}-{1000 * PUBLISHED_MISSION_ERRORS[1]:.0f} mm (real robot)",
-                f"{1000 * worst:.1f} mm ({'succeeded' if result['success'] else 'FAILED: ' + result['reason']})",
+                f"mission {mission}: {statistic} foot error",
+                "not reported" if published is None else f"{1000 * published:.0f} mm (real robot)",
+                f"{1000 * ours:.1f} mm ({outcome})",
                 "ours: simulation judged by ground truth; the paper's: the real Go1",
             )
         )
