@@ -73,6 +73,9 @@ class LegIkResult:
     success: bool  # error <= tol
     error: float  # final foot-centre-to-target distance [m]; inf for a non-finite target
     iterations: int  # full FABRIK iterations (forward, backward, compensation) performed
+    # Compensation sweeps (Algorithm 1) over all iterations: one per iteration in the paper's
+    # algorithm, here repeated within an iteration until they settle (at least one each).
+    compensation_sweeps: int = 0
 
 
 def extended_leg_q(leg: str) -> np.ndarray:
@@ -168,7 +171,7 @@ def _hip_from_plane(ch: _Chain, q0: float, tv: complex, branch: int) -> float:
 
 
 def _iterate(ch: _Chain, tx: float, ty: float, tz: float, q0: float, q1: float, q2: float, branch: int):
-    """One FABRIK iteration; returns the new (q0, q1, q2) [rad]."""
+    """One FABRIK iteration; returns the new (q0, q1, q2) [rad] and the compensation sweeps it made."""
     lat, w_HT, w_TC = ch.lat, ch.w_HT, ch.w_TC
     lo, hi = ch.lower, ch.upper
     tv = complex(ty, tz)
@@ -198,11 +201,13 @@ def _iterate(ch: _Chain, tx: float, ty: float, tz: float, q0: float, q1: float, 
     q2 = _saturate(q2, cmath.phase(w_t - w_C) - ch.phase_CF - q1, lo[2], hi[2])
 
     # 3. Compensation phase (Algorithm 1), from the foot towards the base.
+    sweeps = 0
     for _ in range(_COMPENSATION_SWEEPS):
         q0, q1, q2, rotated = _compensate(ch, w_t, tv, q0, q1, q2)
+        sweeps += 1
         if not rotated:
             break
-    return q0, q1, q2
+    return q0, q1, q2, sweeps
 
 
 def _compensate(ch: _Chain, w_t: complex, tv: complex, q0: float, q1: float, q2: float):
@@ -288,10 +293,11 @@ def solve_leg_ik(
     best = (error, q0, q1, q2)
     branch, switches, just_switched = 0, 0, False
     restarted = (q0, q1, q2) == ch.restart_q  # a restart from the start itself would repeat it
-    iterations = 0
+    iterations = sweeps = 0
     while error > tol and iterations < max_iterations:
         iterations += 1
-        q0, q1, q2 = _iterate(ch, tx, ty, tz, q0, q1, q2, branch)
+        q0, q1, q2, made = _iterate(ch, tx, ty, tz, q0, q1, q2, branch)
+        sweeps += made
         previous = error
         error = _foot_error(ch, tx, ty, tz, q0, q1, q2)
         if error < best[0]:
@@ -319,4 +325,6 @@ def solve_leg_ik(
             switches += 1
             just_switched = True
     error, q0, q1, q2 = best
-    return LegIkResult(q=np.array([q0, q1, q2]), success=error <= tol, error=error, iterations=iterations)
+    return LegIkResult(
+        q=np.array([q0, q1, q2]), success=error <= tol, error=error, iterations=iterations, compensation_sweeps=sweeps
+    )
