@@ -329,6 +329,7 @@ def MakePedipulationDiagram(
             builder.Connect(body_reference, compensator.body_reference_port)
             builder.Connect(base_state, compensator.base_state_port)
             builder.Connect(manager.GetOutputPort("contact_set"), compensator.contact_set_port)
+            builder.Connect(station.GetOutputPort("go1.foot_contact"), compensator.foot_contact_port)
             builder.Connect(compensator.GetOutputPort("body_reference"), controller.GetInputPort("body_reference"))
             extra_logs["trunk_load.learnt"] = compensator.GetOutputPort("learnt")
             builder.Connect(leg_reference, controller.GetInputPort("leg_reference"))

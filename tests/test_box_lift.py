@@ -41,9 +41,9 @@ def _mission_with(tmp_path, old: str, new: str):
 @pytest.mark.parametrize(
     "old,new,field",
     [
-        ("foot_gains: {kp: 100.0, kd: 20.0}", "foot_gains: {kp: 0.0, kd: 20.0}", "phases[6].foot_gains.kp"),
-        ("foot_gains: {kp: 100.0, kd: 20.0}", "foot_gains: {kp: 100.0, kd: -1.0}", "phases[6].foot_gains.kd"),
-        ("foot_gains: {kp: 100.0, kd: 20.0}", "foot_gains: {kp: 100.0}", "phases[6].foot_gains.kd"),
+        ("foot_gains: {kp: 250.0, kd: 30.0}", "foot_gains: {kp: 0.0, kd: 20.0}", "phases[6].foot_gains.kp"),
+        ("foot_gains: {kp: 250.0, kd: 30.0}", "foot_gains: {kp: 100.0, kd: -1.0}", "phases[6].foot_gains.kd"),
+        ("foot_gains: {kp: 250.0, kd: 30.0}", "foot_gains: {kp: 100.0}", "phases[6].foot_gains.kd"),
     ],
 )
 def test_a_non_positive_foot_gain_is_rejected_naming_file_and_field(tmp_path, old, new, field):
@@ -54,7 +54,7 @@ def test_a_non_positive_foot_gain_is_rejected_naming_file_and_field(tmp_path, ol
 
 
 def test_a_bad_foot_gain_exits_2_from_run_sim(tmp_path):
-    path = _mission_with(tmp_path, "foot_gains: {kp: 100.0, kd: 20.0}", "foot_gains: {kp: -5.0, kd: 20.0}")
+    path = _mission_with(tmp_path, "foot_gains: {kp: 250.0, kd: 30.0}", "foot_gains: {kp: -5.0, kd: 20.0}")
     run_sim = REPO / "run_sim.py"
     done = subprocess.run(
         [sys.executable, str(run_sim), "--mission", str(path), "--out", str(tmp_path / "out")],

@@ -8,7 +8,7 @@ import pytest
 
 from pedi_drake.runtime import jit
 
-PACKAGE = Path(jit.__file__).resolve().parent
+PACKAGE = Path(jit.__file__).resolve().parents[1]
 KERNEL_MODULES = sorted(path for path in PACKAGE.rglob("*.py") if "@kernel" in path.read_text())
 
 

@@ -10,6 +10,7 @@ from pedi_drake.control.trunk_load_compensation import (
     ANGULAR,
     CARRIED_HEIGHT,
     LINEAR,
+    TOUCH_FORCE,
     TrunkLoadCompensationConfig,
     TrunkLoadCompensator,
 )
@@ -28,12 +29,13 @@ def _compensator(config: TrunkLoadCompensationConfig | None = None, num_contacts
     return system, context
 
 
-def _fix(system, context, p_ref, p, R=None, contact_set=None):
+def _fix(system, context, p_ref, p, R=None, contact_set=None, foot_contact=(30.0, 30.0, 30.0, 30.0)):
     R = R or RotationMatrix()
     system.body_reference_port.FixValue(context, references.body_reference_vector(np.asarray(p_ref), RotationMatrix()))
     system.base_state_port.FixValue(context, np.concatenate([R.ToQuaternion().wxyz(), p, np.zeros(6)]))
     nc = system.contact_set_port.size()
     system.contact_set_port.FixValue(context, np.ones(nc) if contact_set is None else np.asarray(contact_set, float))
+    system.foot_contact_port.FixValue(context, np.asarray(foot_contact, float))
 
 
 def _tick(system, context, n: int = 1) -> np.ndarray:
@@ -102,10 +104,31 @@ def test_on_loaded_prongs_it_learns_the_attitude_but_not_the_position():
         STANDING,
         R=RotationMatrix.MakeYRotation(0.02),
         contact_set=[1, 1, 0, 0, 1, 0],
+        foot_contact=[30.0, 30.0, 0.0, 0.0],
     )
     learnt = _tick(system, context, 10)
     np.testing.assert_array_equal(learnt[LINEAR], 0.0)
     assert learnt[ANGULAR][1] < 0.0
+
+
+def test_a_lifted_foot_pushing_on_something_stops_the_learning():
+    system, context = _compensator()
+    sagging = STANDING - [0.0, 0.0, 0.02]
+    # FR lifted and in the air: its sensor reads noise; the load is learnt.
+    _fix(system, context, STANDING, sagging, contact_set=[0, 1, 1, 1, 0, 0], foot_contact=[1.0, 40, 40, 40])
+    learnt = _tick(system, context, 10)
+    assert learnt[LINEAR][2] > 0.0
+    # FR pushing on a wall: the trunk's error holds the push's reaction, not a load.
+    _fix(
+        system,
+        context,
+        STANDING,
+        sagging,
+        R=RotationMatrix.MakeYRotation(0.02),
+        contact_set=[0, 1, 1, 1, 0, 0],
+        foot_contact=[TOUCH_FORCE + 1.0, 40, 40, 40],
+    )
+    np.testing.assert_array_equal(_tick(system, context, 10), learnt)
 
 
 def test_disabled_it_passes_the_reference_through():
