@@ -38,6 +38,7 @@ import numpy as np
 from pedi_drake.benchmarks.demos import demo_scenario, simulate_demo
 from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS
+from pedi_drake.benchmarks.paper002_plots import plot_foot_hold, plot_pivot_rotations
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import paper002 as evaluation
 from pedi_drake.evaluation.controller_metrics import controller_metrics
@@ -46,7 +47,6 @@ from pedi_drake.run import run
 from pedi_drake.run_logs import read_run_logs
 from pedi_drake.scenario import Scenario, load_scenario
 from pedi_drake.station_interface import MakeStation
-from pedi_drake.viz.paper002_plots import plot_foot_hold, plot_pivot_rotations
 
 CONTROLLERS = ("whole_body", "projected_impedance")
 MISSIONS = (

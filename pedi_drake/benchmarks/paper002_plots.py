@@ -2,16 +2,14 @@
 `pedi_drake.evaluation.paper002`."""
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import matplotlib.pyplot as plt
 import numpy as np
 
-if TYPE_CHECKING:  # the plots read the evaluation's fields; the evaluation never imports plots
-    from pedi_drake.evaluation.paper002 import FootHoldEvaluation, PivotEvaluation
+from pedi_drake.evaluation.paper002 import FootHoldEvaluation, PivotEvaluation
 
 
-def plot_foot_hold(evaluation: "FootHoldEvaluation", out_dir: Path, title: str = "") -> list[Path]:
+def plot_foot_hold(evaluation: FootHoldEvaluation, out_dir: Path, title: str = "") -> list[Path]:
     """Figs. 3 to 5 of paper 002: positions, foot position error, foot orientation error (PNG)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     e = evaluation
@@ -45,7 +43,7 @@ def plot_foot_hold(evaluation: "FootHoldEvaluation", out_dir: Path, title: str =
     return paths
 
 
-def plot_pivot_rotations(evaluation: "PivotEvaluation", out_dir: Path, title: str = "") -> Path:
+def plot_pivot_rotations(evaluation: PivotEvaluation, out_dir: Path, title: str = "") -> Path:
     """Fig. 7 of paper 002 as curves: the trunk's rotation about the prong (roll, pitch, yaw from
     its start attitude) and the held front feet's displacement, against time (PNG)."""
     out_dir.mkdir(parents=True, exist_ok=True)
