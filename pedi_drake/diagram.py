@@ -322,18 +322,24 @@ def MakePedipulationDiagram(
             )
             builder.Connect(manager.GetOutputPort("references"), split.get_input_port())
             body_reference, leg_reference = split.get_output_port(0), split.get_output_port(1)
+            builder.Connect(body_reference, controller.GetInputPort("body_reference"))
             if scenario.trunk_load_compensation.enabled:
                 compensator = builder.AddNamedSystem(
                     "trunk_load",
-                    TrunkLoadCompensator(scenario.trunk_load_compensation, system.config.period, system.num_contacts),
+                    TrunkLoadCompensator(
+                        scenario.trunk_load_compensation,
+                        system.config.period,
+                        system.num_contacts,
+                        system.model.total_mass,
+                        system.model.standing_rotational_inertia(),
+                    ),
                 )
                 builder.Connect(body_reference, compensator.body_reference_port)
+                builder.Connect(leg_reference, compensator.leg_reference_port)
                 builder.Connect(base_state, compensator.base_state_port)
                 builder.Connect(manager.GetOutputPort("contact_set"), compensator.contact_set_port)
-                builder.Connect(compensator.GetOutputPort("body_reference"), controller.GetInputPort("body_reference"))
+                builder.Connect(compensator.wrench_port, controller.GetInputPort("trunk_external_wrench"))
                 extra_logs["trunk_load.learnt"] = compensator.GetOutputPort("learnt")
-            else:
-                builder.Connect(body_reference, controller.GetInputPort("body_reference"))
             builder.Connect(leg_reference, controller.GetInputPort("leg_reference"))
             for name in ("contact_set", "safety_polygon", "friction"):
                 builder.Connect(manager.GetOutputPort(name), controller.GetInputPort(name))

@@ -61,6 +61,18 @@ def test_a_touch_is_confirmed_by_the_force_it_feels(tmp_path):
     assert abs(row["felt_from_target_m"]) < 0.006, row
 
 
+def test_joint_friction_is_not_felt_as_a_touch(tmp_path):
+    # Coulomb friction in every joint resists the leg along the guarded line: about 3 N against
+    # the approach from the start of the drive, which felt like the cat 4-5 cm before it. The
+    # touch must come at the cat, with force on it by the plant's truth.
+    result = _run_mission(tmp_path, TOUCH_MISSION.format(x=PANEL_X), "{model_error: {joint_friction: 0.2}}")
+    row = _touch_row(result)
+    assert row["confirmed"] and row["bias_in_motion"], row
+    assert abs(row["felt_from_target_m"]) < 0.008, row
+    true_force = read_run_logs(tmp_path / "out" / "logs.npz")["sim.foot_contact_forces"].data[0:3]
+    assert np.linalg.norm(true_force, axis=0).max() >= 1.0
+
+
 def test_a_target_moved_away_after_planning_fails_with_no_contact_felt(tmp_path):
     result = _run_mission(tmp_path, TOUCH_MISSION.format(x=PANEL_X + 0.03))
     assert not result["success"]

@@ -117,7 +117,7 @@ SHADOW_RUNS = {
     # IV-B: the trunk on one prong, both front feet lifted and held, the first rotation.
     "iv_b": (str(missions_dir() / "quick" / "pivot_rotations_once.yaml"), "robot: {initial_pose: standing}", 12.0),
     # obstacle_sensing: stand-up, FR lifted, both presses (the impedance estimate stops them).
-    "obstacle_sensing": ("obstacle_sensing", "force_estimate: impedance", 12.0),
+    "obstacle_sensing": ("obstacle_sensing", "force_estimate: impedance", 13.0),
 }
 
 
@@ -414,6 +414,7 @@ def random_tick_inputs(controller, rng) -> list:
         references.leg_reference_vector(legs),
         np.zeros(references.SAFETY_POLYGON_SIZE),
         np.array([0.6]),
+        rng.normal(0, [0.5, 0.5, 0.5, 5.0, 5.0, 20.0]),  # a load on the trunk [N m, N]
         last_command,
         np.concatenate([q, qd]),
         last_ramp,

@@ -41,6 +41,9 @@ TOUCH_FORCE = 1.0
 IMPACT = 0.02
 
 
+# The balance bound alone, on a controller whose model is the plant: the trunk's load compensation
+# would learn the estimator's small biases (about 0.2 m/s^2) and move the stance's share of the
+# push by a fraction of a percent, which the strict floor below is not about.
 @pytest.fixture(scope="module")
 def wall_run():
     lcm = DrakeLcm("memq://")
@@ -49,7 +52,7 @@ def wall_run():
     scenario = load_scenario(
         scenario_text=(
             f"{{mission: {MISSION}, simulation_duration: {END}, robot: {{initial_pose: standing}}, "
-            "operator: {source: lcm}, controller: whole_body}"
+            "operator: {source: lcm}, controller: whole_body, trunk_load_compensation: {enabled: false}}"
         )
     )
     built = MakePedipulationDiagram(scenario, operator_lcm=lcm)

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from pydrake.math import RotationMatrix
 
+from pedi_drake import robot
 from pedi_drake.control import references
 from pedi_drake.control.trunk_load_compensation import (
     ANGULAR,
@@ -22,18 +23,31 @@ PERIOD = 0.002  # [s]
 STANDING = np.array([0.0, 0.0, 0.28])  # [m]
 
 
+MASS = 13.1  # [kg]
+INERTIA = np.diag([0.13, 0.40, 0.43])  # [kg m^2]
+
+
 def _compensator(config: TrunkLoadCompensationConfig | None = None, num_contacts: int = 6):
-    system = TrunkLoadCompensator(config or TrunkLoadCompensationConfig(enabled=True), PERIOD, num_contacts)
+    system = TrunkLoadCompensator(
+        config or TrunkLoadCompensationConfig(enabled=True), PERIOD, num_contacts, MASS, INERTIA
+    )
     context = system.CreateDefaultContext()
     return system, context
 
 
-def _fix(system, context, p_ref, p, R=None, contact_set=None):
+def _fix(system, context, p_ref, p, R=None, contact_set=None, lifted_mode=references.LEG_MODE_JOINTS):
     R = R or RotationMatrix()
+    nc = system.contact_set_port.size()
+    contact_set = np.ones(nc) if contact_set is None else np.asarray(contact_set, float)
+    lifted = {
+        leg: (lifted_mode, np.zeros(3), np.zeros(3), np.zeros(3))
+        for k, leg in enumerate(robot.LEG_NAMES)
+        if contact_set[k] < 0.5
+    }
+    system.leg_reference_port.FixValue(context, references.leg_reference_vector(lifted))
     system.body_reference_port.FixValue(context, references.body_reference_vector(np.asarray(p_ref), RotationMatrix()))
     system.base_state_port.FixValue(context, np.concatenate([R.ToQuaternion().wxyz(), p, np.zeros(6)]))
-    nc = system.contact_set_port.size()
-    system.contact_set_port.FixValue(context, np.ones(nc) if contact_set is None else np.asarray(contact_set, float))
+    system.contact_set_port.FixValue(context, contact_set)
 
 
 def _tick(system, context, n: int = 1) -> np.ndarray:
@@ -52,11 +66,9 @@ def test_a_sagging_trunk_learns_the_missing_lift_at_the_integral_gain():
     expected = 10 * TrunkLoadCompensationConfig().position_gain * PERIOD * sag
     np.testing.assert_allclose(learnt[LINEAR], [0.0, 0.0, expected], atol=1e-12)
     np.testing.assert_allclose(learnt[ANGULAR], 0.0, atol=1e-12)
-    # ... and hands it to the controller as feed-forward, the rest of the reference unchanged.
-    out = system.GetOutputPort("body_reference").Eval(context)
-    reference = system.body_reference_port.Eval(context)
-    np.testing.assert_allclose(out[10:13] - reference[10:13], learnt[LINEAR])
-    np.testing.assert_array_equal(np.delete(out, np.r_[10:13, 16:19]), np.delete(reference, np.r_[10:13, 16:19]))
+    # ... and hands it to the controller as the load's weight: a downward force on the trunk.
+    wrench = system.wrench_port.Eval(context)
+    np.testing.assert_allclose(wrench, [0.0, 0.0, 0.0, 0.0, 0.0, -MASS * expected], atol=1e-12)
 
 
 def test_a_tilted_trunk_learns_the_missing_moment_about_the_tilt():
@@ -66,6 +78,9 @@ def test_a_tilted_trunk_learns_the_missing_moment_about_the_tilt():
     learnt = _tick(system, context, 5)
     assert learnt[ANGULAR][1] == pytest.approx(5 * TrunkLoadCompensationConfig().orientation_gain * PERIOD * 0.01)
     assert abs(learnt[ANGULAR][0]) < 1e-12 and abs(learnt[ANGULAR][2]) < 1e-12
+    # The moment that tilted it, through the model's inertia in the trunk's own attitude.
+    R = tilt.matrix()
+    np.testing.assert_allclose(system.wrench_port.Eval(context)[:3], -(R @ INERTIA @ R.T) @ learnt[ANGULAR], atol=1e-12)
 
 
 def test_what_it_learns_is_bounded_per_axis():
@@ -108,24 +123,31 @@ def test_on_loaded_prongs_it_learns_the_attitude_but_not_the_position():
     assert learnt[ANGULAR][1] < 0.0
 
 
-def test_with_a_foot_lifted_it_learns_nothing_and_keeps_what_it_knew():
+def test_on_three_feet_it_learns_while_the_lifted_leg_moves_freely():
     system, context = _compensator()
     sagging = STANDING - [0.0, 0.0, 0.02]
     _fix(system, context, STANDING, sagging, contact_set=[1, 1, 1, 1, 0, 0])
-    learnt = _tick(system, context, 10)
-    assert learnt[LINEAR][2] > 0.0
-    # FR lifted (pushing on a wall, or reaching for a target): held, whatever the trunk's error.
-    _fix(system, context, STANDING, sagging, R=RotationMatrix.MakeYRotation(0.02), contact_set=[0, 1, 1, 1, 0, 0])
-    np.testing.assert_array_equal(_tick(system, context, 10), learnt)
+    four = _tick(system, context, 10)
+    assert four[LINEAR][2] > 0.0
+    # FR lifted on a joint reference (a reach): the stance legs carry a different share, learnt.
+    _fix(system, context, STANDING, sagging, contact_set=[0, 1, 1, 1, 0, 0])
+    three = _tick(system, context, 10)
+    assert three[LINEAR][2] > four[LINEAR][2]
+    tilted = RotationMatrix.MakeYRotation(0.02)
+    # FR on a foot task (it may push on a wall): held, whatever the trunk's error.
+    for mode in (references.LEG_MODE_FOOT, references.LEG_MODE_FOOT_POSE):
+        _fix(system, context, STANDING, sagging, R=tilted, contact_set=[0, 1, 1, 1, 0, 0], lifted_mode=mode)
+        np.testing.assert_array_equal(_tick(system, context, 10), three)
+    # FR and FL lifted (on the prongs' tips and the hind feet): held.
+    _fix(system, context, STANDING, sagging, R=tilted, contact_set=[0, 0, 1, 1, 1, 1])
+    np.testing.assert_array_equal(_tick(system, context, 10), three)
 
 
-def test_disabled_it_passes_the_reference_through():
+def test_disabled_it_learns_no_load():
     system, context = _compensator(TrunkLoadCompensationConfig(enabled=False))
     _fix(system, context, STANDING, STANDING - [0.0, 0.0, 0.05], contact_set=[1, 1, 1, 1, 0, 0])
     np.testing.assert_array_equal(_tick(system, context, 10), 0.0)
-    np.testing.assert_array_equal(
-        system.GetOutputPort("body_reference").Eval(context), system.body_reference_port.Eval(context)
-    )
+    np.testing.assert_array_equal(system.wrench_port.Eval(context), 0.0)
 
 
 @pytest.mark.parametrize(

@@ -291,6 +291,21 @@ def _point_bias(V, A, r0, r1, r2):
 
 
 @kernel
+def add_trunk_external_wrench(h, J_trunk, wrench):
+    """Moves an external wrench on the trunk into the bias, in place: h -= J_trunk^T w.
+
+    The dynamics M vdot + h = S tau + J_c^T f + J_trunk^T w (w = [torque; force] on the trunk at
+    its origin, world [N m, N], as an unmodelled load) are then the snapshot's own. Only the
+    floating base's rows change: J_trunk has no joint columns, so no leg's torques do.
+    h (nv,) [N m, N]; J_trunk (6, nv) [angular; translational], world; wrench (6,)."""
+    for j in range(h.shape[0]):
+        total = 0.0
+        for k in range(6):
+            total += J_trunk[k, j] * wrench[k]
+        h[j] -= total
+
+
+@kernel
 def go1_dynamics(model_record, base_state, q_joints, v_joints, out_record):
     """Fills the record `out_record` (`output_dtype`) from the estimate and the measured joints.
 

@@ -51,6 +51,7 @@ from pedi_drake import robot
 from pedi_drake.control import projected_dynamics as pd
 from pedi_drake.control import projected_impedance_tick, references, tasks
 from pedi_drake.control.config import ProjectedImpedanceConfig
+from pedi_drake.control.go1_dynamics import add_trunk_external_wrench
 from pedi_drake.control.robot_model import ControllerModel, RobotSnapshot
 from pedi_drake.control.whole_body_controller import (
     STATUS_BAD_INPUT,
@@ -147,6 +148,7 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             "leg": np.zeros(references.LEG_REFERENCE_SIZE),
             "polygon": np.zeros(references.SAFETY_POLYGON_SIZE),
             "friction": np.array([config.friction]),
+            "trunk_wrench": np.zeros(6),
         }
 
         self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
@@ -157,6 +159,9 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
         self.contact_set_port = self.DeclareVectorInputPort("contact_set", nc)
         self.safety_polygon_port = self.DeclareVectorInputPort("safety_polygon", references.SAFETY_POLYGON_SIZE)
         self.friction_port = self.DeclareVectorInputPort("friction", 1)
+        # An external wrench on the trunk the model lacks, [torque; force] at the trunk origin,
+        # world [N m, N] (a carried load: pedi_drake.control.trunk_load_compensation); zero unconnected.
+        self.trunk_wrench_port = self.DeclareVectorInputPort("trunk_external_wrench", 6)
 
         self.command_state = self.DeclareDiscreteState(initial_command(config.failure_kd))
         self.reference_state = self.DeclareDiscreteState(24)  # q_ref (12), qd_ref (12)
@@ -180,6 +185,7 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             self.leg_reference_port,
             self.safety_polygon_port,
             self.friction_port,
+            self.trunk_wrench_port,
         )
         self._solve_time_entry = self.diag["solve_time"].start
         self._tick_time_entry = self.diag["tick_time"].start
@@ -356,6 +362,7 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             ports[1].Eval(context) if ports[1].HasValue(context) else defaults["leg"],
             ports[2].Eval(context) if ports[2].HasValue(context) else defaults["polygon"],
             ports[3].Eval(context) if ports[3].HasValue(context) else defaults["friction"],
+            ports[4].Eval(context) if ports[4].HasValue(context) else defaults["trunk_wrench"],
             *states,
             *outputs,
         )
@@ -396,13 +403,15 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
         leg_x = self._optional(self.leg_reference_port, context, np.zeros(references.LEG_REFERENCE_SIZE))
         polygon_x = self._optional(self.safety_polygon_port, context, np.zeros(references.SAFETY_POLYGON_SIZE))
         mu_x = self._optional(self.friction_port, context, np.array([c.friction]))
-        if not _all_finite(body_x, leg_x, polygon_x, mu_x) or mu_x[0] <= 0.0:
+        trunk_wrench = self._optional(self.trunk_wrench_port, context, np.zeros(6))
+        if not _all_finite(body_x, leg_x, polygon_x, mu_x, trunk_wrench) or mu_x[0] <= 0.0:
             self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
             return
         body = references.parse_body_reference(body_x)
         legs = references.parse_leg_reference(leg_x)
 
         s = self.model.update(base, q, qd)
+        add_trunk_external_wrench(s.h, s.J_trunk, trunk_wrench)
         held = (contact_set > 0.5) | (ramp > 0.0)
         held_idx = np.flatnonzero(held)
         rows = tasks.contact_rows(held)

@@ -28,7 +28,7 @@ from pedi_drake.control import references
 from pedi_drake.control.compiled_stack import (
     capture_point,
 )
-from pedi_drake.control.go1_dynamics import go1_dynamics
+from pedi_drake.control.go1_dynamics import add_trunk_external_wrench, go1_dynamics
 from pedi_drake.control.tasks import GRAVITY
 from pedi_drake.control.whole_body_tick import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
@@ -366,6 +366,7 @@ def projected_impedance_tick(
     leg_x: np.ndarray,
     polygon_x: np.ndarray,
     mu_x: np.ndarray,
+    trunk_wrench: np.ndarray,
     last_command: np.ndarray,
     last_reference: np.ndarray,
     last_ramp: np.ndarray,
@@ -418,7 +419,8 @@ def projected_impedance_tick(
     else:
         body[0:3] = new_hold[1:4]
         body[3:7] = new_hold[4:8]
-    if not (_all_finite(body) and _all_finite(leg_x) and _all_finite(polygon_x) and _all_finite(mu_x)):
+    inputs_finite = _all_finite(body) and _all_finite(leg_x) and _all_finite(polygon_x) and _all_finite(mu_x)
+    if not (inputs_finite and _all_finite(trunk_wrench)):
         return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
     if mu_x[0] <= 0.0:
         return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
@@ -427,6 +429,7 @@ def projected_impedance_tick(
     ramp[:] = new_ramp
     hold[:] = new_hold
     go1_dynamics(dynamics_model, base, q, qd, snapshot)
+    add_trunk_external_wrench(s.h, s.J_trunk, trunk_wrench)
     s.Jdot_v_com[:] = 0.0  # the Python path's ControllerModel(com_bias=False)
     if not (_all_finite(s.M.ravel()) and _all_finite(s.h) and _all_finite(s.J_contacts.ravel())):
         return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)

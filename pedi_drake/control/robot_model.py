@@ -80,6 +80,16 @@ class ControllerModel:
     def num_contacts(self) -> int:
         return len(self.contact_frames)
 
+    def standing_rotational_inertia(self) -> np.ndarray:
+        """(3, 3) the whole model's rotational inertia about the trunk origin, trunk frame, legs at
+        `robot.STANDING_Q` [kg m^2]: what an angular acceleration of the standing robot costs."""
+        context = self.plant.CreateDefaultContext()
+        q = self.plant_map.full_positions(np.array([1.0, 0.0, 0.0, 0.0]), np.zeros(3), robot.STANDING_Q, self.nq)
+        self.plant.SetPositions(context, q)
+        bodies = [self.plant.get_body(index).index() for index in self.plant.GetBodyIndices(self.plant_map.model)]
+        inertia = self.plant.CalcSpatialInertia(context, self.trunk_frame, bodies)
+        return inertia.CalcRotationalInertia().CopyToFullMatrix3()
+
     def update(self, base_state: np.ndarray, q_joints: np.ndarray, v_joints: np.ndarray) -> RobotSnapshot:
         """The dynamics terms at the estimate and measured joints (compiled or Drake path)."""
         if self.dynamics is None:

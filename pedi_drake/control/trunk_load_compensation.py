@@ -7,29 +7,35 @@ controllers' trunk task is a PD (Eq. 1, a = a_ref + kp e + kd e'), so an unmodel
 a steady error of about (load / mass) / kp: with kp = 100 1/s^2, a 3 kg payload sags the trunk by
 2 cm and motors at 60 % of their rating by 4 cm, more than any phase's tolerance.
 
-`TrunkLoadCompensator` sits between the mission's trunk reference and the controller. It
-integrates the trunk's tracking error (the estimate against the reference) into an acceleration
-it adds to the reference's feed-forward,
+`TrunkLoadCompensator` learns that load from the trunk's tracking error (the estimate against
+the mission's reference) and hands it to the controller as an external wrench on the trunk, a
+term of the dynamics the controller's model lacks:
 
-    a_ref' = a_ref + b,     b' = ki (p_ref - p),
-    alpha_ref' = alpha_ref + beta,   beta' = ki_R rot(R_ref R^T),
+    M vdot + h - J_trunk^T w = S tau + J_c^T f,      w = -(m b, I beta),
+    b' = ki (p_ref - p),     beta' = ki_R rot(R_ref R^T),
 
-so that the controller's PD plus b makes the torques the missing load needs and the steady error
-goes to zero. With the PD's closed loop s^2 + kd s + kp, the integral adds a third pole near
--ki / kp (ki / kp = 2 1/s by default: the load is learnt within a second or two, well below the
-PD's own poles at -10 1/s; the loop is stable while ki < kp kd).
+with m and I the model's mass and rotational inertia about the trunk origin, so that b and beta
+are the accelerations the load would give the model's robot. At steady state the legs carry the
+load and the trunk's error goes to zero. With the PD's closed loop s^2 + kd s + kp, the integral
+adds a third pole near -ki / kp (ki / kp = 2 1/s by default: the load is learnt within a second or
+two, well below the PD's own poles at -10 1/s; the loop is stable while ki < kp kd).
 
-It learns only the load the legs carry, and only while all four feet stand. A trunk lower than
-`CARRIED_HEIGHT` may rest on its belly: nothing is learnt. A loaded prong tip pins the trunk's
-position but not its attitude (the trunk pivots about the tip on its feet): the attitude is
-learnt, the position not. With a foot lifted nothing is learnt, and what was learnt is held
-constant, for two reasons. A lifted foot may push on something (a wall, a box, a button): the
-trunk's error then holds that push's reaction, which is not a load. And the feed-forward is an
-acceleration the trunk does not make: the lifted leg's torques carry their share of it, which the
-joint-torque force estimate reads as a force on that foot (about the leg's mass times the
-feed-forward). Held constant, that reading is a constant offset, which a guarded touch removes
-with the bias it takes at its start; learning on would move it during the approach and feel a
-touch that is not there. What has been learnt is kept, not reset (the payload is still there).
+A wrench, not an acceleration. Added to the trunk task's reference, the same correction would be
+an acceleration the trunk does not make: a lifted leg's torques would carry their share of it
+(the leg's mass times it), and the joint-torque force estimate would read that as a force on the
+foot (a guarded touch against the MuJoCo Go1 felt 3 N with nothing there). A wrench on the trunk
+enters only the floating base's rows of the dynamics; a lifted leg's torques do not change.
+
+It learns only while the legs carry the trunk, the trunk higher than `CARRIED_HEIGHT` (lower, it
+may rest on its belly), on four feet, or on three with the lifted leg moving freely (a joint
+reference: a reach, a lift, a placing). A loaded prong tip pins the trunk's position but not its
+attitude (the trunk pivots about the tip on its feet): the attitude is learnt, the position not.
+On three feet the load the legs must make up changes (motors of different strength carry a
+different share of it), so it must be learnt there too. A lifted foot on a foot task may be
+pushing on something (a wall, an obstacle, a teleoperated press): the trunk's error then holds
+that push's reaction, which the push's own bounds (the balance bound of the live SUF) were set
+against, so nothing is learnt. Then, and with fewer feet down, what was learnt is held. It is
+kept, not reset (the payload is still there).
 """
 
 import dataclasses
@@ -55,20 +61,18 @@ ANGULAR = slice(3, 6)
 class TrunkLoadCompensationConfig:
     """Integral action on the trunk's position and attitude tracking (scenario `trunk_load_compensation:`)."""
 
-    # On: the compensator stands between the mission's trunk reference and the controller. Off by
-    # default: its feed-forward is an acceleration, and with a foot lifted the joint-torque force
-    # estimate reads the lifted leg's share of it as a force on the foot (a guarded touch against
-    # the MuJoCo Go1 felt 3 N with nothing there); see the module docstring.
-    enabled: bool = False
+    # On: the controller is told the load it learns. Off: the controller's model is taken as the
+    # robot (a Go1 exactly as modelled, or a study of what the load does without it).
+    enabled: bool = True
     # Integral gain of the position error [1/s^3]: b' = ki (p_ref - p).
     position_gain: float = 200.0
     # Integral gain of the attitude error [1/s^3]: beta' = ki_R rot(R_ref R^T).
     orientation_gain: float = 300.0
-    # Largest learnt linear feed-forward per axis, x, y, z [m/s^2]: the z bound carries the
+    # Largest learnt linear acceleration of the load per axis, x, y, z [m/s^2]: the z bound carries the
     # controllers' model's own weight once more (motors at half their rating, or a 13 kg load);
     # sideways a third of it, a load 5 cm off a 13 kg trunk needs far less.
     max_linear: list[float] = dataclasses.field(default_factory=lambda: [3.0, 3.0, 10.0])
-    # Largest learnt angular feed-forward per axis [rad/s^2]: a pair of legs at 60 % of their
+    # Largest learnt angular acceleration of the load per axis [rad/s^2]: a pair of legs at 60 % of their
     # rating leaves about 4 N m of pitch to carry, 10 rad/s^2 of the model's trunk.
     max_angular: float = 30.0
 
@@ -86,31 +90,43 @@ class TrunkLoadCompensationConfig:
 
 
 class TrunkLoadCompensator(LeafSystemWithoutWitnesses):
-    """The mission's trunk reference with the learnt feed-forward of the unmodelled load added.
+    """The unmodelled load on the trunk, learnt, as an external wrench for the controller.
 
-    Inputs: body_reference (19, pedi_drake.control.references), base_state (13, the estimate),
-    contact_set (4 feet, then the prong tips). Output: body_reference (19), the input with b
-    added to its acceleration and beta to its angular acceleration. State: (b, beta) [m/s^2,
-    rad/s^2], updated every `period` [s] (the controller's).
+    Inputs: body_reference (19, pedi_drake.control.references), leg_reference (48), base_state
+    (13, the estimate), contact_set (4 feet, then the prong tips). Output: trunk_external_wrench (6), [torque; force]
+    on the trunk at its origin, world frame [N m, N] (the controllers' input of that name). State:
+    (b, beta), the load's accelerations of the model's robot [m/s^2, rad/s^2], updated every
+    `period` [s] (the controller's). `mass` [kg] and `rotational_inertia` (3, 3) [kg m^2] about
+    the trunk origin in the trunk frame are the controller's model's, standing.
     """
 
-    def __init__(self, config: TrunkLoadCompensationConfig, period: float, num_contacts: int) -> None:
+    def __init__(
+        self,
+        config: TrunkLoadCompensationConfig,
+        period: float,
+        num_contacts: int,
+        mass: float,
+        rotational_inertia: np.ndarray,
+    ) -> None:
         super().__init__()
         self.config = config
         self.period = period
+        self.mass = float(mass)
+        self.rotational_inertia = np.asarray(rotational_inertia, dtype=float).reshape(3, 3)
         self._linear_limit = np.asarray(config.max_linear, dtype=float)
         self.body_reference_port = self.DeclareVectorInputPort("body_reference", references.BODY_REFERENCE_SIZE)
+        self.leg_reference_port = self.DeclareVectorInputPort("leg_reference", references.LEG_REFERENCE_SIZE)
         self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
         self.contact_set_port = self.DeclareVectorInputPort("contact_set", num_contacts)
         self.learnt_state = self.DeclareDiscreteState(6)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._learn)
         # The same update on demand (CalcForcedDiscreteVariableUpdate), for tests.
         self.DeclareForcedDiscreteUpdateEvent(self._learn)
-        self.DeclareVectorOutputPort(
-            "body_reference",
-            references.BODY_REFERENCE_SIZE,
-            self._compensated,
-            {self.input_port_ticket(self.body_reference_port.get_index()), self.xd_ticket()},
+        self.wrench_port = self.DeclareVectorOutputPort(
+            "trunk_external_wrench",
+            6,
+            self._wrench,
+            {self.input_port_ticket(self.base_state_port.get_index()), self.xd_ticket()},
         )
         self.DeclareStateOutputPort("learnt", self.learnt_state)
 
@@ -118,7 +134,10 @@ class TrunkLoadCompensator(LeafSystemWithoutWitnesses):
         """(position, attitude): which of the trunk's tracking errors measure the load now."""
         base = self.base_state_port.Eval(context)
         contact_set = self.contact_set_port.Eval(context)
-        standing = bool(np.all(contact_set[:4] >= 0.5))
+        feet_down = contact_set[:4] >= 0.5
+        modes = np.round(self.leg_reference_port.Eval(context)[:: references.LEG_BLOCK])
+        lifted_free = all(modes[k] == references.LEG_MODE_JOINTS for k in range(4) if not feet_down[k])
+        standing = bool(np.all(feet_down)) or (int(np.count_nonzero(feet_down)) == 3 and lifted_free)
         carried = self.config.enabled and base[6] > CARRIED_HEIGHT and standing
         on_prongs = bool(np.any(contact_set[4:] >= 0.5))
         return carried and not on_prongs, carried
@@ -143,9 +162,13 @@ class TrunkLoadCompensator(LeafSystemWithoutWitnesses):
             learnt[ANGULAR] + c.orientation_gain * self.period * attitude_error, -c.max_angular, c.max_angular
         )
 
-    def _compensated(self, context: Context, output: BasicVector) -> None:
-        body = self.body_reference_port.Eval(context).copy()
+    def wrench(self, context: Context) -> np.ndarray:
+        """The learnt load as the external wrench on the trunk, [torque; force] world [N m, N]."""
         learnt = context.get_discrete_state(self.learnt_state).value()
-        body[10:13] += learnt[LINEAR]
-        body[16:19] += learnt[ANGULAR]
-        output.SetFromVector(body)
+        base = self.base_state_port.Eval(context)
+        R_WB = rotation_matrix_wxyz(base[0:4]) if np.all(np.isfinite(base[0:4])) and base[0:4].any() else np.eye(3)
+        inertia_W = R_WB @ self.rotational_inertia @ R_WB.T
+        return -np.concatenate([inertia_W @ learnt[ANGULAR], self.mass * learnt[LINEAR]])
+
+    def _wrench(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self.wrench(context))

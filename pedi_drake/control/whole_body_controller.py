@@ -36,6 +36,7 @@ from pydrake.systems.framework import Context, DiscreteValues
 from pedi_drake import robot
 from pedi_drake.control import compiled_stack, dense_qp, references, tasks, whole_body_tick
 from pedi_drake.control.config import HQP_MODES, QP_BACKENDS, STACKS, WholeBodyControllerConfig
+from pedi_drake.control.go1_dynamics import add_trunk_external_wrench
 from pedi_drake.control.hqp import HqpSettings, solve_hqp, solve_weighted
 from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.control.stacks import ResolvedInputs, StackBuilder
@@ -129,6 +130,7 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         self._no_leg_reference = np.zeros(references.LEG_REFERENCE_SIZE)
         self._no_safety_polygon = np.zeros(references.SAFETY_POLYGON_SIZE)
         self._default_friction = np.array([config.friction])
+        self._no_trunk_wrench = np.zeros(6)
 
         self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
         self.position_port = self.DeclareVectorInputPort("position_measured", 12)
@@ -138,6 +140,9 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         self.contact_set_port = self.DeclareVectorInputPort("contact_set", nc)
         self.safety_polygon_port = self.DeclareVectorInputPort("safety_polygon", references.SAFETY_POLYGON_SIZE)
         self.friction_port = self.DeclareVectorInputPort("friction", 1)
+        # An external wrench on the trunk the model lacks, [torque; force] at the trunk origin,
+        # world [N m, N] (a carried load: pedi_drake.control.trunk_load_compensation); zero unconnected.
+        self.trunk_wrench_port = self.DeclareVectorInputPort("trunk_external_wrench", 6)
 
         self.command_state = self.DeclareDiscreteState(initial_command(config.failure_kd))
         self.reference_state = self.DeclareDiscreteState(24)  # q_ref (12), qd_ref (12)
@@ -194,6 +199,7 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         leg_x = self._evaluated(self.leg_reference_port, context, self._no_leg_reference)
         polygon_x = self._evaluated(self.safety_polygon_port, context, self._no_safety_polygon)
         mu_x = self._evaluated(self.friction_port, context, self._default_friction)
+        trunk_wrench = self._evaluated(self.trunk_wrench_port, context, self._no_trunk_wrench)
         # The framework hands the update the current state: the tick updates it in place.
         get = discrete_state.get_mutable_value
         state = [get(index) for index in self._state_indices]
@@ -212,6 +218,7 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
             leg_x,
             polygon_x,
             mu_x,
+            trunk_wrench,
             self._table,
             *state,
         )
@@ -263,7 +270,8 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         leg_x = self._optional(self.leg_reference_port, context, np.zeros(references.LEG_REFERENCE_SIZE))
         polygon_x = self._optional(self.safety_polygon_port, context, np.zeros(references.SAFETY_POLYGON_SIZE))
         mu_x = self._optional(self.friction_port, context, np.array([c.friction]))
-        if not _all_finite(body_x, leg_x, polygon_x, mu_x) or mu_x[0] <= 0.0:
+        trunk_wrench = self._optional(self.trunk_wrench_port, context, np.zeros(6))
+        if not _all_finite(body_x, leg_x, polygon_x, mu_x, trunk_wrench) or mu_x[0] <= 0.0:
             self._fail(discrete_state, last_command, q, diag, STATUS_BAD_INPUT, start)
             return
         try:
@@ -273,6 +281,7 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
             return
 
         snapshot = self.model.update(base, q, qd)
+        add_trunk_external_wrench(snapshot.h, snapshot.J_trunk, trunk_wrench)
         legs = references.parse_leg_reference(leg_x)
         for i, leg in enumerate(legs):
             if leg.mode == references.LEG_MODE_FOOT_POSE:

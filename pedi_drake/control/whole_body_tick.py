@@ -27,7 +27,7 @@ from pedi_drake.control.compiled_stack import (
     new_record,
     torque_map,
 )
-from pedi_drake.control.go1_dynamics import go1_dynamics
+from pedi_drake.control.go1_dynamics import add_trunk_external_wrench, go1_dynamics
 from pedi_drake.control.references import SAFETY_POLYGON_MAX_VERTICES
 from pedi_drake.go1_command import write_held_command
 from pedi_drake.polygon import halfplanes_kernel
@@ -212,6 +212,7 @@ def whole_body_tick(
     leg_x: np.ndarray,
     polygon_x: np.ndarray,
     mu_x: np.ndarray,
+    trunk_wrench: np.ndarray,
     table_record: np.ndarray,
     command: np.ndarray,
     reference: np.ndarray,
@@ -242,6 +243,7 @@ def whole_body_tick(
     if base[0] == 0.0 and base[1] == 0.0 and base[2] == 0.0 and base[3] == 0.0:
         return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
     go1_dynamics(dynamics_model, base, q, qd, snapshot)
+    add_trunk_external_wrench(s.h, s.J_trunk, trunk_wrench)
     if not p.com_bias:
         s.Jdot_v_com[:] = 0.0
     new_hold = last_hold.copy()
@@ -268,7 +270,8 @@ def whole_body_tick(
     else:
         body[0:3] = new_hold[1:4]
         body[3:7] = new_hold[4:8]
-    if not (_all_finite(body) and _all_finite(leg_x) and _all_finite(polygon_x) and _all_finite(mu_x)):
+    inputs_finite = _all_finite(body) and _all_finite(leg_x) and _all_finite(polygon_x) and _all_finite(mu_x)
+    if not (inputs_finite and _all_finite(trunk_wrench)):
         return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
     if mu_x[0] <= 0.0:
         return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)

@@ -148,8 +148,9 @@ def estimated_foot_errors(progress: MissionProgress) -> list[dict]:
 
 def sensed_touches(progress: MissionProgress) -> list[dict]:
     """Each touching reach (spec.GuardedTouch) as the robot sensed it: whether contact was felt,
-    the force it felt against the approach [N] (less its bias before the touch) by which estimate,
-    and where along the approach it came, from the target [m] (< 0: before it)."""
+    the force it felt against the approach [N] (less its bias) by which estimate, the bias [N]
+    and whether it was taken with the foot moving freely (else at rest, at the approach point),
+    and where along the approach contact came, from the target [m] (< 0: before it)."""
     rows = []
     for record in progress.records:
         touch = record.metrics.get("touch") if record.kind == "reach" else None
@@ -164,6 +165,8 @@ def sensed_touches(progress: MissionProgress) -> list[dict]:
                 "force_estimate": touch["force_estimate"],
                 "felt_from_target_m": touch.get("felt_from_target_m"),
                 "travel_m": touch["travel_m"],
+                "bias_n": touch.get("bias_n"),
+                "bias_in_motion": touch.get("bias_n") is not None,
             }
         )
     return rows

@@ -6,6 +6,7 @@ or potential failure". A runner is stateless: `start` and `step` read and write 
 MissionProgress they are given (held in the MissionManager's Context).
 """
 
+import collections
 import dataclasses
 import math
 from typing import Literal
@@ -78,6 +79,20 @@ PRONG_SEARCH_SPEED = 0.01  # [m/s] ... at this speed
 # A guarded touch starts along its line once the foot is this close to the approach point [m] ...
 GUARD_SETTLE_DISTANCE = 0.005
 GUARD_SETTLE_TIME = 1.0  # [s] ... or after this long.
+# [s] A guarded touch takes its force estimate's bias while the foot moves freely along its
+# line, over this window once its speed is reached: what the leg needs to move (joint friction,
+# rotor inertia, dynamics the model lacks) reads as a force against the motion, and only its
+# change is contact. Joint Coulomb friction of 0.15 N m reads as about 3 N at the foot.
+GUARD_BIAS_WINDOW = 0.1
+# [s] The foot's advance along the line is measured over this window: contact is felt only when
+# the foot has slowed below GUARD_STALL_SHARE of the drive's speed. An object stops the foot; a
+# joint's friction at breakaway or a change of its sign does not.
+GUARD_SPEED_WINDOW = 0.06
+GUARD_STALL_SHARE = 0.5
+# [m] A foot that has not yet moved freely along the line may be stuck to its joints' static
+# friction, which reads as a force against the drive: its stop counts as contact only once the
+# drive has run this far ahead of it (an object already at the approach point is felt then).
+GUARD_STUCK_LEAD = 0.03
 # [s] a press reaches its speed over this, twice the foot impedance's slow time constant (30 N s/m
 # over 600 N/m: 50 ms), so that its start does not read as a force; 2.5 mm of travel at 5 cm/s.
 PRESS_SPEED_RAMP = 0.1
@@ -769,11 +784,19 @@ def _guard(phase, progress: MissionProgress, view: RobotView, env: MissionEnviro
     The joint motion to the approach point may end with the foot behind it (a leg with more
     friction and rotor inertia than the model has): the foot is held there until it is within
     GUARD_SETTLE_DISTANCE of it, for GUARD_SETTLE_TIME at most. Then it is driven along the
-    approach direction (the press reference) from the approach point; each estimate's bias (leg
-    dynamics, model error) is measured there first, with nothing touched. Contact is felt when
-    the mission's estimate, less its bias, reaches the touch's force: the foot's reference is then
-    held where the drive had brought it, a little past the foot (the tracking lag keeps a light
-    preload), for `hold`.
+    approach direction (the press reference) from the approach point.
+
+    Contact is felt when the foot has stopped advancing (below GUARD_STALL_SHARE of the drive's
+    speed over GUARD_SPEED_WINDOW, once the drive is at speed) after it had moved freely (or,
+    never having moved, with the drive GUARD_STUCK_LEAD ahead of it: static friction holds a foot
+    as an object would) and the mission's force estimate, less its bias, reaches the touch's
+    force. The bias is first the estimate at the approach point, at rest; once the foot has moved
+    freely at speed for GUARD_BIAS_WINDOW it is the median over that window, which holds the force
+    the leg needs to move (joint friction, a load the model lacks). Pressed against an object the
+    leg's friction opposes its push as it opposed its motion, so the moving bias is also the bias
+    against the object. The foot's reference is then held where the drive had brought it, a
+    little past the foot (the tracking lag keeps a
+    light preload), for `hold`.
     """
     memo, refs, touch, leg = progress.memo, progress.references, phase.touch, phase.leg
     approach: GuardedApproach = memo["approach"]
@@ -797,33 +820,60 @@ def _guard(phase, progress: MissionProgress, view: RobotView, env: MissionEnviro
         )
         to_target = float((memo["target_W"] - start) @ approach.direction_W)
         memo["guard"] = dict(
-            start=start, to_target=to_target, bias=_force_against(view, leg, approach.direction_W), felt_at=None
+            start=start,
+            to_target=to_target,
+            bias=_force_against(view, leg, approach.direction_W),
+            bias_in_motion=False,
+            window=[],
+            track=collections.deque(),
+            at_speed=t + PRESS_SPEED_RAMP,
+            moved=False,
+            felt_at=None,
         )
         metrics["touch"] = dict(confirmed=False, travel_m=0.0, largest_force_n=0.0, force_estimate=env.force_estimate)
         return RUNNING
     guard = memo["guard"]
     if guard["felt_at"] is not None:
         return SUCCEEDED if t - guard["felt_at"] >= phase.hold else RUNNING
-    forces = {
-        source: value - guard["bias"][source]
-        for source, value in _force_against(view, leg, approach.direction_W).items()
-        if source in guard["bias"]
-    }
+    raw = _force_against(view, leg, approach.direction_W)
+    forces = {source: value - guard["bias"][source] for source, value in raw.items() if source in guard["bias"]}
     force = forces[env.force_estimate]
     travel = float((view.foot_W(leg) - guard["start"]) @ approach.direction_W)
+    track = guard["track"]
+    track.append((t, travel))
+    while len(track) > 1 and track[1][0] <= t - GUARD_SPEED_WINDOW:
+        track.popleft()
+    stalled = False
+    if t >= guard["at_speed"] and t - track[0][0] >= 0.5 * GUARD_SPEED_WINDOW:
+        advance_speed = (travel - track[0][1]) / (t - track[0][0])
+        stalled = advance_speed < GUARD_STALL_SHARE * touch.speed
+        guard["moved"] = guard["moved"] or not stalled
     press = refs.press
     driven, _, _ = smooth_start_kernel(t, press["t0"], press["ramp"])
     reference_travel = touch.speed * driven
     record = metrics["touch"]
     record.update(travel_m=travel, largest_force_n=max(record["largest_force_n"], force), forces_n=forces)
-    if force >= touch.force:
+    stopped = stalled and (guard["moved"] or reference_travel - travel >= GUARD_STUCK_LEAD)
+    if force >= touch.force and stopped:
         held = guard["start"] + reference_travel * approach.direction_W
         refs.press = None
         refs.legs[leg] = LegTrajectory(LEG_MODE_FOOT, QuinticSegment(held, held, t, 1e-3))
         guard["felt_at"] = t
         # Where contact came along the line, from the target (< 0: before it, > 0: beyond it).
-        record.update(confirmed=True, force_n=force, felt_from_target_m=travel - guard["to_target"], t=t)
+        record.update(
+            confirmed=True,
+            force_n=force,
+            felt_from_target_m=travel - guard["to_target"],
+            t=t,
+        )
         return SUCCEEDED if phase.hold <= 0.0 else RUNNING
+    if not guard["bias_in_motion"] and t >= guard["at_speed"] and not stalled:
+        guard["window"].append(raw)
+        if t - guard["at_speed"] >= GUARD_BIAS_WINDOW:
+            window = guard["window"]
+            guard["bias"] = {source: float(np.median([sample[source] for sample in window])) for source in raw}
+            guard["bias_in_motion"] = True
+            record["bias_n"] = guard["bias"][env.force_estimate]
     limit = guard["to_target"] + touch.over_travel
     # The reference may run ahead of a foot that is held back by something it does not feel.
     if travel >= limit or reference_travel >= limit + touch.over_travel:
