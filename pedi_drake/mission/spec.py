@@ -203,10 +203,11 @@ class GuardedTouch:
 
     The joint-space motion ends at the approach point (`Reach.approach_offset` from the target);
     from there the foot moves in a straight line along the approach direction, through the target,
-    until the foot force estimate against that direction reaches `force` (contact felt: the phase
-    holds there and succeeds) or the foot has gone `over_travel` beyond the target (nothing felt:
-    the phase fails). A target in the world frame is only as good as the robot's idea of where the
-    ground is; contact is what says the foot met the object.
+    until it stops with the foot force estimate against that direction, less the force the leg
+    needed to move freely along it, at `force` (contact felt: the phase holds there and succeeds),
+    or it has gone `over_travel` beyond the target (nothing felt: the phase fails); see
+    pedi_drake.mission.phases._guard. A target in the world frame is only as good as the robot's
+    idea of where the ground is; contact is what says the foot met the object.
     """
 
     # The estimated force against the approach direction that counts as contact [N].
