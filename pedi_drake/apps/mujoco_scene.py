@@ -12,7 +12,10 @@ Drake station can build, MuJoCo can too, from the same data:
   softness govern every contact it makes (with the floor, the feet, the trunk); visuals -> geoms
   that do not collide;
 - revolute / prismatic joints -> hinge / slide joints with the SDF's axis, limits, damping and
-  spring (`spring_stiffness`, `spring_reference`), if present;
+  spring (`spring_stiffness`, `spring_reference`), if present; the two bodies a joint connects
+  never collide with each other (a contact exclude), as Drake's MultibodyPlant filters them. MuJoCo
+  would otherwise let them collide when the parent is fixed in the world: the door's leaf would
+  stop against its own post at about 0.9 rad;
 - the kind's welded body (station.scene.SCENE_MODELS) -> a body without a joint, fixed in the
   world; an object without one -> a free body;
 - what the Drake station adds in code, added here from the same constants: the soft obstacle's
@@ -57,6 +60,7 @@ class SceneBodies:
     name: str  # the object's instance name (Scenario.scene)
     bodies: list[str]  # its MJCF body names
     initial_joint_positions: dict[str, float]  # MJCF joint name -> initial position [rad] or [m]
+    jointed_pairs: list[tuple[str, str]]  # (parent, child) MJCF body names joined by a joint
 
 
 def scene_model_path(obj: SceneObject) -> Path:
@@ -235,9 +239,19 @@ def add_scene_object(worldbody: ET.Element, obj: SceneObject, X_WB_initial: Rigi
     X_WO = object_placement(obj, X_WB_initial)
     add(worldbody, roots[0], X_WO @ X_MLink[roots[0]])
     initial = {f"{prefix}hinge": obj.initial_angle} if obj.kind == "door" else {}
-    return SceneBodies(obj.instance_name, bodies, initial)
+    pairs = [(f"{prefix}{joint.findtext('parent')}", f"{prefix}{joint.findtext('child')}") for joint in joints]
+    return SceneBodies(obj.instance_name, bodies, initial, pairs)
 
 
-def add_scene(worldbody: ET.Element, scene: list[SceneObject], X_WB_initial: RigidTransform) -> list[SceneBodies]:
-    """Adds every object of `scene`, in order; returns what each became."""
-    return [add_scene_object(worldbody, obj, X_WB_initial) for obj in scene]
+def add_scene(root: ET.Element, scene: list[SceneObject], X_WB_initial: RigidTransform) -> list[SceneBodies]:
+    """Adds every object of `scene`, in order, to the MJCF `root`'s worldbody, with a contact
+    exclude for every pair of bodies a joint connects; returns what each object became."""
+    added = [add_scene_object(root.find("worldbody"), obj, X_WB_initial) for obj in scene]
+    pairs = [pair for bodies in added for pair in bodies.jointed_pairs]
+    if pairs:
+        contact = root.find("contact")
+        if contact is None:
+            contact = ET.SubElement(root, "contact")
+        for parent, child in pairs:
+            ET.SubElement(contact, "exclude", body1=parent, body2=child)
+    return added
