@@ -45,6 +45,8 @@ SCENE_OBJECT_KINDS = (
     "back_object",
     "fixed_obstacle",
     "soft_obstacle",
+    "mobile_obstacle",
+    "mobile_soft_obstacle",
     "hand",
     "estop_button",
 )

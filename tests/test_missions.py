@@ -8,7 +8,7 @@ over more seeds.
 import pytest
 
 from pedi_drake.batch.tasks import run_task
-from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS, mission_study, result_of
+from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLES, mission_study, obstacle_calls, result_of
 from pedi_drake.mission.spec import shipped_missions
 
 MAX_FOOT_ERROR = 0.010  # [m] every reach phase
@@ -53,6 +53,8 @@ def test_mission_specific_outcome(mission_result):
         assert result["door"]["opened_deg"] >= 20.0
     if name == "prong_push_box":
         assert result["box"]["moved_m"] >= 0.02
-    if name == "obstacle_sensing":
-        calls = {press["phase"]: press["classified_as"] for press in result["presses"]}
-        assert calls == EXPECTED_OBSTACLE_CLASS
+    if name in EXPECTED_OBSTACLES:
+        assert obstacle_calls(result["presses"]) == EXPECTED_OBSTACLES[name]
+    if name == "push_light_box":
+        assert result["object_push"]["moved_m"] >= 0.10
+        assert max(result["object_push"]["stance_feet_slide_m"].values()) <= 0.01

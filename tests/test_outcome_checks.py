@@ -1,5 +1,5 @@
 """Mission outcomes judged by physics: a touch needs a contact force, a cleared back needs the
-object off the trunk; each check fails when its outcome is absent, from synthetic logs, from a
+object off the trunk, a push needs the object moved from a firm stance; each check fails when its outcome is absent, from synthetic logs, from a
 real plant's contact results, and from a short real run."""
 
 import numpy as np
@@ -7,14 +7,16 @@ import pytest
 from pydrake.systems.analysis import Simulator
 
 from pedi_drake import robot
+from pedi_drake.evaluation.object_push import judge_object_push
 from pedi_drake.evaluation.off_trunk import ON_TRUNK_MAX_HEIGHT, OffTrunkTrace, judge_off_trunk, off_trunk_trace
 from pedi_drake.evaluation.touches import judge_touches
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.go1_command import pack_command
-from pedi_drake.mission.spec import Touch, load_mission
+from pedi_drake.mission.spec import ObjectPush, Touch, load_mission
 from pedi_drake.resources import missions_dir
 from pedi_drake.run import run
 from pedi_drake.scenario import Scenario, SceneObject, load_scenario
+from pedi_drake.station.scene import root_body
 from pedi_drake.station.scene_contact import ROBOT_CONTACT_SOURCES, scene_contact_index
 from pedi_drake.station_interface import MakeStation
 
@@ -188,3 +190,61 @@ def test_the_shipped_front_reach_presses_on_the_panel(tmp_path):
     result = _run_until_touched(tmp_path, missions_dir() / "hit_target_front.yaml")
     assert result["touches"][0]["touched"] is True, result["touches"]
     assert "did not touch" not in result["reason"]
+
+
+@pytest.fixture(scope="module")
+def push_plant():
+    """The plant of push_light_box's scene, and its default positions (the robot lying, the box placed)."""
+    scenario = load_scenario()
+    scenario.scene = load_mission("push_light_box").scene
+    plant = MakeStation(scenario).GetSubsystemByName("plant")
+    return plant, plant.GetPositions(plant.CreateDefaultContext())
+
+
+def _push_states(plant, q0, box_shift, trunk_shift=0.0):
+    """Plant states over 0-3 s: the box's root body, and the whole robot with its feet, move
+    `box_shift` and `trunk_shift` [m] along x during the push phase (1-2 s)."""
+    times = np.linspace(0.0, 3.0, 301)
+    ramp = np.clip(times - 1.0, 0.0, 1.0)
+    box = root_body(plant, plant.GetModelInstanceByName("light_box"))
+    states = np.zeros((plant.num_multibody_states(), len(times)))
+    states[: len(q0)] = q0[:, None]
+    states[box.floating_positions_start() + 4] += box_shift * ramp
+    states[robot.Go1PlantMap.from_plant(plant).base_q_start + 4] += trunk_shift * ramp
+    return times, states
+
+
+PUSH = dict(object="light_box", phase="push_box", distance=0.10, stance_slide=0.01)
+PUSH_PHASES = [{"name": "push_box", "t_start": 1.0, "t_end": 2.0}]
+
+
+def test_a_push_that_moved_the_box_far_enough_from_a_firm_stance_passes(push_plant):
+    plant, q0 = push_plant
+    times, states = _push_states(plant, q0, 0.12)
+    row, problem = judge_object_push(plant, ObjectPush(**PUSH), PUSH_PHASES, times, states)
+    assert problem == "" and row["moved_m"] == pytest.approx(0.12, abs=1e-3)
+
+
+def test_a_box_moved_too_little_fails_the_push_naming_it(push_plant):
+    plant, q0 = push_plant
+    times, states = _push_states(plant, q0, 0.05)
+    row, problem = judge_object_push(plant, ObjectPush(**PUSH), PUSH_PHASES, times, states)
+    assert row["moved_m"] == pytest.approx(0.05, abs=1e-3)
+    assert "light_box moved 5.0 cm in push_box" in problem
+
+
+def test_stance_feet_that_slid_fail_the_push(push_plant):
+    plant, q0 = push_plant
+    times, states = _push_states(plant, q0, 0.12, trunk_shift=0.02)
+    row, problem = judge_object_push(plant, ObjectPush(**PUSH), PUSH_PHASES, times, states)
+    assert row["stance_feet_slide_m"], "the lying robot's feet are on the ground"
+    assert max(row["stance_feet_slide_m"].values()) == pytest.approx(0.02, abs=1e-3)
+    assert "stance foot slid 20.0 mm in push_box" in problem
+
+
+def test_an_object_push_naming_no_scene_object_is_refused(tmp_path):
+    text = (missions_dir() / "push_light_box.yaml").read_text().replace("object: light_box", "object: heavy_box")
+    path = tmp_path / "bad_push.yaml"
+    path.write_text(text)
+    with pytest.raises(MissionFileError, match="object_push.object: must name a scene object"):
+        load_mission(str(path))

@@ -42,6 +42,7 @@ from pedi_drake.station.scene import (
     ESTOP_BUTTON_STIFFNESS,
     SCENE_MODELS,
     SOFT_OBSTACLE_STIFFNESS,
+    SPRUNG_PLATE_KINDS,
     TRUNK_TOP_Z,
 )
 
@@ -181,7 +182,7 @@ def _add_joint(body: ET.Element, joint: ET.Element, prefix: str, spring: tuple[f
 
 def _kind_springs(obj: SceneObject) -> dict[str, tuple[float, float]]:
     """The springs the Drake station adds in code to `obj`'s joints: {joint: (stiffness, reference)}."""
-    if obj.kind == "soft_obstacle":
+    if obj.kind in SPRUNG_PLATE_KINDS:
         return {"slide": (SOFT_OBSTACLE_STIFFNESS, 0.0)}
     if obj.kind == "estop_button":
         return {ESTOP_BUTTON_JOINT: (ESTOP_BUTTON_STIFFNESS, -ESTOP_BUTTON_PRELOAD)}

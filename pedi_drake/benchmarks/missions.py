@@ -24,8 +24,17 @@ from pedi_drake.batch.study import study_from_dict
 from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.mission.spec import load_mission, shipped_missions
 
-# The obstacle each press of obstacle_sensing touches, from the mission's scene.
-EXPECTED_OBSTACLE_CLASS = {"press_a": "rigid", "press_b": "soft"}
+# What each press of the obstacle-sensing missions touches, from the missions' scenes:
+# {mission: {press phase: (rigid or soft, fixed or mobile)}}.
+EXPECTED_OBSTACLES = {
+    "obstacle_sensing": {"press_a": ("rigid", "fixed"), "press_b": ("soft", "fixed")},
+    "obstacle_sensing_mobile": {"press_c": ("rigid", "mobile"), "press_d": ("soft", "mobile")},
+}
+
+
+def obstacle_calls(presses: list[dict]) -> dict[str, tuple[str, str]]:
+    """{press phase: (rigid or soft, fixed or mobile)} as a run's `presses` classified them."""
+    return {press["phase"]: (press["classified_as"], press["mobility"]) for press in presses}
 
 
 def mission_study(missions: list[str], noise_seeds: list[int]):
@@ -86,12 +95,14 @@ def summarise(mission: str, runs: list[dict]) -> dict:
     boxes = [r["box"]["moved_m"] for r in runs if "box" in r]
     if boxes:
         row["box_moved_m_min"] = min(boxes)
-    presses = [p for r in runs for p in r.get("presses", [])]
-    if presses:
-        row["obstacles_correct"] = sum(
-            all(p["classified_as"] == EXPECTED_OBSTACLE_CLASS.get(p["phase"]) for p in r["presses"])
-            and len(r["presses"]) == len(EXPECTED_OBSTACLE_CLASS)
-            for r in runs
+    if mission in EXPECTED_OBSTACLES:
+        expected = EXPECTED_OBSTACLES[mission]
+        row["obstacles_correct"] = sum(obstacle_calls(r.get("presses", [])) == expected for r in runs)
+    pushes = [r["object_push"]["moved_m"] for r in runs if "object_push" in r]
+    if pushes:
+        row["object_pushed_m_min"] = min(pushes)
+        row["stance_foot_slide_m_max"] = max(
+            max(r["object_push"]["stance_feet_slide_m"].values(), default=0.0) for r in runs if "object_push" in r
         )
     return row
 
@@ -141,7 +152,12 @@ def main() -> None:
         if "box_moved_m_min" in row:
             extra += f"box +{100 * row['box_moved_m_min']:.1f} cm (min) "
         if "obstacles_correct" in row:
-            extra += f"obstacles right {row['obstacles_correct']}/{row['runs']}"
+            extra += f"obstacles right {row['obstacles_correct']}/{row['runs']} "
+        if "object_pushed_m_min" in row:
+            extra += (
+                f"pushed +{100 * row['object_pushed_m_min']:.1f} cm (min), stance feet "
+                f"{1000 * row['stance_foot_slide_m_max']:.1f} mm (max)"
+            )
 
         def mm(value):
             return f"{1000 * value:8.1f}" if value is not None else "       -"

@@ -37,7 +37,7 @@ import numpy as np
 
 from pedi_drake.benchmarks.demos import demo_scenario, simulate_demo
 from pedi_drake.benchmarks.machine import stamped
-from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLE_CLASS
+from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLES
 from pedi_drake.benchmarks.paper002_plots import plot_foot_hold, plot_pivot_rotations
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import paper002 as evaluation
@@ -103,16 +103,17 @@ def _station_plant(scenario: Scenario):
 
 def press_figures(result: dict, logs: dict) -> dict:
     """The press phases of an obstacle_sensing run: each foot force estimate's RMS error against
-    the simulated contact force at the foot [N] and whether its rigid/soft calls are all right."""
+    the simulated contact force at the foot [N] and whether its rigid/soft and fixed/mobile calls
+    are all right."""
     errors = evaluation.press_force_errors(logs, result["phases"])
     calls: dict[str, dict] = {}
     for press in result["presses"]:
         for source, figures in press.get("by_estimate", {}).items():
-            calls.setdefault(source, {})[press["phase"]] = figures["classified_as"]
+            calls.setdefault(source, {})[press["phase"]] = (figures["classified_as"], figures["mobility"])
     row = {"true_force_max_n": errors["true_force_max_n"]}
     for source, rms in errors["rms_n"].items():
         row[f"force_estimate_rms_{source}_n"] = rms
-        row[f"classified_right_{source}"] = calls.get(source) == EXPECTED_OBSTACLE_CLASS
+        row[f"classified_right_{source}"] = calls.get(source) == EXPECTED_OBSTACLES["obstacle_sensing"]
     return row
 
 

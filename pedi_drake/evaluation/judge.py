@@ -15,6 +15,7 @@ from pedi_drake.evaluation.box_lift import box_lift_trace, judge_box_lift
 from pedi_drake.evaluation.button_press import judge_button_press, plunger_travel
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
 from pedi_drake.evaluation.live_suf import live_suf_summary, update_samples
+from pedi_drake.evaluation.object_push import judge_object_push
 from pedi_drake.evaluation.off_trunk import judge_off_trunk, off_trunk_trace
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_response
 from pedi_drake.evaluation.result_file import write_result
@@ -199,6 +200,11 @@ def judge_run(record) -> dict:
                     contact.data,
                 )
                 reason = "; ".join(filter(None, [reason, press_problem]))
+            if mission.object_push is not None and states.shape[1]:
+                result["object_push"], push_problem = judge_object_push(
+                    plant, mission.object_push, result["phases"], t_state, states
+                )
+                reason = "; ".join(filter(None, [reason, push_problem]))
             if mission.leaves_trunk and states.shape[1]:
                 trace = off_trunk_trace(plant, mission.leaves_trunk, t_state, states)
                 result[mission.leaves_trunk], left_problem = judge_off_trunk(mission.leaves_trunk, trace)

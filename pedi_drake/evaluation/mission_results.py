@@ -9,9 +9,9 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.control.references import LEG_BLOCK
+from pedi_drake.evaluation.obstacle_response import classify_press
 from pedi_drake.mission.progress import MissionProgress
 
-RIGID_STIFFNESS = 1500.0  # [N/m] a press stiffer than this is a rigid obstacle
 FOOT_ON_GROUND = 0.005  # [m] a foot centre this close above its radius touches the ground
 
 
@@ -189,32 +189,41 @@ def prong_leans(progress: MissionProgress) -> list[dict]:
     ]
 
 
+def _press_figures(metrics: dict, source: str) -> dict:
+    """A finished press's figures by the force estimate `source`, its obstacle classified."""
+    curve = metrics["curve"]
+    response = classify_press(curve["displacement_m"], curve["force_n"][source], metrics["stopped_by"])
+    return {
+        "force_n": metrics["forces_n"][source],
+        "peak_force_n": response.peak_force_n,
+        "rise_stiffness_n_per_m": response.rise_stiffness_n_per_m,
+        "travel_beyond_rise_m": response.travel_beyond_rise_m,
+        "force_growth_n": response.force_growth_n,
+        "classified_as": response.stiffness_class,
+        "mobility": response.mobility,
+    }
+
+
 def press_results(progress: MissionProgress) -> list[dict]:
-    """Each press phase: force, displacement, stiffness and the rigid/soft call."""
+    """Each press phase: force, displacement and what its force-displacement curve says of the
+    obstacle (pedi_drake.evaluation.obstacle_response), by the mission's force estimate and by
+    each available one."""
     rows = []
     for record in progress.records:
-        if record.kind != "press" or "stiffness_n_per_m" not in record.metrics:
+        metrics = record.metrics
+        if record.kind != "press" or "curve" not in metrics:
             continue
-        stiffness = record.metrics["stiffness_n_per_m"]
-        row = {
-            "phase": record.name,
-            "force_n": record.metrics["force_n"],
-            "displacement_m": record.metrics["displacement_m"],
-            "stiffness_n_per_m": stiffness,
-            "classified_as": "rigid" if stiffness > RIGID_STIFFNESS else "soft",
-        }
-        if "force_estimate" in record.metrics:
-            # Which estimate stopped the press, and what each available estimate says.
-            row["force_estimate"] = record.metrics["force_estimate"]
-            row["by_estimate"] = {
-                source: {
-                    "force_n": record.metrics["forces_n"][source],
-                    "stiffness_n_per_m": value,
-                    "classified_as": "rigid" if value > RIGID_STIFFNESS else "soft",
-                }
-                for source, value in record.metrics["stiffness_by_estimate"].items()
+        by_estimate = {source: _press_figures(metrics, source) for source in metrics["curve"]["force_n"]}
+        rows.append(
+            {
+                "phase": record.name,
+                "displacement_m": metrics["displacement_m"],
+                "stopped_by": metrics["stopped_by"],
+                "force_estimate": metrics["force_estimate"],
+                **by_estimate[metrics["force_estimate"]],
+                "by_estimate": by_estimate,
             }
-        rows.append(row)
+        )
     return rows
 
 

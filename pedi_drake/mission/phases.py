@@ -921,7 +921,10 @@ class PressRunner(PhaseRunner):
         )
         # Each estimate has a bias from model errors; measure it before touching anything.
         biases = {source: float(-force @ direction) for source, force in estimates.items()}
-        progress.memo.update(start=start, force_bias=biases)
+        # The force-displacement curve of the press, a row [displacement, force by each estimate]
+        # a tick: what tells a fixed obstacle from one that gives way
+        # (pedi_drake.evaluation.obstacle_response). An array, as the memo is copied every tick.
+        progress.memo.update(start=start, force_bias=biases, curve=np.empty((0, 1 + len(biases))))
 
     def step(self, phase, progress, view, env):
         memo, press = progress.memo, progress.references.press
@@ -934,6 +937,8 @@ class PressRunner(PhaseRunner):
         }
         force = forces[env.force_estimate]
         displacement = float((view.foot_W(phase.leg) - memo["start"]) @ direction)
+        sample = [displacement] + [forces[source] for source in memo["force_bias"]]
+        memo["curve"] = np.vstack([memo["curve"], sample])
         metrics = progress.records[-1].metrics
         metrics.update(
             leg=phase.leg,
@@ -952,11 +957,12 @@ class PressRunner(PhaseRunner):
         progress.push = FootPush(phase.leg, -force * direction, -direction, shown, balanced)
         if force >= phase.force or displacement >= phase.max_displacement or balanced:
             press["frozen_at"] = view.time
-            metrics["stiffness_n_per_m"] = force / max(displacement, 1e-4)
-            metrics["stiffness_by_estimate"] = {
-                source: value / max(displacement, 1e-4) for source, value in forces.items()
-            }
             metrics["stopped_by"] = "force" if force >= phase.force else "balance" if balanced else "displacement"
+            curve = memo["curve"]
+            metrics["curve"] = {
+                "displacement_m": curve[:, 0],
+                "force_n": {source: curve[:, 1 + k] for k, source in enumerate(memo["force_bias"])},
+            }
             # Hold the foot where it is, in joint space, for whatever comes next.
             hold = PiecewiseQuintic.through(np.array([view.leg_q(phase.leg)] * 2), view.time, [1e-3])
             progress.references.legs[phase.leg] = LegTrajectory(LEG_MODE_JOINTS, hold)

@@ -459,6 +459,22 @@ class BoxLift:
 
 
 @dataclasses.dataclass
+class ObjectPush:
+    """A push the judge requires, by physics (the logged plant state): over the phase `phase`,
+    the scene object `object` moved at least `distance` on the floor while every foot on the
+    ground stayed within `stance_slide` of where it was at the phase start."""
+
+    # Scene object (model instance) name of the pushed object.
+    object: str = ""
+    # Name of the phase that pushes it.
+    phase: str = ""
+    # Horizontal distance its root body must move over the phase [m].
+    distance: float = 0.10
+    # Largest horizontal motion of a stance foot over the phase [m].
+    stance_slide: float = 0.01
+
+
+@dataclasses.dataclass
 class Touch:
     """A touch the judge requires: during the phase `phase`, the foot of `leg` pressed on the scene
     object `object` with a normal contact force of at least `force` (the logged true contact
@@ -516,6 +532,8 @@ class MissionSpec:
     semi_autonomous: SemiAutonomousMode | None = None
     # The E-stop button press the judge requires (None: none).
     button_press: ButtonPress | None = None
+    # The object push the judge requires (None: none).
+    object_push: ObjectPush | None = None
 
     def planned_duration(self) -> float:
         """Simulated time [s] the mission takes when every phase runs for its planned `duration`
@@ -553,6 +571,8 @@ class _MissionFile:
     semi_autonomous: SemiAutonomousMode | None = None
     # The E-stop button press the judge requires of the run (pedi_drake.evaluation.button_press).
     button_press: ButtonPress | None = None
+    # The object push the judge requires of the run (pedi_drake.evaluation.object_push).
+    object_push: ObjectPush | None = None
     phases: list[dict] = dataclasses.field(default_factory=list)
 
 
@@ -689,6 +709,8 @@ def load_mission(name_or_path: str) -> MissionSpec:
         _check_touch(touch, header.scene, names, f"{where}: touches[{i}]")
     if header.button_press is not None:
         _check_button_press(header.button_press, header.scene, phases, f"{where}: button_press")
+    if header.object_push is not None:
+        _check_object_push(header.object_push, header.scene, names, f"{where}: object_push")
     objects = [obj.instance_name for obj in header.scene]
     if header.leaves_trunk and header.leaves_trunk not in objects:
         raise MissionFileError(
@@ -710,6 +732,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
         teleop=header.teleop,
         semi_autonomous=header.semi_autonomous,
         button_press=header.button_press,
+        object_push=header.object_push,
     )
 
 
@@ -729,6 +752,22 @@ def _check_box_lift(check: BoxLift, scene: list[SceneObject], phase_names: list[
     need(
         check.until_phase in phase_names, "until_phase", f"must name a phase of the mission, got {check.until_phase!r}"
     )
+
+
+def _check_object_push(check: ObjectPush, scene: list[SceneObject], phase_names: list[str], where: str) -> None:
+    objects = [obj.instance_name for obj in scene]
+    problems = {
+        "object": (check.object in objects, f"must name a scene object ({objects}), got {check.object!r}"),
+        "phase": (check.phase in phase_names, f"must name a phase of the mission, got {check.phase!r}"),
+        "distance": (math.isfinite(check.distance) and check.distance > 0, f"must be > 0 [m], got {check.distance}"),
+        "stance_slide": (
+            math.isfinite(check.stance_slide) and check.stance_slide > 0,
+            f"must be > 0 [m], got {check.stance_slide}",
+        ),
+    }
+    for field, (ok, problem) in problems.items():
+        if not ok:
+            raise MissionFileError(f"{where}.{field}: {problem}")
 
 
 def _check_touch(touch: Touch, scene: list[SceneObject], phase_names: list[str], where: str) -> None:

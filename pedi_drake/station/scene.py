@@ -8,6 +8,7 @@ from pydrake.multibody.plant import CoulombFriction, MultibodyPlant
 from pydrake.multibody.tree import ModelInstanceIndex, PrismaticSpring
 
 from pedi_drake import robot
+from pedi_drake.exceptions import ConfigError
 from pedi_drake.scenario import SceneObject
 
 # Model file and the body welded to the world (None: the object is free) for each kind.
@@ -18,10 +19,14 @@ SCENE_MODELS = {
     "back_object": ("back_object.sdf", None),
     "fixed_obstacle": ("fixed_obstacle.sdf", "block"),
     "soft_obstacle": ("soft_obstacle.sdf", "base"),
+    "mobile_obstacle": ("mobile_obstacle.sdf", None),
+    "mobile_soft_obstacle": ("mobile_soft_obstacle.sdf", None),
     "hand": ("hand.sdf", "palm"),
     "estop_button": ("estop_button.sdf", "post"),
 }
 SOFT_OBSTACLE_STIFFNESS = 400.0  # [N/m] spring holding the soft obstacle's plate at rest.
+# The kinds with the soft obstacle's sprung plate (joint "slide", spring SOFT_OBSTACLE_STIFFNESS).
+SPRUNG_PLATE_KINDS = ("soft_obstacle", "mobile_soft_obstacle")
 # The E-stop button's plunger (joint "travel", its position how far it is pushed in [m]): a spring
 # of this stiffness holds it out against its stop with the force of ESTOP_BUTTON_PRELOAD of
 # compression; the button trips when the plunger is in ESTOP_BUTTON_TRIP_TRAVEL, 4 mm short of its
@@ -33,6 +38,18 @@ ESTOP_BUTTON_STIFFNESS = 400.0  # [N/m]
 ESTOP_BUTTON_PRELOAD = 0.005  # [m]
 ESTOP_BUTTON_TRIP_TRAVEL = 0.008  # [m]
 TRUNK_TOP_Z = robot.TRUNK_HALF_EXTENTS[2]  # [m] top face of the trunk box above the trunk origin.
+
+
+def root_body(plant: MultibodyPlant, model):
+    """The one body of `model` that no joint between its own bodies moves: the body a free object
+    floats by (before or after the plant is finalized, which adds a joint from the world)."""
+    joints = [plant.get_joint(j) for j in plant.GetJointIndices(model)]
+    children = {joint.child_body().index() for joint in joints if joint.parent_body().model_instance() == model}
+    roots = [b for b in plant.GetBodyIndices(model) if b not in children]
+    if len(roots) != 1:
+        names = [plant.get_body(b).name() for b in roots]
+        raise ConfigError(f"scene model {plant.GetModelInstanceName(model)!r}: expected one root body, found {names}")
+    return plant.get_body(roots[0])
 
 
 def add_ground(plant: MultibodyPlant, friction: float) -> None:
@@ -71,11 +88,10 @@ def add_scene_object(plant: MultibodyPlant, obj: SceneObject, X_WB_initial: Rigi
     if welded_body is not None:
         plant.WeldFrames(plant.world_frame(), plant.GetFrameByName(welded_body, model), X_WO)
     else:
-        (body_index,) = plant.GetBodyIndices(model)
-        plant.SetDefaultFloatingBaseBodyPose(plant.get_body(body_index), X_WO)
+        plant.SetDefaultFloatingBaseBodyPose(root_body(plant, model), X_WO)
     if obj.kind == "door":
         plant.GetJointByName("hinge", model).set_default_angle(obj.initial_angle)
-    if obj.kind == "soft_obstacle":
+    if obj.kind in SPRUNG_PLATE_KINDS:
         plant.AddForceElement(PrismaticSpring(plant.GetJointByName("slide", model), 0.0, SOFT_OBSTACLE_STIFFNESS))
     if obj.kind == "estop_button":
         plunger = plant.GetJointByName(ESTOP_BUTTON_JOINT, model)
