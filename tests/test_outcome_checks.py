@@ -1,6 +1,7 @@
 """Mission outcomes judged by physics: a touch needs a contact force, a cleared back needs the
-object off the trunk, a push needs the object moved from a firm stance; each check fails when its outcome is absent, from synthetic logs, from a
-real plant's contact results, and from a short real run."""
+object off the trunk, a push needs the object moved from a firm stance; each check fails when
+its outcome is absent, from synthetic logs, from a real plant's contact results, and from a
+short real run."""
 
 import numpy as np
 import pytest
