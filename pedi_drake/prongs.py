@@ -13,19 +13,31 @@ from pedi_drake.exceptions import ProngDesignError
 
 # Half height of the Go1 trunk collision box [m]: prongs attach to its bottom face by default.
 TRUNK_HALF_HEIGHT = 0.057
+# The shipped prongs' x = +-PRONG_HALF_SPACING on the trunk's centre line [m]: as far apart as the
+# legs allow (paper 003), which for the Go1 is the trunk's own end, as long as no hip turns its leg
+# inwards by more than PRONG_HIP_INWARD_LIMIT. Derived by
+# pedi_drake.suf.prong_clearance.widest_prong_spacing (tests/test_prong_clearance.py checks it).
+PRONG_HALF_SPACING = 0.182
+# [rad] the inward hip angle the spacing is derived for: the missions turn a hip inwards by at
+# most 0.3 rad; beyond 0.50-0.58 rad a leg reaches under the trunk to the prongs at any spacing.
+PRONG_HIP_INWARD_LIMIT = 0.5
 
 
 @dataclasses.dataclass
 class ProngDesign:
     """Prongs on the Go1 trunk. Every prong points straight down (-z of the trunk frame).
 
-    The default has two prongs on the trunk's x axis, near the front and the rear, whose tips
-    touch flat ground when the trunk is lowered to a height of about 0.17 m.
+    The default has two prongs on the trunk's x axis at its front and rear ends
+    (+-PRONG_HALF_SPACING), whose tips touch flat ground when the trunk is lowered to a height of
+    about 0.17 m.
     """
 
     # Attachment points p_BA in the trunk frame B [m], one [x, y, z] per prong.
     attachment_points: list[list[float]] = dataclasses.field(
-        default_factory=lambda: [[0.15, 0.0, -TRUNK_HALF_HEIGHT], [-0.15, 0.0, -TRUNK_HALF_HEIGHT]]
+        default_factory=lambda: [
+            [PRONG_HALF_SPACING, 0.0, -TRUNK_HALF_HEIGHT],
+            [-PRONG_HALF_SPACING, 0.0, -TRUNK_HALF_HEIGHT],
+        ]
     )
     # Rod length from the attachment point to the centre of the tip sphere [m].
     length: float = 0.098
@@ -66,7 +78,9 @@ class ProngDesign:
         return float(-np.min(self.tip_positions_B()[:, 2]) + self.tip_radius)
 
     @staticmethod
-    def for_trunk_height(height: float, x_positions=(0.15, -0.15), tip_radius: float = 0.015) -> "ProngDesign":
+    def for_trunk_height(
+        height: float, x_positions=(PRONG_HALF_SPACING, -PRONG_HALF_SPACING), tip_radius: float = 0.015
+    ) -> "ProngDesign":
         """Returns a centre-line design whose tips touch the ground at `height` [m]."""
         length = height - TRUNK_HALF_HEIGHT - tip_radius
         design = ProngDesign(

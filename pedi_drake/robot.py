@@ -33,6 +33,7 @@ NUM_JOINTS = 12
 FOOT_RADIUS = 0.02  # [m]
 # Half sizes of the trunk's collision box, centred on the trunk origin (models/go1/go1.urdf) [m].
 TRUNK_HALF_EXTENTS = (0.1881, 0.04675, 0.057)
+PRONG_ROD_RADIUS = 0.006  # [m] of a prong's rod (drawn; the tip sphere is its collision geometry)
 TOTAL_MASS = 13.100448  # [kg] without prongs, rotors and IMU included.
 
 # URDF limits in Unitree motor order.
@@ -90,7 +91,7 @@ def add_go1(plant: MultibodyPlant, *, prongs: ProngDesign | None = None) -> Mode
 def _add_prongs(plant: MultibodyPlant, model: ModelInstanceIndex, design: ProngDesign) -> None:
     trunk = plant.GetBodyByName(TRUNK_BODY_NAME, model)
     # Thin rod of the design's mass along -z, its COM at mid length.
-    rod_inertia = UnitInertia.SolidCylinder(0.006, design.length, [0, 0, 1])
+    rod_inertia = UnitInertia.SolidCylinder(PRONG_ROD_RADIUS, design.length, [0, 0, 1])
     for i, p_BA in enumerate(design.attachment_points):
         inertia = SpatialInertia(
             design.mass,
@@ -102,7 +103,7 @@ def _add_prongs(plant: MultibodyPlant, model: ModelInstanceIndex, design: ProngD
         if plant.geometry_source_is_registered():
             X_rod = RigidTransform(RotationMatrix(), [0.0, 0.0, -design.length / 2])
             plant.RegisterVisualGeometry(
-                body, X_rod, Cylinder(0.006, design.length), f"prong_{i}_rod", [0.9, 0.5, 0.1, 1]
+                body, X_rod, Cylinder(PRONG_ROD_RADIUS, design.length), f"prong_{i}_rod", [0.9, 0.5, 0.1, 1]
             )
             X_tip = RigidTransform([0.0, 0.0, -design.length])
             plant.RegisterVisualGeometry(body, X_tip, Sphere(design.tip_radius), f"prong_{i}_tip", [0.9, 0.5, 0.1, 1])

@@ -14,7 +14,7 @@ from pedi_drake import robot
 from pedi_drake.exceptions import SufError, UnreachableTarget
 from pedi_drake.ik.analytic import solve_leg_ik_analytic
 from pedi_drake.leg_kinematics import leg_geometry
-from pedi_drake.prongs import ProngDesign
+from pedi_drake.prongs import PRONG_HALF_SPACING, ProngDesign
 from pedi_drake.suf.problem import PRONG_PREFIX, ContactPoint, RejectableForceProblem, build_problem
 
 
@@ -62,7 +62,7 @@ class Go1Stance:
         return q
 
 
-def with_prongs_at_height(stance: Go1Stance, x_positions=(0.15, -0.15)) -> Go1Stance:
+def with_prongs_at_height(stance: Go1Stance, x_positions=(PRONG_HALF_SPACING, -PRONG_HALF_SPACING)) -> Go1Stance:
     """The stance with centre-line prongs whose tips touch the ground at its trunk height."""
     return dataclasses.replace(stance, prongs=ProngDesign.for_trunk_height(stance.trunk_height, x_positions))
 
