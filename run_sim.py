@@ -41,8 +41,8 @@ from pedi_drake.run_checks import check_duration, check_out_dir, check_scene_geo
 from pedi_drake.scenario import MISSION_CONTROLLERS, default_scenario_file, load_scenario  # noqa: E402
 
 ERROR_FILE = "error.txt"
-# The mission of `--teleop` unless --mission names another: the default scenario's mission is
-# autonomous and would never hand the foot to the panel.
+# The mission of `--teleop` unless --mission names another or the scenario's own mission takes an
+# operator: the default scenario's mission is autonomous and would never hand the foot to the panel.
 TELEOP_MISSION = "operator/teleop_foot"
 
 
@@ -53,7 +53,7 @@ def _prepare(args):
     )
     if args.teleop:
         scenario.operator.source = "meshcat"
-        if args.mission is None:
+        if args.mission is None and not (scenario.mission and load_mission(scenario.mission).takes_an_operator()):
             args.mission = TELEOP_MISSION
     mission = None
     if args.mission is not None:
@@ -64,7 +64,9 @@ def _prepare(args):
                 f"--scenario_text: controller: a mission runs under one of {MISSION_CONTROLLERS}, got {asked!r}"
             )
         mission = load_mission(args.mission)  # validate now: bad input exits 2 before anything runs
-        scenario.mission, scenario.controller = args.mission, asked or "whole_body"
+        # The scenario's own mission controller stays (paper 002's in teleop_paper002, say).
+        kept = scenario.controller if scenario.controller in MISSION_CONTROLLERS else "whole_body"
+        scenario.mission, scenario.controller = args.mission, asked or kept
     elif scenario.mission:
         mission = load_mission(scenario.mission)
     if mission is not None and args.duration is None:

@@ -1,75 +1,35 @@
 """The E-stop button scenario: a scripted operator (the shipped press_estop_button.ops, on an
 in-process LCM bus) teleoperates the FR foot onto the button's cap; the judge reads the plunger's
 travel and the foot's contact force from the simulation's ground truth and requires the plunger
-past its trip travel with the force under the teleop phase's bound. The same mission with an
-operator who stops above the cap (2 cm of the 7 cm descent) fails on the press alone; the judge's check also fails
-on synthetic traces (too little travel, too much force, outside the phase), and the mission
-file's check is validated on load.
+past its trip travel with the force under the teleop phase's bound, on the HQP with the
+joint-torque estimate and on paper 002's controller with its Eq. 11 estimate (the shipped scenario
+estop_paper002). The same mission with an operator who stops above the cap (2 cm of the 7 cm
+descent) fails on the press alone; the judge's check also fails on synthetic traces (too little
+travel, too much force, outside the phase), and the mission file's check is validated on load.
 Run with -s to see the measured numbers.
 """
 
-import time
-
 import numpy as np
 import pytest
-from pydrake.lcm import DrakeLcm
-from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import DiagramBuilder
 
 from pedi_drake.apps.teleop_lcm import parse_script
-from pedi_drake.diagram import MakePedipulationDiagram
+from pedi_drake.benchmarks.estop_button import SCRIPT, run_scripted_press
 from pedi_drake.evaluation.button_press import judge_button_press
-from pedi_drake.evaluation.judge import judge_run
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.mission.spec import ButtonPress, load_mission
 from pedi_drake.operator.command import FRAME_WORLD, MODE_AUTONOMOUS
-from pedi_drake.operator.scripted_operator import ScriptedOperator
 from pedi_drake.resources import missions_dir
-from pedi_drake.run import RunRecord
-from pedi_drake.scenario import load_scenario
 from pedi_drake.station.scene import ESTOP_BUTTON_TRIP_TRAVEL
 from pedi_drake.station.scene_contact import ROBOT_CONTACT_SOURCES, scene_contact_index
 
-MISSION = "operator/press_estop_button"
-SCRIPT = missions_dir() / "operator" / "press_estop_button.ops"
-# [s]: the script asks for the autonomous mode at 19.8 s; the leg is back on the ground by about 23 s.
-END = 24.5
 # The press step of the shipped script (down 7 cm at 2 cm/s from 9.94 s) cut to 1 s: the foot stops
 # 2 cm lower, still above the cap, holds, and the rest of the script brings it back.
 PRESS_STEP = "9.94   none        0     0  -0.02"
 STOPS_SHORT = PRESS_STEP + "\n10.94  none        0     0  0"
 
 
-def _run(script: str, name: str) -> dict:
-    """judge_run's result.json of the mission with a scripted operator playing `script` over an
-    in-process LCM bus until END."""
-    lcm = DrakeLcm("memq://")
-    scenario = load_scenario(
-        scenario_text=f"{{mission: {MISSION}, simulation_duration: {END}, operator: {{source: lcm}}}}"
-    )
-    built = MakePedipulationDiagram(scenario, operator_lcm=lcm)
-    builder = DiagramBuilder()
-    builder.AddSystem(built.diagram)
-    steps = parse_script(script, name, frame=FRAME_WORLD)
-    builder.AddSystem(ScriptedOperator(lcm, steps, until=steps[-1].start))
-    simulator = Simulator(builder.Build())
-    built.reserve_logs(simulator.get_mutable_context(), END)
-    simulator.Initialize()
-    start = time.perf_counter()
-    simulator.AdvanceTo(END)
-    context = simulator.get_context()
-    record = RunRecord(
-        scenario=scenario,
-        name=name,
-        hardware=False,
-        built=built,
-        context=context,
-        logs=built.logs(context),
-        sim_time=END,
-        wall_time=time.perf_counter() - start,
-        replay_html=None,
-    )
-    return judge_run(record)
+def _run(script: str, name: str, scenario_name: str = "default") -> dict:
+    return run_scripted_press(scenario_name, "", script, name)
 
 
 def _describe(result: dict) -> str:
@@ -88,6 +48,11 @@ def pressed_run():
 
 
 @pytest.fixture(scope="module")
+def paper002_run():
+    return _run(SCRIPT.read_text(), "press_estop_button on paper 002's controller", "estop_paper002")
+
+
+@pytest.fixture(scope="module")
 def short_run():
     text = SCRIPT.read_text()
     assert PRESS_STEP in text
@@ -100,6 +65,14 @@ def test_the_operator_presses_the_button_with_the_force_under_the_bound(pressed_
     assert press["pressed"] and press["max_travel_m"] >= ESTOP_BUTTON_TRIP_TRAVEL
     assert press["gentle"] and press["max_force_n"] <= press["force_bound_n"]
     assert press["max_force_n"] > 0.0  # the foot, not another part of the leg, pressed it
+
+
+def test_paper_002s_controller_bounded_by_its_eq_11_estimate_presses_it_under_the_bound(paper002_run):
+    print(f"\nE-stop button on paper 002's controller: {_describe(paper002_run)}")
+    press = paper002_run["button_press"]
+    assert paper002_run["success"], paper002_run["reason"]
+    assert press["pressed"] and press["max_force_n"] <= press["force_bound_n"]
+    assert paper002_run["controller"] == "projected_impedance"
 
 
 def test_the_mission_succeeds_and_the_robot_stays_up(pressed_run):

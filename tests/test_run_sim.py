@@ -80,3 +80,17 @@ def test_teleop_runs_the_teleoperated_mission_as_the_readme_starts_it():
 def test_teleop_with_a_mission_runs_that_mission_under_the_panel():
     _, (scenario, _, _) = _prepared("--teleop", "--mission", "give_paw")
     assert scenario.mission == "give_paw" and scenario.operator.source == "meshcat"
+
+
+def test_teleop_on_a_scenario_with_an_operator_mission_runs_it_on_the_scenarios_controller():
+    # estop_paper002 names paper 002's controller, its Eq. 11 estimate and the E-stop mission.
+    _, (scenario, _, _) = _prepared("--teleop", "--scenario_name", "estop_paper002")
+    assert scenario.mission == "operator/press_estop_button" and scenario.operator.source == "meshcat"
+    assert scenario.controller == "projected_impedance" and scenario.force_estimate == "impedance"
+
+
+def test_a_mission_named_on_the_command_line_keeps_the_scenarios_controller():
+    _, (scenario, _, _) = _prepared("--scenario_name", "teleop_paper002", "--mission", "give_paw")
+    assert scenario.mission == "give_paw" and scenario.controller == "projected_impedance"
+    _, (scenario, _, _) = _prepared("--mission", "give_paw")
+    assert scenario.controller == "whole_body"

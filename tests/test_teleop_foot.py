@@ -104,14 +104,23 @@ def test_a_huge_or_overflowed_velocity_is_bounded_and_never_nan():
     assert clipped and np.array_equal(velocity, np.zeros(3))
 
 
-def test_the_force_bound_stops_motion_into_the_contact_but_not_away():
-    force_on_foot = np.array([-20.0, 0.0, 0.0])  # a wall in front pushes back
-    velocity, limited = bound_force(np.array([0.1, 0.05, 0.0]), force_on_foot, 15.0)
-    assert limited
-    np.testing.assert_allclose(velocity, [0.0, 0.05, 0.0])
-    velocity, _ = bound_force(np.array([-0.1, 0.0, 0.0]), force_on_foot, 15.0)
-    np.testing.assert_allclose(velocity, [-0.1, 0.0, 0.0])
-    assert not bound_force(np.array([0.1, 0.0, 0.0]), np.array([-10.0, 0.0, 0.0]), 15.0)[1]
+def test_the_force_bound_slows_motion_into_the_contact_stops_it_and_backs_out_but_not_away():
+    def wall(force):  # a wall in front pushes back with `force` [N]
+        return np.array([-force, 0.0, 0.0])
+
+    towards = np.array([0.1, 0.05, 0.0])
+    velocity, limited = bound_force(towards, wall(10.0), 15.0, 0.1)
+    assert not limited and np.array_equal(velocity, towards)  # far below the bound
+    velocity, limited = bound_force(towards, wall(14.0), 15.0, 0.1)
+    assert limited and 0.0 < velocity[0] < 0.05  # near it: slowed
+    np.testing.assert_allclose(velocity[1], 0.05)  # along the wall: untouched
+    velocity, limited = bound_force(towards, wall(15.0), 15.0, 0.1)
+    assert limited and velocity[0] == pytest.approx(0.0, abs=1e-12)  # at it: stopped
+    velocity, limited = bound_force(towards, wall(20.0), 15.0, 0.1)
+    assert limited and -0.1 <= velocity[0] < 0.0  # beyond it: backing out, within the speed bound
+    velocity, _ = bound_force(np.array([-0.1, 0.0, 0.0]), wall(20.0), 15.0, 0.1)
+    assert velocity[0] <= -0.1  # away from the wall: never slowed
+    assert not bound_force(towards, np.zeros(3), 15.0, 0.1)[1]
 
 
 def _view(t: float, operator: OperatorCommand, q: np.ndarray) -> RobotView:

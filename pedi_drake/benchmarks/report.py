@@ -107,7 +107,27 @@ def _missions(d: dict) -> str:
     runs = sum(row["runs"] for row in summary.values())
     succeeded = sum(row["succeeded"] for row in summary.values())
     worst = max(row["foot_error_max_m"] or 0.0 for row in summary.values())
-    return f"successful runs: {succeeded} of {runs}; largest final foot error {1e3 * worst:.1f} mm"
+    text = f"successful runs: {succeeded} of {runs}; largest final foot error {1e3 * worst:.1f} mm"
+    sensing = [row for row in summary.values() if "obstacles_correct" in row]
+    if sensing:
+        right, pressed = sum(row["obstacles_correct"] for row in sensing), sum(row["runs"] for row in sensing)
+        text += f"; obstacles told apart (rigid or soft, fixed or mobile) in {right} of {pressed} runs"
+    pushes = [row for row in summary.values() if "object_pushed_m_min" in row]
+    for row in pushes:
+        text += (
+            f"; light obstacle pushed at least {100 * row['object_pushed_m_min']:.1f} cm, stance feet within "
+            f"{1e3 * row['stance_foot_slide_m_max']:.1f} mm"
+        )
+    return text
+
+
+def _estop_button(d: dict) -> str:
+    parts = [
+        f"{setup}: {row['succeeded']} of {row['runs']} pressed under the bound, largest true force "
+        f"{row['max_true_force_n']:.1f} N"
+        for setup, row in d["summary"].items()
+    ]
+    return "; ".join(parts) + " (bound 15 N)"
 
 
 def _sil(d: dict) -> str:
@@ -268,6 +288,12 @@ ROWS: tuple[Row, ...] = (
         "guarded_touch.json",
         _guarded_touch,
         "python -m pedi_drake.benchmarks.guarded_touch",
+    ),
+    Row(
+        "E-stop press (paper 002, IV-C f), scripted operator, seed 0 and 5 noisy seeds",
+        "estop_button.json",
+        _estop_button,
+        "python -m pedi_drake.benchmarks.estop_button",
     ),
     Row(
         "Every shipped mission against 30 random draws of the reality gap (studies/reality_gap.yaml)",

@@ -535,6 +535,12 @@ class MissionSpec:
     # The object push the judge requires (None: none).
     object_push: ObjectPush | None = None
 
+    def takes_an_operator(self) -> bool:
+        """Whether an operator has a part in the mission: a teleop_foot phase, or a `teleop:` or
+        `semi_autonomous:` block."""
+        teleop_phase = any(isinstance(phase, TeleopFoot) for phase in self.phases)
+        return teleop_phase or self.teleop is not None or self.semi_autonomous is not None
+
     def planned_duration(self) -> float:
         """Simulated time [s] the mission takes when every phase runs for its planned `duration`
         (a phase without one, such as a press, counts nothing): a rough measure of its cost."""

@@ -11,8 +11,8 @@ Plain functions on arrays (the TeleopFootRunner applies them every mission tick)
     outward component removed (the target slides along the boundary and never leaves it).
   * `step_into_workspace`: from a target the workspace has moved away from (the trunk moved under
     it), the nearest point back inside along the boundary's normal, within a step length;
-  * `bound_speed`, `bound_force`: the velocity clipped to a speed, and without the component that
-    pushes further into a contact whose estimated force exceeds a limit.
+  * `bound_speed`, `bound_force`: the velocity clipped to a speed, and its component into a
+    contact slowed as the contact's estimated force nears a limit, stopped at it, reversed beyond.
 """
 
 import math
@@ -22,6 +22,7 @@ from pydrake.math import RigidTransform
 
 from pedi_drake import robot
 from pedi_drake.ik.analytic import leg_ik_solutions
+from pedi_drake.mission.balance_bound import bound_balance
 
 # Joint-limit distances [rad] enter the margin as metres at this lever (a link length): only the
 # sign and, near a boundary, the active term's gradient matter, not the scale between the terms.
@@ -138,14 +139,15 @@ def bound_speed(velocity: np.ndarray, max_speed: float) -> tuple[np.ndarray, boo
     return velocity * (max_speed / speed), True
 
 
-def bound_force(velocity: np.ndarray, force_W: np.ndarray, max_force: float) -> tuple[np.ndarray, bool]:
-    """(velocity, limited): with the environment's force on the foot `force_W` [N] above `max_force`,
-    the velocity's component against that force (further into the contact) removed."""
+def bound_force(
+    velocity: np.ndarray, force_W: np.ndarray, max_force: float, max_speed: float
+) -> tuple[np.ndarray, bool]:
+    """(velocity, limited): with the environment's force on the foot `force_W` [N] near
+    `max_force`, the velocity's component against that force (further into the contact) slowed,
+    removed at it and turned into a retreat beyond it (at most `max_speed` [m/s]), as the balance
+    bound does (pedi_drake.mission.balance_bound.bound_balance). A foot only stopped at the bound
+    overshoots it: the force keeps rising while the foot's tracking error closes."""
     magnitude = float(np.linalg.norm(force_W))
-    if magnitude <= max_force:
+    if magnitude == 0.0:
         return np.asarray(velocity, float), False
-    into_contact = -np.asarray(force_W, float) / magnitude
-    push = float(velocity @ into_contact)
-    if push <= 0.0:
-        return np.asarray(velocity, float), True
-    return np.asarray(velocity, float) - push * into_contact, True
+    return bound_balance(velocity, force_W, np.asarray(force_W, float) / magnitude, max_force, max_speed)

@@ -8,7 +8,8 @@ a position command as the velocity that would reach it in one tick. Then, in thi
      `return_after` the phase fails, and the mission's recovery puts the leg back on the ground;
   2. speed: at most `max_speed`;
   3. force: with the estimated contact force (the mission's estimate, its bias at the phase start
-     removed) above `max_force`, no motion further into the contact;
+     removed) near `max_force`, motion further into the contact slowed, stopped at it, turned
+     into a retreat beyond it;
   4. balance: the estimated force along its own direction stays below `balance_margin` times the
      live SUF in that direction (pedi_drake.mission.balance_bound: slowed near the limit,
      stopped at it, retreating beyond it), so the operator cannot push the robot over;
@@ -134,7 +135,7 @@ class TeleopFootRunner:
         counts["speed"] += clipped
         force = view.foot_force_estimates_W(phase.leg)[env.force_estimate] - memo["force_bias"]
         memo["max_force_n"] = max(memo["max_force_n"], float(np.linalg.norm(force)))
-        velocity, limited = bound_force(velocity, force, phase.max_force)
+        velocity, limited = bound_force(velocity, force, phase.max_force, phase.max_speed)
         counts["force"] += limited
         velocity, acted = self._balance(phase, progress, view, force, velocity)
         counts["balance"] += acted
