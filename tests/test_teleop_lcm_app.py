@@ -95,3 +95,17 @@ def test_the_app_exits_2_on_a_missing_or_empty_message_log(tmp_path):
             timeout=60,
         )
         assert result.returncode == 2 and result.stderr.strip(), (path, result.stderr)
+
+
+def test_the_feedback_line_shows_the_force_the_balance_margin_and_the_suf():
+    from pedi_drake.apps.teleop_lcm import feedback_text
+    from pedi_drake.operator.feedback import feedback_message, feedback_vector
+
+    message = feedback_message(feedback_vector(0, np.array([-6.0, 0.0, 8.0]), 14.0, 22.5, 1, True), 3.0, 7)
+    text = feedback_text(message)
+    assert "FR foot force  10.0 N" in text and "margin   4.0 N" in text and "SUF  22.5 N" in text
+    assert "BOUND ACTING" in text
+    off = feedback_message(feedback_vector(0, np.zeros(3), float("nan"), float("nan"), 0, False), 3.0, 8)
+    assert "balance bound off" in feedback_text(off) and "SUF" not in feedback_text(off)
+    assert feedback_text(None) == "no feedback yet"
+    assert feedback_text(feedback_message(feedback_vector(-1, None, 0.0, 0.0, 0, False), 3.0, 9)) == "no foot driven"

@@ -12,7 +12,9 @@ In a terminal, keys set the command, which is sent `--rate` times a second until
     e       E-stop (latched by the robot)     q      quit (the robot sees the operator fall silent)
 
 A velocity key holds its velocity (`--speed`, in `--frame`) until space or another velocity key:
-a terminal reports key presses, not releases.
+a terminal reports key presses, not releases. Below the command, the line shows the controller's
+latest haptic feedback (the scenario's `operator.feedback_channel`): the estimated force on the
+driven foot, the balance bound's limit along it and the margin left, and the live SUF.
 
 With `--script FILE`, or when stdin is not a terminal, the commands come from a script instead:
 one step per line, `t_s mode vx vy vz` (time from the start [s], increasing; mode `none`,
@@ -52,6 +54,7 @@ from pedi_drake.go1_driver.lcmtypes import foot_feedback_lcmt
 from pedi_drake.operator.command import FRAME_TRUNK, FRAME_WORLD, MODE_AUTONOMOUS, MODE_NONE, MODE_TELEOP
 from pedi_drake.operator.message_stream import play_messages, read_lcm_log
 from pedi_drake.operator.scripted_operator import ScriptStep, foot_command_message, script_stream
+from pedi_drake.robot import LEG_NAMES
 from pedi_drake.scenario import load_scenario
 
 SCRIPT_MODES = {"none": MODE_NONE, "teleop": MODE_TELEOP, "autonomous": MODE_AUTONOMOUS, "estop": MODE_NONE}
@@ -174,21 +177,54 @@ def _raw_terminal():
         termios.tcsetattr(sys.stdin, termios.TCSADRAIN, saved)
 
 
-def run_keyboard(lcm: DrakeLcmInterface, channel: str, rate: float, speed: float, frame: int) -> int:
-    """Sends the keys' command at `rate` [Hz] until `q`; the number of messages."""
+def feedback_text(message: foot_feedback_lcmt | None) -> str:
+    """One line of what a foot_feedback_lcmt says: the driven foot's estimated force [N], the
+    balance bound's limit along it and the margin left [N], the live SUF [N]."""
+    if message is None:
+        return "no feedback yet"
+    if message.leg < 0:
+        return "no foot driven"
+    force = np.array(message.force, float)
+    text = f"{LEG_NAMES[message.leg]} foot force {np.linalg.norm(force):5.1f} N {np.round(force, 1)}"
+    if math.isfinite(message.force_limit):
+        along = float(np.linalg.norm(force))
+        text += f" | balance limit {message.force_limit:5.1f} N, margin {message.force_limit - along:5.1f} N"
+    else:
+        text += " | balance bound off"
+    if math.isfinite(message.suf):
+        text += f" | SUF {message.suf:5.1f} N"
+    return text + (" | BOUND ACTING" if message.bound_active else "")
+
+
+def run_keyboard(
+    lcm: DrakeLcmInterface, channel: str, feedback_channel: str, rate: float, speed: float, frame: int
+) -> int:
+    """Sends the keys' command at `rate` [Hz] until `q`, showing the latest feedback on
+    `feedback_channel`; the number of messages."""
     operator, count, start = KeyboardOperator(speed, frame), 0, time.monotonic()
+    latest = []
+
+    def take(data: bytes) -> None:
+        latest[:] = [foot_feedback_lcmt.decode(data)]
+
+    if feedback_channel:
+        lcm.Subscribe(feedback_channel, take)
     print(__doc__.split("\n\n")[2], flush=True)
     with _raw_terminal():
         while True:
             ready, _, _ = select.select([sys.stdin], [], [], 1.0 / rate)
             if ready and not operator.press(sys.stdin.read(1)):
                 return count
+            lcm.HandleSubscriptions(0)
             t = time.monotonic() - start
             count += 1
             lcm.Publish(channel, foot_command_message(operator.step, t, count).encode())
             step = operator.step
             print(
-                f"\rmode {step.mode_request} v {np.round(step.value, 3)} m/s estop {step.estop}   ", end="", flush=True
+                f"\rmode {step.mode_request} v {np.round(step.value, 3)} m/s estop {step.estop} | "
+                f"{feedback_text(latest[0] if latest else None)}   ",
+                end="",
+                flush=True,
             )
 
 
@@ -246,7 +282,7 @@ def main(argv: list[str] | None = None) -> int:
     if steps is not None:
         count = play_script(steps, lcm, config.channel, args.rate, start=start)
     else:
-        count = run_keyboard(lcm, config.channel, args.rate, args.speed, frame)
+        count = run_keyboard(lcm, config.channel, config.feedback_channel, args.rate, args.speed, frame)
     print(f"\nsent {count} foot commands on {config.channel} ({url})")
     return 0
 
