@@ -54,3 +54,18 @@ def test_the_height_error_counts_only_while_standing():
     assert 0 < error["samples"] < n
     never = estimator_height_error(logs, {"wall_time": wall, "p_WB": np.zeros((200, 3))})
     assert never["median_m"] is None and never["samples"] == 0
+
+
+def test_the_height_error_leaves_out_a_trunk_rising_or_lowering():
+    # Standing, then lowered from 0.28 to 0.22 m at 5 cm/s (a lean on the prongs), then still: the
+    # estimate lags the motion by 20 mm while it moves and is 1 mm off while still.
+    n = 1000
+    wall = 50.0 + 0.01 * np.arange(200)
+    z_true = np.interp(wall, [50.0, 50.5, 51.7, 52.0], [0.28, 0.28, 0.22, 0.22])
+    p_WB = np.zeros((200, 3))
+    p_WB[:, 2] = z_true
+    t = 50.0 + PERIOD * np.arange(n)
+    moving = (t > 50.5) & (t < 51.7)
+    z_estimated = np.interp(t, wall, z_true) + np.where(moving, 0.02, 0.001)
+    error = estimator_height_error(_controller_logs(50.0, n, z_estimated), {"wall_time": wall, "p_WB": p_WB})
+    assert abs(error["max_m"] - 0.001) < 1e-6

@@ -24,7 +24,7 @@ the same wire and truth log, another engine and a Go1 model with a real one's jo
 soft feet); everything else is unchanged. For either robot, `sil.json` has the mission's touches
 judged by the truth log's contact forces (`touches`, pedi_drake.evaluation.touches), a
 `success_by_truth` (the mission's success and every touch happened by physics) and the estimate's
-vertical trunk error against the truth while standing (`estimator_trunk_height_error`).
+vertical trunk error against the truth while standing still (`estimator_trunk_height_error`).
 
 `--operator_log FILE` adds an operator in a third process, as a person would run one:
 `python -m pedi_drake.apps.teleop_lcm --lcm_log FILE --start_on_feedback` on the same bus, which
@@ -83,6 +83,8 @@ GROUP = "239.255.76.67"
 RUN_SIM = Path(__file__).resolve().parents[2] / "run_sim.py"
 BRIDGE_START_TIMEOUT = 60.0  # [s] for the bridge to build its diagram and start publishing
 START_WINDOW = 0.1  # [s] of the loop's start judged by `start_transient`
+# [m/s] a trunk moving up or down slower than this, above STANDING_TRUNK_HEIGHT, stands still.
+STILL_SPEED = 0.02
 # [s] between two ground-truth samples of the bridge (TRUTH_LOG_PERIOD apart in simulated time)
 # that `bridge_pace` counts as the robot side falling behind: two samples' worth.
 BRIDGE_GAP = 0.02
@@ -118,9 +120,9 @@ def true_foot_errors(result: dict, controller_logs: dict, truth: dict) -> list[d
     return rows
 
 
-def _estimate_and_truth(controller_logs: dict, truth: dict) -> tuple[np.ndarray, np.ndarray]:
+def _estimate_and_truth(controller_logs: dict, truth: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(estimated, true) trunk positions (3, n) [m] at the estimator's logged samples within the
-    truth log's span, aligned by the wall clock."""
+    truth log's span, aligned by the wall clock, and those samples' wall times (n,) [s]."""
     clock, base = controller_logs["wall_clock"], controller_logs["base_state"]
     n = min(len(clock.times), len(base.times))
     wall = clock.data[0, :n]
@@ -128,22 +130,27 @@ def _estimate_and_truth(controller_logs: dict, truth: dict) -> tuple[np.ndarray,
     # The sample logged at t = 0 precedes the estimator's first update (it is all zeros).
     inside &= base.times[:n] > 0.0
     p_true = np.array([np.interp(wall[inside], truth["wall_time"], truth["p_WB"][:, k]) for k in range(3)])
-    return base.data[4:7, :n][:, inside], p_true
+    return base.data[4:7, :n][:, inside], p_true, wall[inside]
 
 
 def estimator_error(controller_logs: dict, truth: dict) -> dict:
     """Trunk position error of the estimate against the bridge's ground truth over the run [m]."""
-    p_estimated, p_true = _estimate_and_truth(controller_logs, truth)
+    p_estimated, p_true, _ = _estimate_and_truth(controller_logs, truth)
     error = np.linalg.norm(p_estimated - p_true, axis=0)
     return {"max_m": float(np.max(error)), "final_m": float(error[-1])}
 
 
 def estimator_height_error(controller_logs: dict, truth: dict, standing: float = STANDING_TRUNK_HEIGHT) -> dict:
-    """|z_estimated - z_true| of the trunk [m], median and max over the run's samples with the true
-    trunk above `standing` [m] (None when it never stood), and how many samples that was."""
-    p_estimated, p_true = _estimate_and_truth(controller_logs, truth)
-    up = p_true[2] > standing
-    error = np.abs(p_estimated[2, up] - p_true[2, up])
+    """|z_estimated - z_true| of the trunk [m], median and max over the run's samples where the
+    robot stands still: the true trunk above `standing` [m] and moving up or down slower than
+    STILL_SPEED (a stand-up, a lean on the prongs or the rise from them is not standing); None when
+    it never did; how many samples that was."""
+    p_estimated, p_true, wall = _estimate_and_truth(controller_logs, truth)
+    if wall.size < 2:
+        return {"median_m": None, "max_m": None, "samples": 0, "standing_above_m": standing}
+    vertical_speed = np.gradient(p_true[2], wall)
+    still = (p_true[2] > standing) & (np.abs(vertical_speed) < STILL_SPEED)
+    error = np.abs(p_estimated[2, still] - p_true[2, still])
     if error.size == 0:
         return {"median_m": None, "max_m": None, "samples": 0, "standing_above_m": standing}
     return {
@@ -559,7 +566,8 @@ def main() -> int:
     height = result["sil"]["estimator_trunk_height_error"]
     if height["median_m"] is not None:
         print(
-            f"estimated trunk height vs truth while standing (true z > {height['standing_above_m']} m): median "
+            f"estimated trunk height vs truth while standing still (true z > {height['standing_above_m']} m, "
+            f"moving vertically under {STILL_SPEED} m/s): median "
             f"{1000 * height['median_m']:.1f} mm, max {1000 * height['max_m']:.1f} mm"
         )
     start = result["sil"]["start"]

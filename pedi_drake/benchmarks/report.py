@@ -151,7 +151,7 @@ def _sil_mujoco(d: dict) -> str:
     return (
         f"runs a success by the engine's truth (touches by its contact forces): {ok} of {len(rows)}; worst true "
         f"foot error per mission [mm] (the robot's feet 3 mm larger): {errors}; trunk height estimate "
-        f"while standing: median at most {max(m for m in medians if m is not None):.1f} mm, "
+        f"while standing still: median at most {max(m for m in medians if m is not None):.1f} mm, "
         f"largest {max(m for m in largest if m is not None):.1f} mm"
     )
 
