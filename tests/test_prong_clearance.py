@@ -3,15 +3,21 @@
 import pytest
 
 from pedi_drake import robot
-from pedi_drake.prongs import PRONG_HALF_SPACING, PRONG_HIP_INWARD_LIMIT, TRUNK_HALF_HEIGHT, ProngDesign
+from pedi_drake.prongs import (
+    PRONG_HALF_SPACING,
+    PRONG_HIP_INWARD_LIMIT,
+    TRUNK_HALF_HEIGHT,
+    WIDEST_PRONG_HALF_SPACING,
+    ProngDesign,
+)
 from pedi_drake.suf.prong_clearance import hip_inward_reach, leg_prong_clearance, widest_prong_spacing
 
 
-def test_the_shipped_spacing_is_the_widest_the_legs_allow():
+def test_the_widest_spacing_is_the_trunks_end_and_the_shipped_one_within_it():
     shipped = ProngDesign()
-    assert shipped.attachment_points[0][0] == PRONG_HALF_SPACING
+    assert shipped.attachment_points[0][0] == PRONG_HALF_SPACING <= WIDEST_PRONG_HALF_SPACING
     widest = widest_prong_spacing(shipped.length, shipped.tip_radius, PRONG_HIP_INWARD_LIMIT)
-    assert widest == pytest.approx(PRONG_HALF_SPACING, abs=1e-3)
+    assert widest == pytest.approx(WIDEST_PRONG_HALF_SPACING, abs=1e-3)
     # The Go1's legs do not bound it: the trunk's end does.
     assert widest == pytest.approx(robot.TRUNK_HALF_EXTENTS[0] - robot.PRONG_ROD_RADIUS, abs=1e-9)
 
@@ -27,7 +33,7 @@ def test_a_leg_reaches_centre_line_prongs_at_the_same_hip_angle_whatever_their_s
     def pair(x):
         return ProngDesign(attachment_points=[[x, 0.0, -TRUNK_HALF_HEIGHT], [-x, 0.0, -TRUNK_HALF_HEIGHT]])
 
-    reaches = [hip_inward_reach(pair(x)) for x in (0.05, PRONG_HALF_SPACING)]
+    reaches = [hip_inward_reach(pair(x)) for x in (0.05, WIDEST_PRONG_HALF_SPACING)]
     assert PRONG_HIP_INWARD_LIMIT < reaches[0] < robot.HARDWARE_Q_UPPER[0]
     assert reaches[1] == reaches[0]
 

@@ -97,7 +97,7 @@ def test_a_scene_object_duplicated_by_the_mission_exits_2(main, tmp_path):
         "all_objects",
         "--mission",
         "hit_target_front",
-        expect=["scene[6].name", "duplicate object name 'target_panel'"],
+        expect=["scene[8].name", "duplicate object name 'target_panel'"],
     )
 
 
