@@ -303,6 +303,14 @@ ROWS: tuple[Row, ...] = (
         summary=True,
     ),
     Row(
+        "The missions with free obstacles against the same 30 draws (studies/reality_gap_slice.yaml)",
+        "reality_gap_slice.json",
+        _reality_gap,
+        "python -m pedi_drake.batch studies/reality_gap_slice.yaml && python -m pedi_drake.benchmarks.reality_gap "
+        "out/studies/reality_gap_slice --out benchmarks/results/reality_gap_slice.json",
+        summary=True,
+    ),
+    Row(
         "Teleoperation at real time over UDP",
         "teleop.json",
         _teleop,
