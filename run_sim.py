@@ -43,7 +43,8 @@ from pedi_drake.scenario import MISSION_CONTROLLERS, default_scenario_file, load
 ERROR_FILE = "error.txt"
 # The mission of `--teleop` unless --mission names another or the scenario's own mission takes an
 # operator: the default scenario's mission is autonomous and would never hand the foot to the panel.
-TELEOP_MISSION = "operator/teleop_foot"
+# The FR foot is lifted 5 cm from a wall, so that a push on it shows the force display.
+TELEOP_MISSION = "operator/teleop_foot_wall"
 
 
 def _prepare(args):

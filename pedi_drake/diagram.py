@@ -22,6 +22,7 @@ from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource, Demultiplexer, MatrixGain, Multiplexer, VectorLogSink
 
+from pedi_drake.control.controller_switch import ControllerSwitch
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.references import BODY_REFERENCE_SIZE, LEG_REFERENCE_SIZE
 from pedi_drake.control.stand_controller import StandController
@@ -33,7 +34,7 @@ from pedi_drake.exceptions import ScenarioError
 from pedi_drake.go1_driver.pacing import loop_wait
 from pedi_drake.ik.leg_ik_system import LegIkSystem
 from pedi_drake.mission.mission_manager import MissionManager, needs_posture_planner
-from pedi_drake.mission.spec import MissionSpec, load_mission
+from pedi_drake.mission.spec import SWITCHABLE_CONTROLLERS, MissionSpec, load_mission
 from pedi_drake.operator.command import OPERATOR_COMMAND_SIZE
 from pedi_drake.operator.estop_gate import OperatorEstopGate
 from pedi_drake.operator.feedback import OperatorFeedback
@@ -47,6 +48,7 @@ from pedi_drake.runtime.wall_clock import WallClock
 from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
 from pedi_drake.station_interface import MakeStation
 from pedi_drake.suf.live_suf_system import LiveSufSystem
+from pedi_drake.viz.force_display import ForceDisplay
 
 # Signals logged by every run (name -> exported port of the diagram).
 LOGGED_SIGNALS = (
@@ -123,6 +125,32 @@ def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
     return merged
 
 
+def _whole_body_controller(scenario: Scenario, name: str):
+    """The whole-body controller `name` ("whole_body" or "projected_impedance") of `scenario`."""
+    if name == "projected_impedance":
+        return ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs)
+    return WholeBodyController(scenario.whole_body, scenario.robot.prongs)
+
+
+def _add_controller_switch(
+    builder: DiagramBuilder, scenario: Scenario, controllers, manager, operator
+) -> ControllerSwitch:
+    """The ControllerSwitch between the two controllers (the scenario's first), fed by the mission's
+    and the operator's requests."""
+    switch = builder.AddNamedSystem(
+        "controller.switch",
+        ControllerSwitch(scenario.controller, scenario.whole_body.period, scenario.controller_switch.blend_time),
+    )
+    names = [scenario.controller, *(name for name in SWITCHABLE_CONTROLLERS if name != scenario.controller)]
+    for name, system in zip(names, controllers, strict=True):
+        builder.Connect(system.GetOutputPort("command"), switch.command_ports[name])
+    if manager is not None:
+        builder.Connect(manager.GetOutputPort("controller_request"), switch.mission_request_port)
+    if operator is not None:
+        builder.Connect(operator.GetOutputPort("operator_command"), switch.operator_port)
+    return switch
+
+
 def _add_leg_ik(builder: DiagramBuilder, manager: MissionManager) -> None:
     """One LegIkSystem per leg the mission moves ("ik.<leg>"), asked and answered by the manager.
 
@@ -182,7 +210,10 @@ def _add_operator(
     if config.source == "meshcat":
         if meshcat is None:
             raise ScenarioError("operator.source: 'meshcat' needs a Meshcat (run_sim.py --meshcat --teleop)")
-        return builder.AddNamedSystem("operator", MeshcatOperatorPanel(config.meshcat, meshcat, config.period))
+        panel = MeshcatOperatorPanel(
+            config.meshcat, meshcat, config.period, controller_buttons=scenario.controller_switch.enabled
+        )
+        return builder.AddNamedSystem("operator", panel)
     if lcm is None:
         lcm = DrakeLcm(scenario.lcm_buses[config.lcm_bus].lcm_url)
     return builder.AddNamedSystem("operator", OperatorInput(config, lcm))
@@ -259,7 +290,7 @@ def MakePedipulationDiagram(
     base_state = estimator.GetOutputPort("base_state")
 
     extra_logs = {}
-    operator = operator_bus = None
+    operator = operator_bus = manager = None
     if operator_messages is not None and scenario.operator.source != "lcm":
         raise ScenarioError(f"operator.source: an operator's stream is played on LCM, got {scenario.operator.source!r}")
     if scenario.operator.source != "none":
@@ -275,14 +306,18 @@ def MakePedipulationDiagram(
         controller = builder.AddNamedSystem("controller", StandController(scenario.stand))
         builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
     else:
-        if scenario.controller == "projected_impedance":
-            system = ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs)
-        else:
-            system = WholeBodyController(scenario.whole_body, scenario.robot.prongs)
+        system = _whole_body_controller(scenario, scenario.controller)
         controller = builder.AddNamedSystem("controller", system)
-        builder.Connect(base_state, controller.base_state_port)
-        builder.Connect(station.GetOutputPort("go1.position_measured"), controller.position_port)
-        builder.Connect(station.GetOutputPort("go1.velocity_measured"), controller.velocity_port)
+        # With controller_switch, the other controller ticks beside it on the same inputs.
+        controllers = [controller]
+        if scenario.controller_switch.enabled:
+            other = next(name for name in SWITCHABLE_CONTROLLERS if name != scenario.controller)
+            controllers.append(builder.AddNamedSystem(f"controller.{other}", _whole_body_controller(scenario, other)))
+            extra_logs[f"controller.{other}.diagnostics"] = controllers[1].diagnostics_port
+        for each in controllers:
+            builder.Connect(base_state, each.base_state_port)
+            builder.Connect(station.GetOutputPort("go1.position_measured"), each.position_port)
+            builder.Connect(station.GetOutputPort("go1.velocity_measured"), each.velocity_port)
         extra_logs["controller.diagnostics"] = controller.diagnostics_port
         if mission is not None:
             force_estimate = mission.force_estimate or scenario.force_estimate
@@ -322,7 +357,8 @@ def MakePedipulationDiagram(
             )
             builder.Connect(manager.GetOutputPort("references"), split.get_input_port())
             body_reference, leg_reference = split.get_output_port(0), split.get_output_port(1)
-            builder.Connect(body_reference, controller.GetInputPort("body_reference"))
+            for each in controllers:
+                builder.Connect(body_reference, each.GetInputPort("body_reference"))
             if scenario.trunk_load_compensation.enabled:
                 compensator = builder.AddNamedSystem(
                     "trunk_load",
@@ -338,11 +374,13 @@ def MakePedipulationDiagram(
                 builder.Connect(leg_reference, compensator.leg_reference_port)
                 builder.Connect(base_state, compensator.base_state_port)
                 builder.Connect(manager.GetOutputPort("contact_set"), compensator.contact_set_port)
-                builder.Connect(compensator.wrench_port, controller.GetInputPort("trunk_external_wrench"))
+                for each in controllers:
+                    builder.Connect(compensator.wrench_port, each.GetInputPort("trunk_external_wrench"))
                 extra_logs["trunk_load.learnt"] = compensator.GetOutputPort("learnt")
-            builder.Connect(leg_reference, controller.GetInputPort("leg_reference"))
-            for name in ("contact_set", "safety_polygon", "friction"):
-                builder.Connect(manager.GetOutputPort(name), controller.GetInputPort(name))
+            for each in controllers:
+                builder.Connect(leg_reference, each.GetInputPort("leg_reference"))
+                for name in ("contact_set", "safety_polygon", "friction"):
+                    builder.Connect(manager.GetOutputPort(name), each.GetInputPort(name))
             if isinstance(estimator, KalmanEstimator):
                 builder.Connect(manager.GetOutputPort("contact_set"), estimator.contact_set_port)
             if scenario.live_suf.enabled:
@@ -354,6 +392,14 @@ def MakePedipulationDiagram(
                     OperatorFeedback(operator_bus, scenario.operator.feedback_channel, scenario.operator.period),
                 )
                 builder.Connect(manager.GetOutputPort("operator_feedback"), feedback.GetInputPort("operator_feedback"))
+            if meshcat is not None and operator is not None:
+                # The haptic feedback drawn in the live view: the force arrow, the limit's bar.
+                display = ForceDisplay(meshcat, scenario.operator.period)
+                builder.AddNamedSystem("operator.force_display", display)
+                builder.Connect(manager.GetOutputPort("operator_feedback"), display.GetInputPort("operator_feedback"))
+                builder.Connect(base_state, display.GetInputPort("base_state"))
+                measured = station.GetOutputPort("go1.position_measured")
+                builder.Connect(measured, display.GetInputPort("position_measured"))
             extra_logs["mission.status"] = manager.GetOutputPort("mission_status")
             # The driven foot's estimated force, which the teleoperated foot's force bound acts on.
             extra_logs["mission.operator_feedback"] = manager.GetOutputPort("operator_feedback")
@@ -362,6 +408,10 @@ def MakePedipulationDiagram(
             extra_logs["mission.contact_set"] = manager.GetOutputPort("contact_set")
             extra_logs["mission.safety_polygon"] = manager.GetOutputPort("safety_polygon")
     command = controller.GetOutputPort("command")
+    if scenario.controller != "stand_pd" and scenario.controller_switch.enabled:
+        switch = _add_controller_switch(builder, scenario, controllers, manager, operator)
+        command = switch.GetOutputPort("command")
+        extra_logs["controller.switch"] = switch.GetOutputPort("switch_state")
     if operator is not None:
         command = _connect_operator_estop(builder, operator, station, command, scenario, hardware)
     builder.Connect(command, station.GetInputPort("go1.command"))

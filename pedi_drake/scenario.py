@@ -25,12 +25,14 @@ from pedi_drake.control.config import (
     StandControllerConfig,
     WholeBodyControllerConfig,
 )
+from pedi_drake.control.controller_switch import ControllerSwitchConfig
 from pedi_drake.control.trunk_load_compensation import TrunkLoadCompensationConfig
 from pedi_drake.estimation.config import KalmanEstimatorConfig
 from pedi_drake.exceptions import ProngDesignError, ScenarioError
 from pedi_drake.go1_driver.config import Go1DriverConfig
 from pedi_drake.go1_driver.constants import DEFAULT_GO1_LCM_URL, GO1_BUS_NAME
 from pedi_drake.go1_driver.pacing import wait_problem
+from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.resources import models_dir, scenarios_dir
@@ -218,6 +220,9 @@ class Scenario:
     whole_body: WholeBodyControllerConfig = dataclasses.field(default_factory=WholeBodyControllerConfig)
     # Settings of paper 002's projected-impedance controller.
     projected_impedance: ProjectedImpedanceConfig = dataclasses.field(default_factory=ProjectedImpedanceConfig)
+    # Both whole-body controllers in the run, switched by the mission or the operator
+    # (pedi_drake.control.controller_switch); `controller` is the one driving at the start.
+    controller_switch: ControllerSwitchConfig = dataclasses.field(default_factory=ControllerSwitchConfig)
     # Integral action on the trunk's tracking under a mission: learns the load the controllers'
     # model does not know (payload, weak motors, joint friction); see
     # pedi_drake.control.trunk_load_compensation.
@@ -324,6 +329,27 @@ class Scenario:
         for i, push in enumerate(self.pushes):
             for field, problem in push.problems():
                 need(False, f"pushes[{i}].{field}", problem)
+        for field, problem in self.controller_switch.problems():
+            need(False, f"controller_switch.{field}", problem)
+        if self.controller_switch.enabled:
+            need(
+                self.controller in CONTROLLER_NAMES.values(),
+                "controller",
+                f"controller_switch runs both {tuple(CONTROLLER_NAMES.values())}: the one driving at the start must "
+                f"be one of them, got {self.controller!r}",
+            )
+            need(
+                self.force_estimate != "impedance",
+                "force_estimate",
+                "'impedance' (Eq. 11) holds only while paper 002's controller drives the motors: with "
+                "controller_switch use joint_torque",
+            )
+            need(
+                self.whole_body.period == self.projected_impedance.period,
+                "projected_impedance.period",
+                f"both controllers tick together: must equal whole_body.period {self.whole_body.period}, "
+                f"got {self.projected_impedance.period}",
+            )
         for field, problem in self.trunk_load_compensation.problems():
             need(False, f"trunk_load_compensation.{field}", problem)
         for field, problem in self.model_error.problems(self.plant_config):

@@ -21,6 +21,8 @@ WALL_CLOCK_MODULES = {
     "test_run_interrupt",
     "test_batch",
     "test_replay_browser",
+    "test_meshcat_teleop_browser",
+    "test_haptic_device_app",
 }
 
 

@@ -321,6 +321,7 @@ def test_every_progress_field_is_either_shared_or_duplicated_by_copy():
         "resume_index",
         "operator_mode",
         "teleop_pending",
+        "controller_request",
         "switches",
         "target_requests",
         "last_target",

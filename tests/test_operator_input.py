@@ -54,6 +54,10 @@ def _valid() -> foot_command_lcmt:
     return foot_command_message(ScriptStep(0.0, (0.01, 0.0, 0.0), mode_request=MODE_TELEOP), 0.0, 1)
 
 
+def _padded_to_foot_command_size(data: bytes) -> bytes:
+    return data + bytes(len(_valid().encode()) - len(data))
+
+
 def _with(**fields) -> bytes:
     message = _valid()
     for name, value in fields.items():
@@ -65,7 +69,7 @@ def _with(**fields) -> bytes:
     ("data", "reason"),
     [
         (_valid().encode()[:-3], "wrong_size"),
-        (rc_command_lcmt().encode() + bytes(6), "wrong_fingerprint"),  # padded to the right size
+        (_padded_to_foot_command_size(rc_command_lcmt().encode()), "wrong_fingerprint"),
         (_with(value=[float("nan"), 0.0, 0.0]), "nonfinite"),
         (_with(value=[0.0, float("inf"), 0.0]), "nonfinite"),
         (_with(mode_request=7), "out_of_range"),

@@ -14,15 +14,26 @@ from pydrake.systems.analysis import Simulator
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.go1_command import split_command
-from pedi_drake.operator.command import FRAME_WORLD, KIND_VELOCITY, MODE_AUTONOMOUS, MODE_TELEOP, OperatorCommand
+from pedi_drake.operator.command import (
+    CONTROLLER_NONE,
+    CONTROLLER_PROJECTED_IMPEDANCE,
+    CONTROLLER_WHOLE_BODY,
+    FRAME_WORLD,
+    KIND_VELOCITY,
+    MODE_AUTONOMOUS,
+    MODE_TELEOP,
+    OperatorCommand,
+)
 from pedi_drake.operator.config import MeshcatPanelConfig
 from pedi_drake.operator.meshcat_page import MeshcatPage, msgpack_map
 from pedi_drake.operator.meshcat_panel import (
     AUTONOMOUS_BUTTON,
     ESTOP_BUTTON,
+    PROJECTED_IMPEDANCE_BUTTON,
     SLIDERS,
     STOP_BUTTON,
     TELEOP_BUTTON,
+    WHOLE_BODY_BUTTON,
     MeshcatOperatorPanel,
 )
 from pedi_drake.scenario import load_scenario
@@ -36,8 +47,8 @@ def meshcat():
     return Meshcat()
 
 
-def _make(meshcat, **config):
-    panel = MeshcatOperatorPanel(MeshcatPanelConfig(**config), meshcat, PERIOD)
+def _make(meshcat, controller_buttons=False, **config):
+    panel = MeshcatOperatorPanel(MeshcatPanelConfig(**config), meshcat, PERIOD, controller_buttons=controller_buttons)
     simulator = Simulator(panel)
     simulator.Initialize()
     return panel, simulator
@@ -83,6 +94,18 @@ def test_both_mode_buttons_in_one_period_ask_for_the_autonomous_mission(meshcat)
         assert _tick(panel, simulator, 0.05).mode_request == MODE_AUTONOMOUS
         page.click(TELEOP_BUTTON)
         assert _tick(panel, simulator, 0.1).mode_request == MODE_TELEOP
+
+
+def test_the_controller_buttons_ask_for_a_controller_only_where_the_run_has_both(meshcat):
+    panel, simulator = _make(meshcat, controller_buttons=True)
+    with MeshcatPage(meshcat) as page:
+        assert _tick(panel, simulator, 0.05).controller_request == CONTROLLER_NONE
+        page.click(PROJECTED_IMPEDANCE_BUTTON)
+        assert _tick(panel, simulator, 0.1).controller_request == CONTROLLER_PROJECTED_IMPEDANCE
+        page.click(WHOLE_BODY_BUTTON)
+        assert _tick(panel, simulator, 0.2).controller_request == CONTROLLER_WHOLE_BODY
+    _make(meshcat)
+    assert WHOLE_BODY_BUTTON not in meshcat.GetButtonNames()
 
 
 def test_the_estop_button_latches(meshcat):

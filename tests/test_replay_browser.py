@@ -6,33 +6,24 @@ grid are light, so the share of dark pixels in the middle of the frame says how 
 Meshcat's default camera, several metres off, shows it at under 1 % of the centre.
 """
 
-import shutil
 import subprocess
 
 import numpy as np
 import pytest
+from browser import chromium
 from PIL import Image
 
 from pedi_drake.run import run
 from pedi_drake.scenario import load_scenario
 
-CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
 WINDOW = (800, 600)  # [px]
 DARK = 90  # a pixel whose brightest channel is below this is the robot's (trunk, feet, motors)
 MIN_ROBOT_SHARE = 0.03  # of the centre's pixels: several times what the default camera gives
 
 
-def _chromium() -> str:
-    for name in CHROMIUM_NAMES:
-        path = shutil.which(name)
-        if path:
-            return path
-    pytest.fail("no Chromium found: install the system package (apt-get install -y chromium); .ci/run does")
-
-
 def _screenshot(html, png, profile) -> np.ndarray:
     command = [
-        _chromium(),
+        chromium(),
         "--headless",
         "--no-sandbox",  # CI runs as root, where Chromium's sandbox refuses to start
         # Software WebGL (SwiftShader): a CI machine has no GPU.

@@ -56,7 +56,7 @@ def test_the_script_is_published_as_valid_foot_commands():
     vectors = np.array([foot_command_vector(m) for m in received])
     assert all(foot_command_in_range(v) for v in vectors)
     assert [m.sequence for m in received] == list(range(1, 17))
-    assert np.allclose(vectors[5], [MODE_NONE, FRAME_TRUNK, 0, 0.05, 0.0, 0.0, 0.0])  # t = 0.1 s
+    assert np.allclose(vectors[5], [MODE_NONE, FRAME_TRUNK, 0, 0.05, 0.0, 0.0, 0.0, 0.0])  # t = 0.1 s
     assert vectors[0][0] == MODE_TELEOP and vectors[10][0] == MODE_AUTONOMOUS and vectors[-1][6] == 1.0
 
 

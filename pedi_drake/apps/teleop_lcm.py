@@ -10,6 +10,7 @@ In a terminal, keys set the command, which is sent `--rate` times a second until
     a / d   foot left / right   (+y / -y)     g      ask for the autonomous mission (go)
     r / f   foot up / down      (+z / -z)     space  stop the foot (zero velocity)
     e       E-stop (latched by the robot)     q      quit (the robot sees the operator fall silent)
+    1 / 2   ask for the HQP / paper 002's controller (a scenario with controller_switch runs both)
 
 A velocity key holds its velocity (`--speed`, in `--frame`) until space or another velocity key:
 a terminal reports key presses, not releases. Below the command, the line shows the controller's
@@ -18,7 +19,8 @@ driven foot, the balance bound's limit along it and the margin left, and the liv
 
 With `--script FILE`, or when stdin is not a terminal, the commands come from a script instead:
 one step per line, `t_s mode vx vy vz` (time from the start [s], increasing; mode `none`,
-`teleop`, `autonomous` or `estop`; the foot velocity [m/s]), `#` starts a comment. Each step
+`teleop`, `autonomous` or `estop`, or `hqp` / `paper002` to ask for a controller; the foot
+velocity [m/s]), `#` starts a comment. Each step
 holds until the next one's time; the app ends at the last step's time. A malformed script exits
 with status 2 and names the file and line.
 
@@ -39,6 +41,7 @@ the ones `run_sim.py` with `operator: {source: lcm}` listens on.
 
 import argparse
 import contextlib
+import dataclasses
 import math
 import select
 import sys
@@ -51,13 +54,32 @@ from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 
 from pedi_drake.exceptions import PediError
 from pedi_drake.go1_driver.lcmtypes import foot_feedback_lcmt
-from pedi_drake.operator.command import FRAME_TRUNK, FRAME_WORLD, MODE_AUTONOMOUS, MODE_NONE, MODE_TELEOP
+from pedi_drake.operator.command import (
+    CONTROLLER_NONE,
+    CONTROLLER_PROJECTED_IMPEDANCE,
+    CONTROLLER_WHOLE_BODY,
+    FRAME_TRUNK,
+    FRAME_WORLD,
+    MODE_AUTONOMOUS,
+    MODE_NONE,
+    MODE_TELEOP,
+)
 from pedi_drake.operator.message_stream import play_messages, read_lcm_log
 from pedi_drake.operator.scripted_operator import ScriptStep, foot_command_message, script_stream
 from pedi_drake.robot import LEG_NAMES
 from pedi_drake.scenario import load_scenario
 
-SCRIPT_MODES = {"none": MODE_NONE, "teleop": MODE_TELEOP, "autonomous": MODE_AUTONOMOUS, "estop": MODE_NONE}
+SCRIPT_MODES = {
+    "none": MODE_NONE,
+    "teleop": MODE_TELEOP,
+    "autonomous": MODE_AUTONOMOUS,
+    "estop": MODE_NONE,
+    "hqp": MODE_NONE,
+    "paper002": MODE_NONE,
+}
+# Script words and keys that ask for a controller.
+SCRIPT_CONTROLLERS = {"hqp": CONTROLLER_WHOLE_BODY, "paper002": CONTROLLER_PROJECTED_IMPEDANCE}
+CONTROLLER_KEYS = {"1": CONTROLLER_WHOLE_BODY, "2": CONTROLLER_PROJECTED_IMPEDANCE}
 # Key -> unit direction of the foot velocity (x forward, y left, z up).
 VELOCITY_KEYS = {
     "w": (1.0, 0.0, 0.0),
@@ -97,7 +119,14 @@ def parse_script(text: str, source: str = "<script>", frame: int = FRAME_TRUNK) 
         if t < 0 or (steps and t <= steps[-1].start):
             raise ScriptError(f"{where}: times must be >= 0 s and increasing, got {t} after the previous step")
         steps.append(
-            ScriptStep(t, (vx, vy, vz), mode_request=SCRIPT_MODES[words[1]], frame=frame, estop=words[1] == "estop")
+            ScriptStep(
+                t,
+                (vx, vy, vz),
+                mode_request=SCRIPT_MODES[words[1]],
+                frame=frame,
+                estop=words[1] == "estop",
+                controller_request=SCRIPT_CONTROLLERS.get(words[1], CONTROLLER_NONE),
+            )
         )
     if not steps:
         raise ScriptError(f"{source}: no steps")
@@ -151,15 +180,15 @@ class KeyboardOperator:
         if key == "q":
             return False
         if key in VELOCITY_KEYS:
-            self.step = ScriptStep(
-                0.0, tuple(self._speed * np.array(VELOCITY_KEYS[key])), step.mode_request, step.frame
-            )
+            self.step = dataclasses.replace(step, value=tuple(self._speed * np.array(VELOCITY_KEYS[key])))
         elif key == " ":
-            self.step = ScriptStep(0.0, (0.0, 0.0, 0.0), step.mode_request, step.frame, estop=step.estop)
+            self.step = dataclasses.replace(step, value=(0.0, 0.0, 0.0))
         elif key in MODE_KEYS:
-            self.step = ScriptStep(0.0, step.value, MODE_KEYS[key], step.frame, estop=step.estop)
+            self.step = dataclasses.replace(step, mode_request=MODE_KEYS[key])
+        elif key in CONTROLLER_KEYS:
+            self.step = dataclasses.replace(step, controller_request=CONTROLLER_KEYS[key])
         elif key == "e":
-            self.step = ScriptStep(0.0, (0.0, 0.0, 0.0), step.mode_request, step.frame, estop=True)
+            self.step = dataclasses.replace(step, value=(0.0, 0.0, 0.0), estop=True)
         return True
 
 
@@ -228,12 +257,18 @@ def run_keyboard(
             )
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def add_operator_bus_arguments(parser: argparse.ArgumentParser) -> None:
+    """The flags that name the operator's bus: the scenario (file, name, text, as run_sim.py takes
+    them) whose `operator:` and `lcm_buses:` it reads, or a URL."""
     parser.add_argument("--scenario_file", default=None, help="YAML file of named scenarios (default: the shipped one)")
     parser.add_argument("--scenario_name", default="default", help="scenario to read from --scenario_file")
     parser.add_argument("--scenario_text", default="{}", help="YAML mapping merged onto the scenario (as run_sim.py)")
     parser.add_argument("--lcm_url", default="", help="the bus URL (default: the scenario's operator bus)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_operator_bus_arguments(parser)
     parser.add_argument("--speed", type=float, default=DEFAULT_SPEED, help="foot speed of a key [m/s]")
     parser.add_argument("--rate", type=float, default=DEFAULT_RATE, help="messages a second [Hz]")
     parser.add_argument("--frame", choices=("trunk", "world"), default="trunk")

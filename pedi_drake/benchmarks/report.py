@@ -130,6 +130,23 @@ def _estop_button(d: dict) -> str:
     return "; ".join(parts) + " (bound 15 N)"
 
 
+def _controller_switches(d: dict) -> str:
+    s = d["summary"]
+    return (
+        f"{s['succeeded']} of {s['runs']} runs succeeded without a fall, at least {s['switches_per_run_min']} "
+        f"switches each; largest joint-target step in a hand-over {s['max_target_step_rad']:.4f} rad (rate limit "
+        f"{s['target_step_limit_rad']:.3f}); the lifted foot within {1000 * s['max_lifted_foot_stray_m']:.1f} mm "
+        "of where it held"
+    )
+
+
+def _prong_push(d: dict) -> str:
+    return "; ".join(
+        f"along {direction}: " + ", ".join(f"{design.replace('_', ' ')} {value:.2f}" for design, value in row.items())
+        for direction, row in d["summary"].items()
+    )
+
+
 def _sil(d: dict) -> str:
     summary = d["summary"]
     runs = sum(row["runs"] for row in summary.values())
@@ -294,6 +311,20 @@ ROWS: tuple[Row, ...] = (
         "estop_button.json",
         _estop_button,
         "python -m pedi_drake.benchmarks.estop_button",
+    ),
+    Row(
+        "Runtime controller switching, HQP and paper 002's controller, 20 random operator requests with a foot "
+        "lifted, seed 0 and 5 noisy seeds",
+        "controller_switches.json",
+        _controller_switches,
+        "python -m pedi_drake.benchmarks.controller_switches",
+    ),
+    Row(
+        "Largest knee torque a 30 N push on the trunk adds [N m], no prongs / a centre-line pair / a side pair "
+        "(paper 003 VII-A)",
+        "prong_push.json",
+        _prong_push,
+        "python -m pedi_drake.benchmarks.prong_push",
     ),
     Row(
         "Every shipped mission against 30 random draws of the reality gap (studies/reality_gap.yaml)",

@@ -45,7 +45,9 @@ from pedi_drake.operator.command import (
 from pedi_drake.operator.message_stream import TimedMessage
 
 MISSION = "operator/teleop_foot_wall"
-SEED = 6101  # of the tests and, unless told otherwise, the benchmark
+# Of the tests and, unless told otherwise, the benchmark: a draw whose careless operator meets the
+# workspace, speed and force bounds alike (the tests check that each had work to do).
+SEED = 6104
 FUZZ_COUNT = 10_000
 FUZZ_RATE = 1000.0  # [Hz]
 HEARTBEAT_RATE = 100.0  # [Hz]
@@ -192,11 +194,14 @@ def fuzz_stream(seed: int, count: int = FUZZ_COUNT, channel: str = "operator_foo
         heartbeat(float(t), teleop)
     kinds = list(KINDS)
     weights = np.array(list(KINDS.values()))
-    command, next_change = _careless_command(rng), FUZZ_START
+    # The careless operator draws from a generator of its own: how the broken messages are drawn
+    # (their bytes follow the message's size) leaves the path the foot is driven along unchanged.
+    careless = np.random.default_rng([seed, 1])
+    command, next_change = _careless_command(careless), FUZZ_START
     for n in range(count):
         t = FUZZ_START + n / FUZZ_RATE
         if t >= next_change:
-            command, next_change = _careless_command(rng), t + rng.uniform(0.2, 1.0)
+            command, next_change = _careless_command(careless), t + careless.uniform(0.2, 1.0)
         kind = kinds[rng.choice(len(kinds), p=weights / weights.sum())]
         if kind == "valid":
             message = sender.message(command, t)

@@ -13,6 +13,7 @@ from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import capture_point, mission_results
 from pedi_drake.evaluation.box_lift import box_lift_trace, judge_box_lift
 from pedi_drake.evaluation.button_press import judge_button_press, plunger_travel
+from pedi_drake.evaluation.controller_switches import switch_problem, switch_summary
 from pedi_drake.evaluation.estimator_accuracy import estimate_errors
 from pedi_drake.evaluation.live_suf import live_suf_summary, update_samples
 from pedi_drake.evaluation.object_push import judge_object_push
@@ -122,6 +123,16 @@ def judge_run(record) -> dict:
                 "p99": float(np.percentile(tick_ms, 99)),
                 "max": float(np.max(tick_ms)),
             }
+    switch_reason = ""
+    if "controller.switch" in logs:
+        result["controller_switches"] = switch_summary(
+            logs["controller.switch"],
+            logs["go1.command"],
+            scenario.whole_body.period,
+            scenario.go1_driver.safety.max_target_rate,
+            None if hardware else logs.get("sim.motor_torque"),
+        )
+        switch_reason = switch_problem(result["controller_switches"])
     progress = record.mission_progress()
     reason = ""
     if progress is None:
@@ -241,6 +252,7 @@ def judge_run(record) -> dict:
     if hardware and result["driver"]["latched"] is not None:
         # Damping took over: whatever the estimate says afterwards, the run did not go as planned.
         reason = f"the driver latched damping ({result['driver']['latched']}); " + reason
+    reason = "; ".join(filter(None, [reason, switch_reason]))
     if record.interrupted is not None:
         # What ran is judged as it stands; the run as a whole did not happen.
         reason = f"interrupted at t = {sim_time:.2f} s ({record.interrupted})" + (f"; {reason}" if reason else "")

@@ -5,6 +5,8 @@ The mission manager decides success from the state estimate, as the robot would.
 plant state, which no controller ever reads.
 """
 
+import math
+
 import numpy as np
 
 from pedi_drake import robot
@@ -57,15 +59,23 @@ def posture_table(progress: MissionProgress) -> list[dict]:
     ]
 
 
+def _finite_or_none(value: float | None) -> float | None:
+    return value if value is not None and math.isfinite(value) else None
+
+
 def teleop_table(progress: MissionProgress) -> list[dict]:
     """The `teleop` list of result.json: per teleop_foot phase, how often each of its bounds acted
-    (pedi_drake.mission.teleop_foot.BOUNDS), its largest estimated foot force [N] and what ended it."""
+    (pedi_drake.mission.teleop_foot.BOUNDS), its largest estimated foot force [N], the estimate's
+    noise [N] and the lowest force limit the bound kept for it [N], and what ended it."""
     return [
         {
             "phase": r.name,
             "leg": r.metrics.get("leg", ""),
             "bound_activations": dict(r.metrics.get("bound_activations", {})),
             "max_force_n": r.metrics.get("max_force_n"),
+            "force_noise_n": r.metrics.get("force_noise_n"),
+            # None when the phase ended before its first update.
+            "min_force_limit_n": _finite_or_none(r.metrics.get("min_force_limit_n")),
             "ended_by": r.metrics.get("ended_by", ""),
         }
         for r in progress.records

@@ -27,7 +27,9 @@ plans its motion when the answers are in (a path of waypoints takes one tick a w
 The live SUF (pedi_drake.suf.live_suf_system) is asked about on `suf_request` (the lifted foot:
 the one a teleop_foot or press phase drives, else the first lifted leg; and the direction of
 that phase's push) and read back on `suf`, for the balance bound of those phases; the haptic
-feedback of the driven foot leaves on `operator_feedback` (pedi_drake.operator.feedback).
+feedback of the driven foot leaves on `operator_feedback` (pedi_drake.operator.feedback). The
+whole-body controller a switch_controller phase asked for leaves on `controller_request`
+(pedi_drake.control.controller_switch).
 
 A failed phase (IK unreachable, timeout, fall) fails the mission with a reason; the manager then
 places any lifted leg back on the ground ("recovering") and holds the robot standing.
@@ -195,6 +197,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
         self._ik_targets = {leg: self.DeclareDiscreteState(np.full(3, np.nan)) for leg in self.ik_legs}
         self._suf_request = self.DeclareDiscreteState(suf_request_vector(-1, None))
         self._feedback = self.DeclareDiscreteState(feedback_vector(-1, None, np.nan, np.nan, 0, False))
+        self._controller_request = self.DeclareDiscreteState(1)
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
         # Trajectory samples change with time: computed when evaluated, from the packed references.
@@ -220,6 +223,8 @@ class MissionManager(LeafSystemWithoutWitnesses):
         self.DeclareStateOutputPort("mission_status", self._status)
         self.DeclareStateOutputPort("suf_request", self._suf_request)
         self.DeclareStateOutputPort("operator_feedback", self._feedback)
+        # The whole-body controller the mission asks for (a switch_controller phase; 0: none).
+        self.DeclareStateOutputPort("controller_request", self._controller_request)
         warm_up(holding)
         # The stance's safety polygon is made at every update: its kernel is compiled here, not
         # in the first update (on hardware, a first tick late by the compile latches the driver).
@@ -286,6 +291,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
         state.get_mutable_discrete_state(self._contacts).SetFromVector(refs.contacts)
         state.get_mutable_discrete_state(self._status).SetFromVector(self._status_vector(progress))
         state.get_mutable_discrete_state(self._suf_request).SetFromVector(self._suf_request_vector(progress))
+        state.get_mutable_discrete_state(self._controller_request).SetFromVector([progress.controller_request])
         plan = progress.ik
         if previous is not None and plan is previous.ik:
             return

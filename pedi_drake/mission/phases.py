@@ -43,6 +43,7 @@ from pedi_drake.mission.progress import (
 from pedi_drake.mission.reference_start import foot_reference_start, joint_reference_start
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_foot import TeleopFootRunner
+from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.suf.posture import Posture, PostureCase
 from pedi_drake.trajectory import (
@@ -1207,6 +1208,17 @@ class WaitRunner(PhaseRunner):
         return SUCCEEDED if view.time >= progress.phase_start + phase.duration else RUNNING
 
 
+class SwitchControllerRunner(PhaseRunner):
+    """Asks for the phase's controller (MissionProgress.controller_request), then holds."""
+
+    def start(self, phase, progress, view, env):
+        codes = {name: code for code, name in CONTROLLER_NAMES.items()}
+        progress.controller_request = codes[phase.to]
+
+    def step(self, phase, progress, view, env):
+        return SUCCEEDED if view.time >= progress.phase_start + phase.duration else RUNNING
+
+
 RUNNERS: dict[type, PhaseRunner] = {
     spec.StandUp: StandUpRunner(),
     spec.LieDown: LieDownRunner(),
@@ -1223,6 +1235,7 @@ RUNNERS: dict[type, PhaseRunner] = {
     spec.LeaveProngs: LeaveProngsRunner(),
     spec.TeleopFoot: TeleopFootRunner(),
     spec.Wait: WaitRunner(),
+    spec.SwitchController: SwitchControllerRunner(),
 }
 assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a runner"
 

@@ -165,7 +165,9 @@ class FootPush:
     leg: str
     force_W: np.ndarray  # (3,) estimated force of the environment on the foot, bias removed, world [N]
     direction_W: np.ndarray | None  # (3,) unit direction of that force for the balance bound, world
-    limit: float  # the balance bound's limit along direction_W [N]; nan when it is off or waits
+    # The limit the force is held under [N]: teleop_foot's tighter of its force bound and its balance
+    # bound along direction_W; press's balance limit; nan when there is none.
+    limit: float
     bound_active: bool  # the balance bound changed the foot's motion at this update
 
     def __deepcopy__(self, memo) -> "FootPush":
@@ -220,6 +222,9 @@ class MissionProgress:
     # request for the teleoperated mode waits for a safe point.
     operator_mode: int = 0
     teleop_pending: bool = False
+    # The whole-body controller the mission last asked for (pedi_drake.operator.command
+    # CONTROLLER_*; 0: none asked), the `controller_request` output.
+    controller_request: int = 0
     switches: list[ModeSwitch] = dataclasses.field(default_factory=list)
     # The semi-autonomous mode (pedi_drake.mission.semi_autonomous): every target the operator
     # sent (SemiAutonomous TargetRequest values), the last value seen [m], the accepted target

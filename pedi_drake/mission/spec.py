@@ -29,6 +29,7 @@ from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import FORCE_ESTIMATES, STACKS
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.mission.posture_planner import PLAN_LATENCY, POSTURE_DURATION
+from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.resources import missions_dir
 from pedi_drake.robot import FOOT_RADIUS, LEG_NAMES
 from pedi_drake.scenario import Push, RobotConfig, SceneObject, resolve_model_path, scene_problems
@@ -416,6 +417,21 @@ class Wait(PhaseBase):
     duration: float = 1.0
 
 
+# The controllers a switch_controller phase can ask for.
+SWITCHABLE_CONTROLLERS = tuple(CONTROLLER_NAMES.values())
+
+
+@dataclasses.dataclass
+class SwitchController(PhaseBase):
+    """Asks for the whole-body controller `to` ("whole_body" or "projected_impedance") and holds
+    the current references for `duration` [s] while the hand-over blends (a scenario with
+    controller_switch runs both controllers, pedi_drake.control.controller_switch; in any other
+    the request changes nothing)."""
+
+    to: str = "whole_body"
+    duration: float = 0.3
+
+
 PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "stand_up": StandUp,
     "lie_down": LieDown,
@@ -432,6 +448,7 @@ PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "leave_prongs": LeaveProngs,
     "teleop_foot": TeleopFoot,
     "wait": Wait,
+    "switch_controller": SwitchController,
 }
 
 
@@ -902,6 +919,10 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         need(phase.radius > 0 or phase.via_points, "via_points", "give a circle radius > 0 or at least one via point")
         for k, point in enumerate(phase.via_points):
             need(len(point) == 3, f"via_points[{k}]", f"expected [x, y, z] offsets in metres, got {point}")
+        need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+    if isinstance(phase, SwitchController):
+        need(phase.to in SWITCHABLE_CONTROLLERS, "to", f"must be one of {SWITCHABLE_CONTROLLERS}, got {phase.to!r}")
+        need(math.isfinite(phase.duration) and phase.duration >= 0, "duration", f"must be >= 0 s, got {phase.duration}")
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
     if isinstance(phase, TeleopFoot):
         for field in ("max_speed", "max_force", "hold_after", "return_after", "joint_margin", "min_height"):

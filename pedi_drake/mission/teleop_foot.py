@@ -8,11 +8,14 @@ a position command as the velocity that would reach it in one tick. Then, in thi
      `return_after` the phase fails, and the mission's recovery puts the leg back on the ground;
   2. speed: at most `max_speed`;
   3. force: with the estimated contact force (the mission's estimate, its bias at the phase start
-     removed) near `max_force`, motion further into the contact slowed, stopped at it, turned
-     into a retreat beyond it;
+     removed) near `max_force`, motion further into the contact slowed,
+     stopped at it, turned into a retreat beyond it. The bound acts a margin of the estimate's
+     measured noise below `max_force` (pedi_drake.mission.estimate_noise), so that the true
+     force, which the noise shakes as much, stays under it;
   4. balance: the estimated force along its own direction stays below `balance_margin` times the
-     live SUF in that direction (pedi_drake.mission.balance_bound: slowed near the limit,
-     stopped at it, retreating beyond it), so the operator cannot push the robot over;
+     live SUF in that direction, less the same noise margin (pedi_drake.mission.balance_bound:
+     slowed near the limit, stopped at it, retreating beyond it), so the operator cannot push the
+     robot over;
   5. workspace: the step is kept in the leg's workspace, sliding along its boundary
      (pedi_drake.mission.teleop_bounds). When the trunk has moved under the foot's target so
      that the target is outside, the target first steps back in along the boundary's normal, and
@@ -35,6 +38,7 @@ import numpy as np
 from pedi_drake import robot
 from pedi_drake.exceptions import UnreachableTarget
 from pedi_drake.mission.balance_bound import balance_limit, bound_balance, disturbance_direction
+from pedi_drake.mission.estimate_noise import EstimateNoise
 from pedi_drake.mission.progress import (
     FAILED,
     LEG_MODE_FOOT,
@@ -92,6 +96,8 @@ class TeleopFootRunner:
             p_ref_W=np.asarray(p_ref, float),
             t_prev=view.time,
             force_bias=estimates[env.force_estimate].copy(),
+            noise=EstimateNoise(),
+            min_force_limit_n=math.inf,
             counts=dict.fromkeys(BOUNDS, 0),
             holding=False,
             other_mode_seen=view.operator.mode_request != MODE_AUTONOMOUS,
@@ -133,11 +139,15 @@ class TeleopFootRunner:
             velocity = _desired_velocity_W(view, p_ref, dt)
         velocity, clipped = bound_speed(velocity, phase.max_speed)
         counts["speed"] += clipped
-        force = view.foot_force_estimates_W(phase.leg)[env.force_estimate] - memo["force_bias"]
+        estimate = view.foot_force_estimates_W(phase.leg)[env.force_estimate]
+        memo["noise"].update(estimate, dt)
+        force = estimate - memo["force_bias"]
         memo["max_force_n"] = max(memo["max_force_n"], float(np.linalg.norm(force)))
-        velocity, limited = bound_force(velocity, force, phase.max_force, phase.max_speed)
+        force_limit = memo["noise"].bounded_limit(phase.max_force)
+        memo["min_force_limit_n"] = min(memo["min_force_limit_n"], force_limit)
+        velocity, limited = bound_force(velocity, force, force_limit, phase.max_speed)
         counts["force"] += limited
-        velocity, acted = self._balance(phase, progress, view, force, velocity)
+        velocity, acted = self._balance(phase, progress, view, force, velocity, force_limit)
         counts["balance"] += acted
 
         X_WB = view.X_WB
@@ -168,6 +178,8 @@ class TeleopFootRunner:
         metrics.update(
             bound_activations=dict(counts),
             max_force_n=memo["max_force_n"],
+            force_noise_n=memo["noise"].sigma,
+            min_force_limit_n=memo["min_force_limit_n"],
             target_W=p_next.tolist(),
             foot_error_m=float(np.linalg.norm(view.foot_W(phase.leg) - p_ref)),
             balance=dict(memo["balance"]),
@@ -178,8 +190,11 @@ class TeleopFootRunner:
         return RUNNING
 
     @staticmethod
-    def _balance(phase, progress: MissionProgress, view: RobotView, force: np.ndarray, velocity: np.ndarray):
-        """(velocity, whether the balance bound acted), and the update's FootPush."""
+    def _balance(
+        phase, progress: MissionProgress, view: RobotView, force: np.ndarray, velocity: np.ndarray, force_limit: float
+    ):
+        """(velocity, whether the balance bound acted), and the update's FootPush, whose limit is the
+        tighter of the force bound's `force_limit` [N] and the balance bound's."""
         memo = progress.memo
         direction = disturbance_direction(force, velocity, memo["push_direction"])
         memo["push_direction"] = direction
@@ -187,6 +202,7 @@ class TeleopFootRunner:
         if phase.balance_margin > 0.0 and direction is not None:
             limit = balance_limit(view.suf, robot.LEG_NAMES.index(phase.leg), direction, phase.balance_margin)
             if limit is not None:
+                limit = memo["noise"].bounded_limit(limit)
                 velocity, acted = bound_balance(velocity, force, direction, limit, phase.max_speed)
                 # The retreat adds to the command: the speed bound holds for the sum.
                 velocity, _ = bound_speed(velocity, phase.max_speed)
@@ -194,7 +210,6 @@ class TeleopFootRunner:
                 balance["last_limit_n"] = limit
                 balance["min_limit_n"] = min(balance["min_limit_n"], limit)
                 balance["max_force_along_n"] = max(balance["max_force_along_n"], float(force @ direction))
-        progress.push = FootPush(
-            phase.leg, force.copy(), direction, math.nan if limit is None else float(limit), bool(acted)
-        )
+        tighter = force_limit if limit is None else min(force_limit, float(limit))
+        progress.push = FootPush(phase.leg, force.copy(), direction, tighter, bool(acted))
         return velocity, acted

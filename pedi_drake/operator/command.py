@@ -1,6 +1,7 @@
 """The operator's command as one vector: the `operator_command` port of OperatorInput.
 
-  operator_command (10) = [mode_request, frame, kind, value (3), estop, age, received, dropped]
+  operator_command (11) = [mode_request, frame, kind, value (3), estop, age, received, dropped,
+                           controller_request]
 
 mode_request  the last mode the operator asked for: MODE_NONE (nothing asked yet),
               MODE_AUTONOMOUS (the mission's phases), MODE_TELEOP (the teleoperated foot) or
@@ -10,6 +11,9 @@ kind          KIND_VELOCITY (value is a foot velocity [m/s]) or KIND_POSITION (a
 estop         1 once any message asked for an E-stop (latched for the rest of the run)
 age           time since the last valid message [s] (inf before any): the operator's heartbeat
 received, dropped   valid messages taken in, and messages rejected (malformed, non-finite, ...)
+controller_request  the last whole-body controller the operator asked for: CONTROLLER_NONE
+              (nothing asked yet), CONTROLLER_WHOLE_BODY or CONTROLLER_PROJECTED_IMPEDANCE (taken
+              by a scenario that runs both, pedi_drake.control.controller_switch)
 """
 
 import dataclasses
@@ -21,7 +25,11 @@ MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP, MODE_SEMI_AUTONOMOUS = 0, 1, 2, 3
 MODES = (MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP, MODE_SEMI_AUTONOMOUS)
 FRAME_TRUNK, FRAME_WORLD = 0, 1
 KIND_VELOCITY, KIND_POSITION = 0, 1
-OPERATOR_COMMAND_SIZE = 10
+CONTROLLER_NONE, CONTROLLER_WHOLE_BODY, CONTROLLER_PROJECTED_IMPEDANCE = 0, 1, 2
+# The scenario's name of each controller a request can name.
+CONTROLLER_NAMES = {CONTROLLER_WHOLE_BODY: "whole_body", CONTROLLER_PROJECTED_IMPEDANCE: "projected_impedance"}
+CONTROLLER_REQUESTS = (CONTROLLER_NONE, *CONTROLLER_NAMES)
+OPERATOR_COMMAND_SIZE = 11
 
 
 @dataclasses.dataclass(frozen=True)
@@ -36,6 +44,7 @@ class OperatorCommand:
     age: float = math.inf  # [s]
     received: int = 0
     dropped: int = 0
+    controller_request: int = CONTROLLER_NONE
 
     @staticmethod
     def from_vector(x: np.ndarray) -> "OperatorCommand":
@@ -49,6 +58,7 @@ class OperatorCommand:
             age=float(x[7]),
             received=int(x[8]),
             dropped=int(x[9]),
+            controller_request=int(x[10]),
         )
 
     def to_vector(self) -> np.ndarray:
@@ -62,6 +72,7 @@ class OperatorCommand:
                 self.age,
                 self.received,
                 self.dropped,
+                self.controller_request,
             ],
             float,
         )

@@ -6,7 +6,9 @@ The mission manager writes, at each of its updates, the `operator_feedback` vect
 
 leg           the foot a phase drives (Unitree index), -1 when none
 force         the estimated force of the environment on that foot, world, bias removed [N]
-force_limit   the balance bound's limit along that force's direction [N] (NaN: off or waiting)
+force_limit   the limit the foot's force is held under [N]: the tighter of the force bound's
+              (pedi_drake.mission.estimate_noise) and the balance bound's along the force's
+              direction (NaN: no bound)
 suf           the live SUF [N] (NaN: none) and suf_status its status (pedi_drake.suf.live)
 bound_active  1 when the balance bound changed the foot's motion at that update
 

@@ -5,7 +5,9 @@ The panel adds to the Meshcat's control pane (`run_sim.py --meshcat --teleop` op
   sliders  the foot velocity along x, y, z [m/s] (the scenario's `operator.meshcat.frame`), each
            in [-max_speed, max_speed]; keys w/s, a/d, r/f step them (as pedi_drake.apps.teleop_lcm)
   buttons  "Teleop (t)" and "Autonomous (g)" ask for a mode, "Stop foot (space)" sets the sliders
-           to zero, "E-stop (e)" latches the E-stop
+           to zero, "E-stop (e)" latches the E-stop; with `controller_buttons` (a scenario with
+           controller_switch, pedi_drake.control.controller_switch) "HQP controller (1)" and
+           "Paper 002 controller (2)" ask for a whole-body controller
 
 and reads them at its period into the same `operator_command` port as OperatorInput (layout in
 pedi_drake.operator.command), so the mission manager and the E-stop gate cannot tell the sources
@@ -32,6 +34,8 @@ from pydrake.systems.framework import BasicVector, DiscreteValues
 
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import (
+    CONTROLLER_PROJECTED_IMPEDANCE,
+    CONTROLLER_WHOLE_BODY,
     FRAME_TRUNK,
     FRAME_WORLD,
     KIND_VELOCITY,
@@ -52,11 +56,20 @@ TELEOP_BUTTON = "Teleop (t)"
 AUTONOMOUS_BUTTON = "Autonomous (g)"
 STOP_BUTTON = "Stop foot (space)"
 ESTOP_BUTTON = "E-stop (e)"
-BUTTONS = ((TELEOP_BUTTON, "KeyT"), (AUTONOMOUS_BUTTON, "KeyG"), (STOP_BUTTON, "Space"), (ESTOP_BUTTON, "KeyE"))
+WHOLE_BODY_BUTTON = "HQP controller (1)"
+PROJECTED_IMPEDANCE_BUTTON = "Paper 002 controller (2)"
+BUTTONS = (
+    (TELEOP_BUTTON, "KeyT"),
+    (AUTONOMOUS_BUTTON, "KeyG"),
+    (STOP_BUTTON, "Space"),
+    (ESTOP_BUTTON, "KeyE"),
+    (WHOLE_BODY_BUTTON, "Digit1"),
+    (PROJECTED_IMPEDANCE_BUTTON, "Digit2"),
+)
 PANEL_REJECT_REASONS = ("nonfinite", "out_of_range")
 
 # Discrete state: the operator_command layout with t_last [s] in place of the age (as OperatorInput).
-_MODE, _VALUE, _ESTOP, _T_LAST, _RECEIVED, _DROPPED = 0, slice(3, 6), 6, 7, 8, 9
+_MODE, _VALUE, _ESTOP, _T_LAST, _RECEIVED, _DROPPED, _CONTROLLER = 0, slice(3, 6), 6, 7, 8, 9, 10
 # A slider value this far beyond the range is rounding, not a foreign value [m/s].
 _RANGE_TOLERANCE = 1e-9
 
@@ -64,8 +77,9 @@ _RANGE_TOLERANCE = 1e-9
 class MeshcatOperatorPanel(LeafSystemWithoutWitnesses):
     """The operator's command from the Meshcat panel (port `operator_command`; see the module docstring)."""
 
-    def __init__(self, config: MeshcatPanelConfig, meshcat: Meshcat, period: float):
-        """`period`: how often the panel is read [s]."""
+    def __init__(self, config: MeshcatPanelConfig, meshcat: Meshcat, period: float, controller_buttons: bool = False):
+        """`period`: how often the panel is read [s]; `controller_buttons`: the run has both
+        whole-body controllers, and the panel the buttons that switch them."""
         super().__init__()
         self._meshcat = meshcat
         self._max_speed = config.max_speed
@@ -73,15 +87,17 @@ class MeshcatOperatorPanel(LeafSystemWithoutWitnesses):
             # A Meshcat keeps its controls: a panel made again on it (another run) starts afresh.
             meshcat.DeleteSlider(label, strict=False)
             meshcat.AddSlider(label, -config.max_speed, config.max_speed, config.step, 0.0, decrement, increment)
-        for label, key in BUTTONS:
+        self._buttons = BUTTONS if controller_buttons else BUTTONS[:4]
+        for label, _ in BUTTONS:
             meshcat.DeleteButton(label, strict=False)
+        for label, key in self._buttons:
             meshcat.AddButton(label, key)
         initial = np.zeros(OPERATOR_COMMAND_SIZE)
         initial[1], initial[2] = (FRAME_TRUNK if config.frame == "trunk" else FRAME_WORLD), KIND_VELOCITY
         initial[_T_LAST] = -math.inf
         self._state = self.DeclareDiscreteState(initial)
         # Clicks of each button taken in so far, and drops by reason (PANEL_REJECT_REASONS).
-        self._clicks = self.DeclareDiscreteState(len(BUTTONS))
+        self._clicks = self.DeclareDiscreteState(len(self._buttons))
         self._rejected = self.DeclareDiscreteState(len(PANEL_REJECT_REASONS))
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._take_in)
         self.DeclareVectorOutputPort(
@@ -106,10 +122,11 @@ class MeshcatOperatorPanel(LeafSystemWithoutWitnesses):
         x = context.get_discrete_state(self._state).get_value().copy()
         seen = context.get_discrete_state(self._clicks).get_value()
         rejected = context.get_discrete_state(self._rejected).get_value().copy()
-        clicks = np.array([meshcat.GetButtonClicks(label) for label, _ in BUTTONS], float)
+        clicks = np.array([meshcat.GetButtonClicks(label) for label, _ in self._buttons], float)
         # A button added again (another panel on this Meshcat) counts from zero again.
         new = np.where(clicks >= seen, clicks - seen, clicks)
-        teleop, autonomous, stop, estop = (new[k] > 0 for k in range(len(BUTTONS)))
+        pressed = [k < len(new) and new[k] > 0 for k in range(len(BUTTONS))]
+        teleop, autonomous, stop, estop, whole_body, projected_impedance = pressed
         x[_RECEIVED] += new.sum()
         if estop:
             x[_ESTOP] = 1.0
@@ -117,6 +134,11 @@ class MeshcatOperatorPanel(LeafSystemWithoutWitnesses):
             x[_MODE] = MODE_AUTONOMOUS
         elif teleop:
             x[_MODE] = MODE_TELEOP
+        # Both clicked in one period: the HQP, the controller every mission runs on.
+        if whole_body:
+            x[_CONTROLLER] = CONTROLLER_WHOLE_BODY
+        elif projected_impedance:
+            x[_CONTROLLER] = CONTROLLER_PROJECTED_IMPEDANCE
         if stop:
             for label, _, _ in SLIDERS:
                 meshcat.SetSliderValue(label, 0.0)

@@ -1,13 +1,13 @@
 """The operator's LCM messages as vectors, and which values a reader accepts.
 
-Each message type becomes the same 7 numbers, [mode_request, frame, kind, value (3), estop]
-(the first seven entries of the `operator_command` layout, pedi_drake.operator.command), so
-the input system treats both sources alike:
+Each message type becomes the same 8 numbers, [mode_request, frame, kind, value (3), estop,
+controller_request] (the `operator_command` layout's entries of those names,
+pedi_drake.operator.command), so the input system treats both sources alike:
 
   foot_command_lcmt (the project's own type): copied; codes outside their sets are out of range.
   rc_command_lcmt (the Go1 remote, walk-these-ways layout): sticks -> a foot velocity, buttons ->
-    a mode request and the E-stop (RemoteMapping); an eighth number, the largest stick
-    deflection, lets `remote_in_range` reject sticks outside [-1, 1].
+    a mode request and the E-stop (RemoteMapping), no controller request; a ninth number, the
+    largest stick deflection, lets `remote_in_range` reject sticks outside [-1, 1].
 """
 
 from collections.abc import Callable
@@ -15,6 +15,8 @@ from collections.abc import Callable
 import numpy as np
 
 from pedi_drake.operator.command import (
+    CONTROLLER_NONE,
+    CONTROLLER_REQUESTS,
     FRAME_TRUNK,
     FRAME_WORLD,
     KIND_POSITION,
@@ -26,15 +28,16 @@ from pedi_drake.operator.command import (
 )
 from pedi_drake.operator.config import RemoteMapping
 
-MESSAGE_VECTOR_SIZE = 7
+MESSAGE_VECTOR_SIZE = 8
 # Sticks are floats in [-1, 1] on the wire; this much beyond counts as rounding.
 _STICK_TOLERANCE = 1e-3
 
 
 def foot_command_vector(message) -> np.ndarray:
-    """[mode_request, frame, kind, value (3), estop] of a foot_command_lcmt."""
+    """[mode_request, frame, kind, value (3), estop, controller_request] of a foot_command_lcmt."""
+    estop = 1.0 if message.estop else 0.0
     return np.array(
-        [message.mode_request, message.frame, message.kind, *message.value, 1.0 if message.estop else 0.0], float
+        [message.mode_request, message.frame, message.kind, *message.value, estop, message.controller_request], float
     )
 
 
@@ -46,7 +49,10 @@ def foot_command_stamp(message) -> tuple[float, int]:
 def foot_command_in_range(values: np.ndarray) -> bool:
     """Whether the codes of a foot command vector are known ones (its values are checked finite before)."""
     return bool(
-        values[0] in MODES and values[1] in (FRAME_TRUNK, FRAME_WORLD) and values[2] in (KIND_VELOCITY, KIND_POSITION)
+        values[0] in MODES
+        and values[1] in (FRAME_TRUNK, FRAME_WORLD)
+        and values[2] in (KIND_VELOCITY, KIND_POSITION)
+        and values[7] in CONTROLLER_REQUESTS
     )
 
 
@@ -61,9 +67,10 @@ def _deadband(stick: float, deadband: float) -> float:
 
 
 def remote_command_vector(mapping: RemoteMapping) -> Callable[[object], np.ndarray]:
-    """The function rc_command_lcmt -> [mode_request, frame, kind, value (3), estop] for `mapping`.
+    """The function rc_command_lcmt -> [mode_request, frame, kind, value (3), estop,
+    controller_request] for `mapping`.
 
-    The eighth entry is the largest stick deflection (see `remote_in_range`); a stick that is not
+    The ninth entry is the largest stick deflection (see `remote_in_range`); a stick that is not
     finite makes the velocity non-finite (rejected by the inbox).
     """
     frame = FRAME_TRUNK if mapping.frame == "trunk" else FRAME_WORLD
@@ -84,11 +91,13 @@ def remote_command_vector(mapping: RemoteMapping) -> Callable[[object], np.ndarr
         else:
             mode = MODE_NONE
         estop = any(getattr(message, button) != 0 for button in mapping.estop_buttons)
-        return np.array([mode, frame, KIND_VELOCITY, *velocity, 1.0 if estop else 0.0, sticks.max()], float)
+        return np.array(
+            [mode, frame, KIND_VELOCITY, *velocity, 1.0 if estop else 0.0, CONTROLLER_NONE, sticks.max()], float
+        )
 
     return to_vector
 
 
 def remote_in_range(values: np.ndarray) -> bool:
-    """Whether every stick of a remote vector (its eighth entry) is within [-1, 1]."""
+    """Whether every stick of a remote vector (its ninth entry) is within [-1, 1]."""
     return bool(values[MESSAGE_VECTOR_SIZE] <= 1.0 + _STICK_TOLERANCE)

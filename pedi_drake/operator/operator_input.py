@@ -14,7 +14,8 @@ stamps.
 A periodic update takes in what arrived (polling the bus: the diagram's time is the only
 clock, so a lock-step simulation and a real-time run see the same ages) and keeps in the discrete
 state: the newest command, the last mode the operator asked for, the latched E-stop and the
-diagram time of the last valid message. `age` on the output is the time since then [s].
+diagram time of the last valid message, the last controller asked for. `age` on the output is
+the time since then [s].
 """
 
 import math
@@ -29,7 +30,7 @@ from pedi_drake.go1_driver.constants import RC_COMMAND_CHANNEL
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt, rc_command_lcmt
 from pedi_drake.go1_driver.link import QUEUE_CAPACITY, DrakeLcmTransport, Inbox
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
-from pedi_drake.operator.command import MODE_NONE, OPERATOR_COMMAND_SIZE
+from pedi_drake.operator.command import CONTROLLER_NONE, MODE_NONE, OPERATOR_COMMAND_SIZE
 from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.operator.messages import (
     MESSAGE_VECTOR_SIZE,
@@ -40,8 +41,9 @@ from pedi_drake.operator.messages import (
     remote_in_range,
 )
 
-# Discrete state: [mode_request, frame, kind, value (3), estop, t_last [s], received, dropped].
-_MODE, _FRAME_KIND_VALUE, _ESTOP, _T_LAST, _RECEIVED, _DROPPED = 0, slice(1, 6), 6, 7, 8, 9
+# Discrete state: [mode_request, frame, kind, value (3), estop, t_last [s], received, dropped,
+# controller_request].
+_MODE, _FRAME_KIND_VALUE, _ESTOP, _T_LAST, _RECEIVED, _DROPPED, _CONTROLLER = 0, slice(1, 6), 6, 7, 8, 9, 10
 FOOT_COMMAND_ENCODED_SIZE = len(foot_command_lcmt().encode())
 # Silence after which a foot command is taken whatever its stamps (a restarted or new sender) [s]:
 # longer than any delivery delay, and the foot already holds after the teleop phase's hold_after.
@@ -130,6 +132,8 @@ class OperatorInput(LeafSystemWithoutWitnesses):
                 x[_MODE] = values[0]
             x[_FRAME_KIND_VALUE] = values[1:6]
             x[_ESTOP] = max(x[_ESTOP], values[6])  # latched
+            if values[7] != CONTROLLER_NONE:  # as a mode request, it stands until another
+                x[_CONTROLLER] = values[7]
             x[_T_LAST] = context.get_time()
         x[_RECEIVED], x[_DROPPED] = received, dropped
         discrete_state.set_value(self._state, x)

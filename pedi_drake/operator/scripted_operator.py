@@ -15,7 +15,7 @@ from pydrake.systems.framework import EventStatus
 
 from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
-from pedi_drake.operator.command import FRAME_TRUNK, KIND_VELOCITY, MODE_NONE
+from pedi_drake.operator.command import CONTROLLER_NONE, FRAME_TRUNK, KIND_VELOCITY, MODE_NONE
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
 from pedi_drake.operator.message_stream import TimedMessage
 
@@ -30,6 +30,7 @@ class ScriptStep:
     frame: int = FRAME_TRUNK
     kind: int = KIND_VELOCITY
     estop: bool = False
+    controller_request: int = CONTROLLER_NONE
 
 
 def script_command(steps: list[ScriptStep], t: float) -> ScriptStep | None:
@@ -48,6 +49,7 @@ def foot_command_message(step: ScriptStep, t: float, sequence: int) -> foot_comm
     message.mode_request, message.frame, message.kind = step.mode_request, step.frame, step.kind
     message.value = [float(v) for v in step.value]
     message.estop = 1 if step.estop else 0
+    message.controller_request = step.controller_request
     return message
 
 

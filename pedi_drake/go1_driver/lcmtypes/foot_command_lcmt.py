@@ -13,11 +13,11 @@ class foot_command_lcmt(object):
     pedi_drake's own type (not the Go1 bridge's), for a haptic device, a joystick or a program.
     """
 
-    __slots__ = ["timestamp_us", "sequence", "mode_request", "frame", "kind", "value", "estop"]
+    __slots__ = ["timestamp_us", "sequence", "mode_request", "frame", "kind", "value", "estop", "controller_request"]
 
-    __typenames__ = ["int64_t", "int64_t", "int8_t", "int8_t", "int8_t", "double", "int8_t"]
+    __typenames__ = ["int64_t", "int64_t", "int8_t", "int8_t", "int8_t", "double", "int8_t", "int8_t"]
 
-    __dimensions__ = [None, None, None, None, None, [3], None]
+    __dimensions__ = [None, None, None, None, None, [3], None, None]
 
     def __init__(self):
         self.timestamp_us = 0
@@ -58,6 +58,13 @@ class foot_command_lcmt(object):
         LCM Type: int8_t
         """
 
+        self.controller_request = 0
+        """
+        0 no request, 1 the whole-body HQP, 2 paper 002's projected-impedance controller (taken
+        when the scenario runs both: controller_switch).
+        LCM Type: int8_t
+        """
+
 
     def encode(self):
         buf = BytesIO()
@@ -68,7 +75,7 @@ class foot_command_lcmt(object):
     def _encode_one(self, buf):
         buf.write(struct.pack(">qqbbb", self.timestamp_us, self.sequence, self.mode_request, self.frame, self.kind))
         buf.write(struct.pack('>3d', *self.value[:3]))
-        buf.write(struct.pack(">b", self.estop))
+        buf.write(struct.pack(">bb", self.estop, self.controller_request))
 
     @staticmethod
     def decode(data: bytes):
@@ -85,13 +92,13 @@ class foot_command_lcmt(object):
         self = foot_command_lcmt()
         self.timestamp_us, self.sequence, self.mode_request, self.frame, self.kind = struct.unpack(">qqbbb", buf.read(19))
         self.value = struct.unpack('>3d', buf.read(24))
-        self.estop = struct.unpack(">b", buf.read(1))[0]
+        self.estop, self.controller_request = struct.unpack(">bb", buf.read(2))
         return self
 
     @staticmethod
     def _get_hash_recursive(parents):
         if foot_command_lcmt in parents: return 0
-        tmphash = (0x515d9d929754e7a0) & 0xffffffffffffffff
+        tmphash = (0x93903d6b5e92cd54) & 0xffffffffffffffff
         tmphash  = (((tmphash<<1)&0xffffffffffffffff) + (tmphash>>63)) & 0xffffffffffffffff
         return tmphash
     _packed_fingerprint = None
