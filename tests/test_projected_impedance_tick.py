@@ -302,12 +302,14 @@ def test_infeasible_contact_qp_fails_and_recovers_alike_on_both_paths():
     assert statuses[0] == statuses[-1] == STATUS_OK
 
 
-def test_lifting_a_foot_to_a_world_pose_agrees_on_both_paths():
+@pytest.mark.parametrize("mode", [references.LEG_MODE_FOOT_POSE, references.LEG_MODE_SHANK_POSE])
+def test_lifting_a_foot_to_a_world_pose_agrees_on_both_paths(mode):
     # Standing, then FR's load ramped out (in 10 ticks) and the leg moving: the idle joint
-    # impedance, then FR's foot held 5 cm up with its calf pitched (the 5-D task) with the force
-    # estimate's filter running. The inputs stay fixed, so the centre of mass stays on the FL-RR
-    # diagonal; a trunk reference 2 cm towards FR asks for an acceleration that way, which moves
-    # the centre of pressure into the FL-RR-RL triangle and keeps the contact QP feasible.
+    # impedance, then FR's foot held 5 cm up with its calf pitched (the 5-D task, or the 6-D shank
+    # task with the calf's yaw held too) with the force estimate's filter running. The inputs stay
+    # fixed, so the centre of mass stays on the FL-RR diagonal; a trunk reference 2 cm towards FR
+    # asks for an acceleration that way, which moves the centre of pressure into the FL-RR-RL
+    # triangle and keeps the contact QP feasible.
     controller, context = standing_controller("compiled", ProjectedImpedanceConfig(contact_ramp_time=0.02))
     base = controller.base_state_port.Eval(context)
     s = controller.model.update(base, robot.STANDING_Q, np.zeros(12))
@@ -320,7 +322,7 @@ def test_lifting_a_foot_to_a_world_pose_agrees_on_both_paths():
     controller.velocity_port.FixValue(context, np.linspace(-0.2, 0.2, 12))
     target = s.p_contacts[0] + np.array([0.0, 0.0, 0.05])
     calf_pitch = np.array([0.0, 0.1, 0.0])  # the calf's reference orientation, a rotation vector [rad]
-    legs = references.leg_reference_vector({"FR": (references.LEG_MODE_FOOT_POSE, target, np.zeros(3), calf_pitch)})
+    legs = references.leg_reference_vector({"FR": (mode, target, np.zeros(3), calf_pitch)})
     foot_task_ticks = 0
     for k in range(60):
         if k == 30:

@@ -189,7 +189,10 @@ def test_sliding_prongs_that_friction_cannot_stop_brake_at_the_limit_instead_of_
     assert np.sum(forces[:, 0]) < -0.9 * mu * np.sum(forces[:, 2])  # braking, at the friction limit
 
 
-def test_hqp_takes_the_optional_5d_foot_task():
+@pytest.mark.parametrize(
+    ("mode", "calf_rows"), [(references.LEG_MODE_FOOT_POSE, 2), (references.LEG_MODE_SHANK_POSE, 3)]
+)
+def test_hqp_takes_the_optional_5d_foot_task_and_the_6d_shank_task(mode, calf_rows):
     controller, context = standing_controller()
     tick(controller, context, 2)
     controller.contact_set_port.FixValue(context, references.contact_set_vector(("FL", "RR", "RL")))
@@ -198,7 +201,7 @@ def test_hqp_takes_the_optional_5d_foot_task():
     ]
     R_WC, _, _ = controller.model.calf_orientation(0)
     rotation = orientation_error_W(R_WC, np.eye(3)) + np.array([0.05, -0.05, 0.0])
-    legs = references.leg_reference_vector({"FR": (references.LEG_MODE_FOOT_POSE, p_WF, np.zeros(3), rotation)})
+    legs = references.leg_reference_vector({"FR": (mode, p_WF, np.zeros(3), rotation)})
     controller.leg_reference_port.FixValue(context, legs)
     _, diag = tick(controller, context, 1)
     assert diag[controller.diag["status"]][0] in (STATUS_OK, STATUS_CONTACTS_RELAXED)
@@ -221,7 +224,7 @@ def test_hqp_takes_the_optional_5d_foot_task():
     names = [task.name for task in controller.builder.leg_tasks(snapshot, inputs)]
     assert names == ["foot_FR", "calf_FR"]
     calf = controller.builder.leg_tasks(snapshot, inputs)[1]
-    assert calf.A.shape[0] == 2  # roll and pitch only: the yaw is free
+    assert calf.A.shape[0] == calf_rows  # the 5-D task leaves the yaw free, the 6-D holds it
 
 
 def test_a_safety_polygon_with_two_vertices_is_rejected_as_bad_input():

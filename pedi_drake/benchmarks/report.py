@@ -140,6 +140,21 @@ def _controller_switches(d: dict) -> str:
     )
 
 
+def _shank_hold(d: dict) -> str:
+    parts = []
+    for row in d["runs"]:
+        if "foot_position_error_max_m" not in row:
+            parts.append(f"{row['controller']} {row['task']}: failed")
+            continue
+        angle = max(row["calf_roll_error_max_deg"], row["calf_pitch_error_max_deg"], row["calf_yaw_error_max_deg"])
+        parts.append(
+            f"{row['controller']} {row['task']}: {1000 * row['foot_position_error_max_m']:.1f} mm, "
+            f"{angle:.2f} deg (yaw {row['calf_yaw_error_max_deg']:.2f}), trunk moved "
+            f"{1000 * row['trunk_displacement_max_m']:.1f} mm"
+        )
+    return "; ".join(parts)
+
+
 def _prong_push(d: dict) -> str:
     return "; ".join(
         f"along {direction}: " + ", ".join(f"{design.replace('_', ' ')} {value:.2f}" for design, value in row.items())
@@ -318,6 +333,13 @@ ROWS: tuple[Row, ...] = (
         "controller_switches.json",
         _controller_switches,
         "python -m pedi_drake.benchmarks.controller_switches",
+    ),
+    Row(
+        "Lifted FL shank held while the trunk moves (paper 002's 6-D task beside the 5-D one): largest foot error, "
+        "largest calf rotation",
+        "shank_hold.json",
+        _shank_hold,
+        "python -m pedi_drake.benchmarks.shank_hold",
     ),
     Row(
         "Largest knee torque a 30 N push on the trunk adds [N m], no prongs / a centre-line pair / a side pair "

@@ -30,6 +30,7 @@ from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rota
 STACK_PAPER000, STACK_PAPER003 = 0, 1
 # Leg reference modes (references.py).
 _FOOT, _JOINTS, _FOOT_POSE = references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, references.LEG_MODE_FOOT_POSE
+_SHANK_POSE = references.LEG_MODE_SHANK_POSE
 
 
 # The constants of a configured whole-body controller (`stack_params`).
@@ -114,8 +115,8 @@ def table_dtype(nv: int, nc: int) -> np.dtype:
     """A RowTable (compiled_hqp) at its largest sizes for any stack on `nc` contacts; `*_start`
     give each level's rows."""
     n = nv + 3 * nc
-    # physics 6 + 3 nc; pose up to 6 + 4 x 5; regularisation 24 + 3 nc
-    max_eq = (6 + 3 * nc) + 26 + (24 + 3 * nc)
+    # physics 6 + 3 nc; pose up to 6 + 4 x 6 (a 6-D shank task per leg); regularisation 24 + 3 nc
+    max_eq = (6 + 3 * nc) + 30 + (24 + 3 * nc)
     max_hard = 6 * nc + 48
     max_soft = references.SAFETY_POLYGON_MAX_VERTICES + nc
     # dense_qp's scratch arrays for the largest level QP (compiled_hqp.new_workspace), kept here so
@@ -359,12 +360,13 @@ def build_levels(
     if p.stack == STACK_PAPER003:
         level = _close_level(table, level, row, hard, soft)
 
-    # Legs: pedipulation feet (position, or the 5-D pose), joint references, idle swing legs.
+    # Legs: pedipulation feet (position, the 5-D pose or the 6-D shank pose), joint references, idle
+    # swing legs.
     for i in range(4):
         block = legs[12 * i : 12 * i + 12]
         mode = round(block[0])
         ref_kp, ref_kd = block[10], block[11]
-        if mode == _FOOT or mode == _FOOT_POSE:
+        if mode == _FOOT or mode == _FOOT_POSE or mode == _SHANK_POSE:
             kp, kd = p.foot_gains[0], p.foot_gains[1]
             if ref_kp > 0.0 and ref_kd >= 0.0:
                 kp, kd = ref_kp, ref_kd
@@ -375,11 +377,13 @@ def build_levels(
             row = _pd_row_targets(
                 J, s.v, error, block[4:7], a_ref, kp, kd, s.Jdot_v_contacts[3 * i : 3 * i + 3], eq_A, eq_b, row
             )
-            if mode == _FOOT_POSE:
+            if mode == _FOOT_POSE or mode == _SHANK_POSE:
                 calf_error = np.empty(3)
                 orientation_error_kernel(axis_angle_kernel(block[7:10]), s.R_WC[i], calf_error)
                 kp, kd = p.calf_gains[0], p.calf_gains[1]
-                for k in range(2):
+                # Roll and pitch (the 5-D task), or all three axes (the 6-D shank task).
+                axes = 3 if mode == _SHANK_POSE else 2
+                for k in range(axes):
                     rate = 0.0
                     for j in range(nv):
                         rate += s.J_w_calf[i, k, j] * s.v[j]

@@ -236,7 +236,7 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
         for i, (leg, ref) in enumerate(zip(robot.LEG_NAMES, legs, strict=True)):
             if held[i]:
                 continue
-            if ref.mode in (references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, references.LEG_MODE_FOOT_POSE):
+            if ref.mode in (references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, *references.CALF_ORIENTATION_ROWS):
                 if ref.mode == references.LEG_MODE_JOINTS:
                     p_ref, v_ref, a_ref = joint_reference_in_world(leg, s, ref)
                 elif ref.mode == references.LEG_MODE_FOOT:
@@ -255,8 +255,9 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
                     self.foot_stiffness,
                     self.foot_damping,
                 )
-                if ref.mode == references.LEG_MODE_FOOT_POSE:
-                    task = pd.stack_impedance_tasks([task, self._calf_task(s, i, leg, ref)], self.model.nv)
+                if ref.mode in references.CALF_ORIENTATION_ROWS:
+                    axes = references.CALF_ORIENTATION_ROWS[ref.mode]
+                    task = pd.stack_impedance_tasks([task, self._calf_task(s, i, leg, ref, axes)], self.model.nv)
                 impedance.append(task)
                 foot_rows[i] = slice(row, row + 3)
                 row += task.J.shape[0]
@@ -279,27 +280,34 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             row += 3
         return impedance, foot_rows
 
-    def _calf_task(self, s: RobotSnapshot, i: int, leg: str, ref: references.LegReference) -> pd.ImpedanceTask:
-        """The 2 orientation rows of the 5-D foot task: the calf's rotation about world x and y
-        (roll and pitch) towards the reference, the rotation about world z (yaw) left free."""
+    def _calf_task(
+        self, s: RobotSnapshot, i: int, leg: str, ref: references.LegReference, axes: int
+    ) -> pd.ImpedanceTask:
+        """The orientation rows of the foot-pose tasks: the calf's rotation towards the reference
+        about world x and y (roll and pitch; the 5-D task, `axes` 2, the yaw left free) or about
+        all three axes (the 6-D shank task, `axes` 3)."""
         c = self.config
         R_WC, J_w, bias_w = self.model.calf_orientation(i)
         R_ref = axis_angle_matrix(ref.acceleration)
         error = -orientation_error_W(R_ref, R_WC)  # e = x - x_ref, as a rotation vector
         return pd.ImpedanceTask(
             f"calf_{leg}",
-            J_w[:2],
-            bias_w[:2],
-            error[:2],
-            (J_w @ s.v)[:2],
-            np.zeros(2),
-            np.full(2, c.foot_orientation_stiffness),
-            np.full(2, c.foot_orientation_damping),
+            J_w[:axes],
+            bias_w[:axes],
+            error[:axes],
+            (J_w @ s.v)[:axes],
+            np.zeros(axes),
+            np.full(axes, c.foot_orientation_stiffness),
+            np.full(axes, c.foot_orientation_damping),
         )
 
     def _lower_tasks(
-        self, s: RobotSnapshot, body: references.BodyReference, on_prongs: bool
+        self, s: RobotSnapshot, body: references.BodyReference, attitude_first: bool
     ) -> list[pd.AccelerationTask]:
+        """The trunk's tasks and the posture, in the feet's null space. The attitude comes first
+        (`attitude_first`) on loaded prongs, whose tips pin the trunk's position, and while a lifted
+        shank is held in 6-D, whose six rows leave the trunk three free directions that its
+        position would otherwise take, its attitude left uncontrolled."""
         c = self.config
         w, v = s.V_trunk[:3], s.V_trunk[3:]
         angular = (
@@ -308,16 +316,16 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             + c.trunk_orientation.kd * (body.w - w)
         )
         linear = body.a + c.trunk_position.kp * (body.p - s.p_WB) + c.trunk_position.kd * (body.v - v)
-        if c.torso_position_first and not on_prongs:
+        if c.torso_position_first and not attitude_first:
             torso = [
                 pd.AccelerationTask("torso_position", s.J_trunk[3:], s.Jdot_v_trunk[3:], linear),
                 pd.AccelerationTask("torso_orientation", s.J_trunk[:3], s.Jdot_v_trunk[:3], angular),
             ]
         else:
             torso = [pd.AccelerationTask("torso", s.J_trunk, s.Jdot_v_trunk, np.concatenate([angular, linear]))]
-        if on_prongs:
-            # A loaded prong pins the trunk: its attitude is what is left to control, so it
-            # comes first; its position (nearly fixed by the tip) takes what remains.
+        if attitude_first:
+            # A loaded prong pins the trunk (or a held shank leaves it three directions): its
+            # attitude comes first; its position takes what remains.
             torso = [
                 pd.AccelerationTask("torso_orientation", s.J_trunk[:3], s.Jdot_v_trunk[:3], angular),
                 pd.AccelerationTask("torso_position", s.J_trunk[3:], s.Jdot_v_trunk[3:], linear),
@@ -422,7 +430,8 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             )
             impedance, foot_rows = self._impedance_tasks(s, legs, held)
             stacked = pd.stack_impedance_tasks(impedance, self.model.nv)
-            lower = self._lower_tasks(s, body, bool(held[4:].any()))
+            shank_held = any(ref.mode == references.LEG_MODE_SHANK_POSE and not held[i] for i, ref in enumerate(legs))
+            lower = self._lower_tasks(s, body, bool(held[4:].any()) or shank_held)
             law = pd.prioritized_force(dynamics, s.v, stacked, lower, c.rank_tolerance)
             free = pd.constraint_free_torque(dynamics, law.u, self.S, c.rank_tolerance)
             share = self.total_weight / max(float(ramp[held_idx].sum()), 1e-6)

@@ -57,6 +57,7 @@ _STATUS, _CONSECUTIVE, _TOTAL, _CP, _TRUNK_P, _TRUNK_R, _FEET, _RESIDUALS, _FORC
     range(13)
 )
 _FOOT, _JOINTS, _FOOT_POSE = references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, references.LEG_MODE_FOOT_POSE
+_SHANK_POSE = references.LEG_MODE_SHANK_POSE
 _ESTIMATE_ENTRIES = 7  # per leg: error rate (3), filtered error acceleration (3), active flag
 
 # Constants of a configured ProjectedImpedanceController (`tick_params`).
@@ -194,9 +195,9 @@ def _impedance_rows(leg_x, held, rows_of_leg, foot_row) -> int:
         if held[i]:
             continue
         mode = round(leg_x[12 * i])
-        if mode == _FOOT or mode == _JOINTS or mode == _FOOT_POSE:
+        if mode == _FOOT or mode == _JOINTS or mode == _FOOT_POSE or mode == _SHANK_POSE:
             foot_row[i] = m
-            rows_of_leg[i] = 5 if mode == _FOOT_POSE else 3
+            rows_of_leg[i] = 5 if mode == _FOOT_POSE else (6 if mode == _SHANK_POSE else 3)
         else:
             rows_of_leg[i] = 3
         m += rows_of_leg[i]
@@ -279,10 +280,12 @@ def _impedance_tasks(tp, s, leg_x, held, foot_row, J, Jdot_v, error, error_rate,
                 stiffness[row + k] = tp.foot_stiffness[k]
                 damping[row + k] = tp.foot_damping[k]
             row += 3
-            if mode == _FOOT_POSE:
-                # The calf's roll and pitch (rotation about world x and y) towards the reference.
+            if mode == _FOOT_POSE or mode == _SHANK_POSE:
+                # The calf's roll and pitch (rotation about world x and y; the 5-D task), or its
+                # whole orientation (the 6-D shank task), towards the reference.
                 orientation_error_kernel(axis_angle_kernel(block[7:10]), s.R_WC[i], rotation_error)
-                for k in range(2):
+                axes = 3 if mode == _SHANK_POSE else 2
+                for k in range(axes):
                     rate = 0.0
                     for j in range(nv):
                         J[row + k, j] = s.J_w_calf[i, k, j]
@@ -292,7 +295,7 @@ def _impedance_tasks(tp, s, leg_x, held, foot_row, J, Jdot_v, error, error_rate,
                     error_rate[row + k] = rate
                     stiffness[row + k] = tp.foot_orientation_stiffness
                     damping[row + k] = tp.foot_orientation_damping
-                row += 2
+                row += axes
         else:
             # A lifted leg without a reference: a joint impedance to the nominal posture.
             for k in range(3):
@@ -306,7 +309,7 @@ def _impedance_tasks(tp, s, leg_x, held, foot_row, J, Jdot_v, error, error_rate,
 
 
 @kernel
-def _lower_tasks(tp, s, body, on_prongs, J, Jdot_v, desired, start) -> int:
+def _lower_tasks(tp, s, body, attitude_first, J, Jdot_v, desired, start) -> int:
     """The trunk's levels and the posture (ProjectedImpedanceController._lower_tasks) into the
     stacked rows; returns the number of levels (start[:levels + 1] their rows)."""
     nv = tp.nv
@@ -321,10 +324,10 @@ def _lower_tasks(tp, s, body, on_prongs, J, Jdot_v, desired, start) -> int:
         linear[k] = body[10 + k] + kp_p * (body[k] - s.p_WB[k]) + kd_p * (body[7 + k] - s.V_trunk[3 + k])
     J[:, :] = 0.0
     # Trunk rows in order: (first trunk row, desired) per level; the position first unless the
-    # trunk stands on prongs (a prong tip pins its position: the attitude comes first) or the six
-    # rows are one level.
-    position_first = tp.torso_position_first and not on_prongs
-    split = on_prongs or tp.torso_position_first
+    # attitude must come first (see ProjectedImpedanceController._lower_tasks) or the six rows are
+    # one level.
+    position_first = tp.torso_position_first and not attitude_first
+    split = attitude_first or tp.torso_position_first
     row = 0
     levels = 0
     start[0] = 0
@@ -481,7 +484,12 @@ def projected_impedance_tick(
     lower_Jdot_v = np.empty(18)
     lower_desired = np.empty(18)
     lower_start = np.empty(4, dtype=np.int64)
-    num_lower = _lower_tasks(tp, s, body, on_prongs, lower_J, lower_Jdot_v, lower_desired, lower_start)
+    # A lifted shank held in 6-D leaves the trunk three free directions: its attitude first.
+    shank_held = False
+    for i in range(4):
+        if not held[i] and round(leg_x[12 * i]) == _SHANK_POSE:
+            shank_held = True
+    num_lower = _lower_tasks(tp, s, body, on_prongs or shank_held, lower_J, lower_Jdot_v, lower_desired, lower_start)
     u = np.empty(nv)
     impedance_force = np.empty(m)
     impedance_inertia = np.empty((m, m))

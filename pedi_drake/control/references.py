@@ -12,12 +12,13 @@ Layouts (world frame W, Unitree leg order FR, FL, RR, RL):
     [10:13] a_WB_ref [m/s^2]   [13:16] w_WB_ref [rad/s]   [16:19] alpha_WB_ref [rad/s^2]
 `leg_reference` (48): per leg k (12 entries from 12 k):
     [0] mode: 0 none (the leg is a stance or idle leg), 1 foot position in W, 2 joint angles,
-        3 foot pose in W (the 5-D task: foot position, and the calf's roll and pitch; yaw free)
-    [1:4] position: foot p_WF_ref [m] (modes 1, 3) or (hip, thigh, calf) [rad] (mode 2)
+        3 foot pose in W (the 5-D task: foot position, and the calf's roll and pitch; yaw free),
+        4 shank pose in W (the 6-D task: foot position and the calf's full orientation)
+    [1:4] position: foot p_WF_ref [m] (modes 1, 3, 4) or (hip, thigh, calf) [rad] (mode 2)
     [4:7] velocity [m/s | rad/s]
-    [7:10] acceleration [m/s^2 | rad/s^2] (modes 1, 2); mode 3: the rotation vector of the calf's
-        reference orientation R_WC_ref [rad] (the foot pose is held: no acceleration reference)
-    [10:12] the whole-body controller's foot task gains of modes 1 and 3, stiffness kp [1/s^2]
+    [7:10] acceleration [m/s^2 | rad/s^2] (modes 1, 2); modes 3, 4: the rotation vector of the
+        calf's reference orientation R_WC_ref [rad] (the pose is held: no acceleration reference)
+    [10:12] the whole-body controller's foot task gains of modes 1, 3 and 4, stiffness kp [1/s^2]
         and damping kd [1/s] of Eq. 1; kp 0 (or kp not > 0, or kd < 0) selects its configured
         `foot_position` gains (paper 002's controller keeps its own `foot_stiffness`). A
         low stiffness makes the foot compliant: pressed against an object it pushes with about
@@ -50,7 +51,9 @@ LEG_REFERENCE_SIZE = 48
 LEG_BLOCK = 12
 SAFETY_POLYGON_MAX_VERTICES = 8  # the four feet and up to four prong tips
 SAFETY_POLYGON_SIZE = 4 + 2 * SAFETY_POLYGON_MAX_VERTICES
-LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS, LEG_MODE_FOOT_POSE = 0, 1, 2, 3
+LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS, LEG_MODE_FOOT_POSE, LEG_MODE_SHANK_POSE = 0, 1, 2, 3, 4
+# The modes with calf-orientation rows, and how many rows each has (roll and pitch; all three axes).
+CALF_ORIENTATION_ROWS = {LEG_MODE_FOOT_POSE: 2, LEG_MODE_SHANK_POSE: 3}
 
 
 @dataclasses.dataclass

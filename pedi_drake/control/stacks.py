@@ -27,8 +27,8 @@ from pedi_drake.control import tasks
 from pedi_drake.control.config import WholeBodyControllerConfig
 from pedi_drake.control.hqp import EqualityTask, Level
 from pedi_drake.control.references import (
+    CALF_ORIENTATION_ROWS,
     LEG_MODE_FOOT,
-    LEG_MODE_FOOT_POSE,
     LEG_MODE_JOINTS,
     BodyReference,
     LegReference,
@@ -121,11 +121,13 @@ class StackBuilder:
             if ref.mode == LEG_MODE_FOOT:
                 rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, ref.acceleration, gains))
                 rows[-1].name = f"foot_{leg}"
-            elif ref.mode == LEG_MODE_FOOT_POSE:
-                # The optional 5-D task: the foot held at a world pose (its calf's roll and pitch too).
+            elif ref.mode in CALF_ORIENTATION_ROWS:
+                # The 5-D task (the foot held at a world pose, its calf's roll and pitch too) or the
+                # 6-D shank task (the calf's whole orientation).
                 rows.append(self.foot.rows(s, self.layout, i, ref.position, ref.velocity, np.zeros(3), gains))
                 rows[-1].name = f"foot_{leg}"
-                rows.append(self.calf.rows(s, self.layout, i, axis_angle_matrix(ref.acceleration)))
+                R_ref = axis_angle_matrix(ref.acceleration)
+                rows.append(self.calf.rows(s, self.layout, i, R_ref, CALF_ORIENTATION_ROWS[ref.mode]))
                 rows[-1].name = f"calf_{leg}"
             elif ref.mode == LEG_MODE_JOINTS:
                 rows.append(self.leg_joints.rows(s, self.layout, joints, ref.position, ref.velocity, ref.acceleration))

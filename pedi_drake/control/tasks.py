@@ -307,8 +307,9 @@ class FootPosition:
 
 @dataclasses.dataclass
 class CalfOrientation:
-    """The 5-D foot task's orientation rows: the calf's rotation about world x and y (roll and
-    pitch) towards R_ref (2 rows), Eq. 1 with a zero reference rate; the yaw is left free."""
+    """The orientation rows of the foot-pose tasks: the calf's rotation towards R_ref, Eq. 1 with
+    a zero reference rate, about world x and y (roll and pitch: the 5-D task, `axes` 2, the yaw
+    left free) or about all three (the 6-D shank task, `axes` 3)."""
 
     gains: PdGains
 
@@ -318,13 +319,14 @@ class CalfOrientation:
         layout: VariableLayout,
         contact: int,
         R_ref: np.ndarray,
+        axes: int = 2,
     ) -> EqualityTask:
         R_WC, J_w, bias_w = s.calf_orientations[contact]
-        e = orientation_error_W(R_ref, R_WC)[:2]
-        a = self.gains.kp * e - self.gains.kd * (J_w @ s.v)[:2]
-        A = np.zeros((2, layout.size))
-        A[:, : layout.nv] = J_w[:2]
-        return EqualityTask("calf_orientation", A, a - bias_w[:2])
+        e = orientation_error_W(R_ref, R_WC)[:axes]
+        a = self.gains.kp * e - self.gains.kd * (J_w @ s.v)[:axes]
+        A = np.zeros((axes, layout.size))
+        A[:, : layout.nv] = J_w[:axes]
+        return EqualityTask("calf_orientation", A, a - bias_w[:axes])
 
 
 @dataclasses.dataclass

@@ -284,7 +284,7 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         add_trunk_external_wrench(snapshot.h, snapshot.J_trunk, trunk_wrench)
         legs = references.parse_leg_reference(leg_x)
         for i, leg in enumerate(legs):
-            if leg.mode == references.LEG_MODE_FOOT_POSE:
+            if leg.mode in references.CALF_ORIENTATION_ROWS:
                 snapshot.calf_orientations[i] = self.model.calf_orientation(i)
         no_motion = (contact_set > 0.5) | (ramp > 0.0)
         loaded = contact_set > 0.5

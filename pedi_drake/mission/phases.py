@@ -33,6 +33,7 @@ from pedi_drake.mission.progress import (
     LEG_MODE_FOOT,
     LEG_MODE_FOOT_POSE,
     LEG_MODE_JOINTS,
+    LEG_MODE_SHANK_POSE,
     RUNNING,
     SUCCEEDED,
     FootPush,
@@ -392,7 +393,8 @@ class BodyPathRunner(PhaseRunner):
 
 
 class HoldFootPoseRunner(PhaseRunner):
-    """The lifted foot held where its reference is now (and its calf's roll and pitch) from now on."""
+    """The lifted foot held where its reference is now (and its calf's roll and pitch, or its whole
+    orientation) from now on."""
 
     def start(self, phase, progress, view, env):
         if phase.leg not in progress.references.legs:
@@ -401,7 +403,8 @@ class HoldFootPoseRunner(PhaseRunner):
         hold = QuinticSegment(p, p, view.time, 1e-3)
         if phase.orientation:
             rotation = orientation_error_W(view.calf_rotation_W(phase.leg), np.eye(3))  # its rotation vector
-            leg_trajectory = LegTrajectory(LEG_MODE_FOOT_POSE, hold, calf_rotation=rotation)
+            mode = LEG_MODE_SHANK_POSE if phase.shank else LEG_MODE_FOOT_POSE
+            leg_trajectory = LegTrajectory(mode, hold, calf_rotation=rotation)
         else:
             leg_trajectory = LegTrajectory(LEG_MODE_FOOT, hold)
         progress.references.legs[phase.leg] = leg_trajectory
@@ -982,7 +985,7 @@ class MoveFeetRunner(PhaseRunner):
             current = refs.legs.get(foot.leg)
             if current is None:
                 raise UnreachableTarget(f"{phase.name}: {foot.leg} is not in pedipulation mode")
-            if current.mode in (LEG_MODE_FOOT, LEG_MODE_FOOT_POSE):
+            if current.mode in (LEG_MODE_FOOT, LEG_MODE_FOOT_POSE, LEG_MODE_SHANK_POSE):
                 # From the reference, not the foot: a foot held short of its reference by an
                 # object keeps pressing by the same amount as the reference moves on.
                 start = current.trajectory.sample(t).position

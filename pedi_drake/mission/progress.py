@@ -15,6 +15,12 @@ import dataclasses
 import numpy as np
 from pydrake.math import RotationMatrix
 
+# The leg reference's modes, which the mission writes (pedi_drake.control.references has their layout).
+from pedi_drake.control.references import LEG_MODE_FOOT as LEG_MODE_FOOT
+from pedi_drake.control.references import LEG_MODE_FOOT_POSE as LEG_MODE_FOOT_POSE
+from pedi_drake.control.references import LEG_MODE_JOINTS as LEG_MODE_JOINTS
+from pedi_drake.control.references import LEG_MODE_NONE as LEG_MODE_NONE
+from pedi_drake.control.references import LEG_MODE_SHANK_POSE as LEG_MODE_SHANK_POSE
 from pedi_drake.trajectory import (
     CircularPath,
     PiecewiseQuintic,
@@ -26,13 +32,13 @@ from pedi_drake.trajectory import (
 
 RUNNING, SUCCEEDED, FAILED, RECOVERING = "running", "succeeded", "failed", "recovering"
 STATUS_CODES = {RUNNING: 0, SUCCEEDED: 1, FAILED: 2, RECOVERING: 3}
-LEG_MODE_NONE, LEG_MODE_FOOT, LEG_MODE_JOINTS, LEG_MODE_FOOT_POSE = 0, 1, 2, 3
 
 
 @dataclasses.dataclass(frozen=True)
 class LegTrajectory:
     """Reference of one pedipulation leg: joint angles (mode 2), foot position in W (mode 1), or
-    a held foot pose in W (mode 3: the trajectory's position and the calf's orientation).
+    a held foot pose in W (mode 3: the trajectory's position and the calf's roll and pitch; mode
+    4: the shank's pose, the calf's whole orientation).
 
     A value (a new reference replaces it): shared by the copies of a progress."""
 

@@ -125,11 +125,14 @@ class BodyPath(PhaseBase):
 @dataclasses.dataclass
 class HoldFootPose(PhaseBase):
     """Holds the lifted foot of `leg` at its current world position and, with `orientation`, its
-    calf's roll and pitch (the 5-D foot task; yaw free) for whatever comes next."""
+    calf's roll and pitch (the 5-D foot task; yaw free), with `shank` the calf's whole
+    orientation (paper 002's 6-D task of the shank), for whatever comes next."""
 
     leg: str = "FL"
     # Also hold the calf's roll and pitch (5-D), not just the foot position (3-D).
     orientation: bool = True
+    # Hold the calf's yaw too (6-D: the shank's pose); needs `orientation`.
+    shank: bool = False
     # Time the phase lasts before the next starts [s].
     duration: float = 0.5
 
@@ -920,6 +923,8 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
         for k, point in enumerate(phase.via_points):
             need(len(point) == 3, f"via_points[{k}]", f"expected [x, y, z] offsets in metres, got {point}")
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+    if isinstance(phase, HoldFootPose):
+        need(phase.orientation or not phase.shank, "shank", "the 6-D shank pose needs orientation: true")
     if isinstance(phase, SwitchController):
         need(phase.to in SWITCHABLE_CONTROLLERS, "to", f"must be one of {SWITCHABLE_CONTROLLERS}, got {phase.to!r}")
         need(math.isfinite(phase.duration) and phase.duration >= 0, "duration", f"must be >= 0 s, got {phase.duration}")
