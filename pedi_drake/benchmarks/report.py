@@ -133,7 +133,7 @@ def _estop_button(d: dict) -> str:
 def _controller_switches(d: dict) -> str:
     s = d["summary"]
     return (
-        f"{s['succeeded']} of {s['runs']} runs succeeded without a fall, at least {s['switches_per_run_min']} "
+        f"missions done without a fall in {s['succeeded']} of {s['runs']} runs, at least {s['switches_per_run_min']} "
         f"switches each; largest joint-target step in a hand-over {s['max_target_step_rad']:.4f} rad (rate limit "
         f"{s['target_step_limit_rad']:.3f}); the lifted foot within {1000 * s['max_lifted_foot_stray_m']:.1f} mm "
         "of where it held"
@@ -153,6 +153,17 @@ def _shank_hold(d: dict) -> str:
             f"{1000 * row['trunk_displacement_max_m']:.1f} mm"
         )
     return "; ".join(parts)
+
+
+def _reach_edge(d: dict) -> str:
+    parts = [
+        f"{row['controller']}: foot error {1000 * row['foot_error_beyond_reach_max_m']:.1f} mm beyond reach, "
+        f"{1000 * row['foot_error_after_max_m']:.2f} mm after, torque at most "
+        f"{100 * row['torque_share_of_limit_max']:.0f} % of its limit"
+        for row in d["runs"]
+        if "foot_error_beyond_reach_max_m" in row
+    ]
+    return f"floors met on {d['summary']['floors_met']} of {d['summary']['runs']}: " + "; ".join(parts)
 
 
 def _prong_push(d: dict) -> str:
@@ -340,6 +351,12 @@ ROWS: tuple[Row, ...] = (
         "shank_hold.json",
         _shank_hold,
         "python -m pedi_drake.benchmarks.shank_hold",
+    ),
+    Row(
+        "Lifted foot driven 1.8 cm beyond the edge of its reach and back (paper 002's singularity row), no fall",
+        "reach_edge.json",
+        _reach_edge,
+        "python -m pedi_drake.benchmarks.reach_edge",
     ),
     Row(
         "Largest knee torque a 30 N push on the trunk adds [N m], no prongs / a centre-line pair / a side pair "
