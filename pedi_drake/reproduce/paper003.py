@@ -338,9 +338,10 @@ def _push_recovery(folder: Path, section: Section, quick: bool) -> None:
             f"knee torque the push adds on the loaded side ({', '.join(loaded)}) [N m], with / without prongs",
             "lower with prongs (the paper's amplification from force to torque)",
             " / ".join(f"{added[label]:.2f}" for label in PUSH_MISSIONS),
-            "mean at full force minus mean before the push. The shipped prongs sit on the trunk's centre line, "
-            f"so they took {_pair(rows, lambda r: abs(r['prong_share_of_push']), 0, 100)} % of the sideways force "
-            f"and {_pair(rows, lambda r: abs(r['prong_load_N']), 0)} N of the weight but none of its roll moment; "
-            "the prong placement comparison below pushes along x and y with the prongs placed either way.",
+            "mean at full force minus mean before the push. The shipped prongs sit on the trunk's centre line; "
+            f"they took {_pair(rows, lambda r: abs(r['prong_share_of_push']), 0, 100)} % of the sideways force "
+            f"at the ground and {_pair(rows, lambda r: abs(r['prong_load_N']), 0)} N of the weight, but no roll "
+            "moment about their own line, which a push along y makes; the prong placement comparison below "
+            "pushes along x and y with the prongs placed either way.",
         ),
     ]
