@@ -21,11 +21,9 @@ WIDEST_PRONG_HALF_SPACING = 0.182
 # [rad] the inward hip angle that spacing is derived for: the missions turn a hip inwards by at
 # most 0.3 rad; beyond 0.50-0.58 rad a leg reaches under the trunk to the prongs at any spacing.
 PRONG_HIP_INWARD_LIMIT = 0.5
-# The shipped design's half-spacing [m], not yet the widest: with the prongs at
-# +-WIDEST_PRONG_HALF_SPACING the compiled whole-body controller's QP fails one tick of the
-# prongs demonstration, where the first front foot unloads (its reference and DAQP solve it), so
-# the prongs stay 3 cm further in until that is understood.
-PRONG_HALF_SPACING = 0.15
+# The shipped design's half-spacing [m]: the widest (paper 003 places its prongs as far apart as
+# the legs allow).
+PRONG_HALF_SPACING = WIDEST_PRONG_HALF_SPACING
 
 
 @dataclasses.dataclass

@@ -6,6 +6,8 @@ on one or two variables, torque-like rows on a dozen), then equalities on a few 
 regularisation of more rows than the null space left has columns.
 """
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -142,3 +144,31 @@ def test_a_level_the_levels_above_already_fix_takes_no_step():
         compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, N), SETTINGS)[1],
     ):
         np.testing.assert_allclose(solution, expected.x, rtol=0, atol=1e-9)
+
+
+def test_redundant_contact_rows_are_found_rank_deficient_as_the_svd_finds_them():
+    # The paper003 stack of a real tick with six loaded contacts (four feet, two prongs at the
+    # trunk's ends) as the FR foot starts to unload: its first level's 24 rows have rank 23 (a
+    # singular value of 3e-17), yet an unpivoted QR leaves 1.9e-8 on its diagonal. Taken as full
+    # rank, the minimum-norm step was 8e6 long and the next level's QP infeasible.
+    recorded = np.load(Path(__file__).parent / "fixtures" / "hqp_redundant_prong_contacts.npz")
+    n = int(recorded["n"])
+    A = recorded["eq_A"][: recorded["eq_start"][1]]
+    W, N, R = (np.empty((n, n)) for _ in range(3))
+    tau, order = np.empty(n), np.empty(n, dtype=np.int64)
+    rank, _ = compiled_hqp._row_space_split(A, float(recorded["rank_tolerance"]), W, tau, N, R, order)
+    singular = np.linalg.svd(A, compute_uv=False)
+    assert rank == np.sum(singular > float(recorded["rank_tolerance"]) * singular[0]) == 23
+    table = compiled_hqp.RowTable(
+        n,
+        *(recorded[f] for f in ("eq_A", "eq_b", "eq_start", "hard_G", "hard_h", "hard_start")),
+        *(recorded[f] for f in ("soft_G", "soft_h", "soft_w", "soft_start")),
+    )
+    settings = HqpSettings(
+        proximal_weight=float(recorded["proximal_weight"]),
+        rank_tolerance=float(recorded["rank_tolerance"]),
+        fix_tolerance=float(recorded["fix_tolerance"]),
+    )
+    status, x, _ = compiled_hqp.solve_table_strict(table, settings)
+    assert status == compiled_hqp.STATUS_OK
+    np.testing.assert_allclose(x, recorded["x"], atol=1e-8)  # the Python reference's solution

@@ -128,11 +128,12 @@ def _row_space_split(
     (m, m) and the row order (small_linalg.householder_factor) into the leading blocks of the
     given buffers (W, N, R: (n, n); tau, order: (n,)) and returns (rank, SPLIT_* kind).
 
-    A Householder QR of A^T first; when its diagonal says A is rank-deficient, the same QR with
-    pivoting, which reveals the rank in its diagonal (hqp.py takes an SVD there: the two agree
-    on the rank when A's singular values are clearly above or below the tolerance, as the
-    stack's are: a stance's redundant contact rows give singular values of 1e-18 of the
-    largest, the others 1e-2 and more). An SVD only when A has more rows than columns."""
+    A Householder QR of A^T first; when its diagonal comes within the square root of the
+    tolerance of rank deficiency, the same QR with pivoting, which reveals the rank in its
+    diagonal (hqp.py takes an SVD there: the two agree on the rank when A's singular values are
+    clearly above or below the tolerance, as the stack's are: a stance's redundant contact rows
+    give singular values of 1e-17 of the largest, the others 1e-2 and more). An SVD only when A
+    has more rows than columns."""
     m, n = A.shape
     if m == 0:
         for i in range(n):
@@ -149,7 +150,11 @@ def _row_space_split(
             smallest = min(smallest, d)
         kind = SPLIT_FULL_RANK
         rank = m
-        if not smallest > tolerance * max(1.0, largest):
+        # An unpivoted QR's diagonal bounds the smallest singular value only from above (a stance's
+        # redundant contact rows can leave 1e-8 there over a singular value of 1e-17), so full
+        # rank is taken only with a wide margin: the square root of the tolerance. Anything
+        # closer goes to the pivoted QR, whose diagonal reveals the rank.
+        if not smallest > math.sqrt(tolerance) * max(1.0, largest):
             householder_factor(A, W, tau, Rm, order, True)
             kind = SPLIT_PIVOTED
             top = abs(Rm[0, 0])
