@@ -146,3 +146,17 @@ def test_the_reality_gap_study_draws_at_least_30_gaps_for_every_shipped_mission(
         assert 0.0 <= s["model_error.payload_mass"] <= 3.0 and np.linalg.norm(s["model_error.payload_offset"]) <= 0.05
         assert 0.4 <= s["ground_friction"] <= 1.0 and all(0.6 <= v <= 1.0 for v in s["model_error.motor_strength"])
         assert 0.0 <= s["model_error.command_latency"] <= 0.010 and 0.0 <= s["model_error.joint_friction"] <= 0.3
+
+
+@pytest.mark.parametrize("name", ["reality_gap_slice", "reality_gap_prongs"])
+def test_a_slice_of_the_reality_gap_study_draws_the_whole_studys_gaps_for_its_missions(name):
+    whole = {
+        (t.settings["mission"], t.task_id): t.settings for t in load_study(REPO / "studies" / "reality_gap.yaml").tasks
+    }
+    part = load_study(REPO / "studies" / f"{name}.yaml").tasks
+    assert len(part) == 30 * len({t.settings["mission"] for t in part})
+    for task in part:
+        expected = whole[(task.settings["mission"], task.task_id)]
+        assert set(task.settings) == set(expected)
+        for field, value in task.settings.items():
+            assert np.all(np.asarray(value) == np.asarray(expected[field])), (task.task_id, field)

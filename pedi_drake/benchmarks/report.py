@@ -381,6 +381,14 @@ ROWS: tuple[Row, ...] = (
         summary=True,
     ),
     Row(
+        "The missions on the prongs, at the trunk's ends, against the same 30 draws (studies/reality_gap_prongs.yaml)",
+        "reality_gap_prongs.json",
+        _reality_gap,
+        "python -m pedi_drake.batch studies/reality_gap_prongs.yaml && python -m pedi_drake.benchmarks.reality_gap "
+        "out/studies/reality_gap_prongs --out benchmarks/results/reality_gap_prongs.json",
+        summary=True,
+    ),
+    Row(
         "Teleoperation at real time over UDP",
         "teleop.json",
         _teleop,
