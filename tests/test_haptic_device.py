@@ -6,6 +6,7 @@ import pytest
 from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import LogVectorOutput
 
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL, DEFAULT_FOOT_FEEDBACK_CHANNEL
@@ -48,24 +49,24 @@ def device_run():
     device = SpringDevice()
     adapter = DeviceAdapter(device, lcm, DEFAULT_FOOT_COMMAND_CHANNEL, DEFAULT_FOOT_FEEDBACK_CHANNEL)
     targets = [(0.0, (0.0, 0.0, 0.0)), (PUSH_AT, (HAND_PUSH, 0.0, 0.0))]
-    operator = builder.AddSystem(DeviceOperator(adapter, device, targets))
+    # The hand lets go of the button at RELEASE_AT: the autonomous mission again.
+    operator = builder.AddSystem(DeviceOperator(adapter, device, targets, button_release=RELEASE_AT))
+    handle = LogVectorOutput(operator.GetOutputPort("handle"), builder, 0.01)
     simulator = Simulator(builder.Build())
     simulator.Initialize()
-    simulator.AdvanceTo(RELEASE_AT)
-    device.button = False  # the hand lets go of the button: the autonomous mission again
     simulator.AdvanceTo(END)
     manager = diagram.GetSubsystemByName("mission")
     progress = manager.progress(manager.GetMyContextFromRoot(simulator.get_context()))
     logs = built.logs(simulator.get_context())
     wall = [obj.instance_name for obj in built.mission.scene]
-    return operator.trace, progress, logs, wall
+    log = handle.FindLog(simulator.get_context())
+    return (log.sample_times(), log.data()), progress, logs, wall
 
 
 def test_the_device_drives_the_foot_to_the_wall_and_feels_it_push_back(device_run):
-    trace, progress, logs, scene_names = device_run
-    times = np.array([t for t, _, _ in trace])
-    offsets = np.array([offset[0] for _, offset, _ in trace])
-    rendered = np.array([np.linalg.norm(force) for _, _, force in trace])
+    (times, handle), progress, logs, scene_names = device_run
+    offsets = handle[0]
+    rendered = np.linalg.norm(handle[6:9], axis=0)
     contact = logs["sim.scene_contact_forces"]
     wall_force = contact.data[scene_contact_index("wall", "FR", scene_names)]
     free = (times > PUSH_AT + 0.3) & (times < PUSH_AT + 0.5)

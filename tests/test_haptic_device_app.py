@@ -28,7 +28,7 @@ def test_the_device_pushes_the_foot_into_the_wall_and_is_pushed_back(tmp_path):
     try:
         device = subprocess.run(
             [sys.executable, "-m", "pedi_drake.apps.haptic_device", "--scenario_text", SCENARIO]
-            + ["--push_at", "8", "--release_at", "14", "--duration", "16", "--start_on_feedback"],
+            + ["--push_at", "7", "--release_at", "11", "--duration", "12", "--start_on_feedback"],
             capture_output=True,
             text=True,
             timeout=300,
@@ -46,8 +46,8 @@ def test_the_device_pushes_the_foot_into_the_wall_and_is_pushed_back(tmp_path):
     ]
     rendered = [float(re.search(r"rendered \[\s*([-\d.]+)", line).group(1)) for line in lines]
     print("\n" + "\n".join(lines))
-    free = [x for t, x in handle if 9.0 <= t < 10.0]
-    pushing = [x for t, x in handle if 12.0 <= t < 14.0]
+    free = [x for t, x in handle if 8.0 <= t < 9.0]
+    pushing = [x for t, x in handle if 10.0 <= t < 11.0]
     assert free and min(free) > 25.0  # mm: the hand's 3 cm, nothing pushing back yet
     assert pushing and max(pushing) < 25.0  # the wall's force, fed back, holds the handle back
     assert min(rendered) < -2.0  # N, along -x: the wall pushes the foot back
