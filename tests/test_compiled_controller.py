@@ -2,10 +2,9 @@
 
 A shadow run: a mission simulated with the reference tick driving the robot, and at every tick
 the compiled tick also runs on the same context into scratch state. Both must write the same
-command, reference, ramps, held pose and diagnostics. The reference solves its level QPs with the
-same exact solver (`qp_backend: dense_qp`; tests/test_dense_qp.py holds that solver against DAQP
-run to tight tolerances), so the two agree to rounding. DAQP at the controller's settings stops
-within its own tolerance, about 1e-7 rad/s of integrated joint rate per tick here.
+command, reference, ramps, held pose and diagnostics. Both solve their QPs with DAQP at the same
+settings (`qp_backend: daqp`: the Python reference calls it through its Python module, the
+compiled tick through its C library), so the two agree to rounding.
 """
 
 import dataclasses
@@ -80,7 +79,7 @@ def shadow_run(monkeypatch, mission: str, duration: float, state_tolerance: floa
     scenario = load_scenario()
     scenario.mission = mission
     scenario.simulation_duration = duration
-    scenario.whole_body = dataclasses.replace(scenario.whole_body, qp_backend="dense_qp", **whole_body)
+    scenario.whole_body = dataclasses.replace(scenario.whole_body, qp_backend="daqp", **whole_body)
     simulate(scenario=scenario, name=mission, quiet=True, replay=False)
     return stats
 

@@ -17,7 +17,7 @@ from pedi_drake.control.small_linalg import householder_q_columns
 from pedi_drake.exceptions import QpInfeasible
 
 N = 30
-SETTINGS = HqpSettings(backend="dense_qp")
+SETTINGS = HqpSettings(backend="daqp")
 
 
 def sparse_rows(rng: np.random.Generator, rows: int, nonzeros: int) -> np.ndarray:

@@ -23,9 +23,8 @@ from pedi_drake.station.initial_state import initial_trunk_pose
 from pedi_drake.vector3 import orientation_error_W
 
 # The tick implementations every closed-loop property must hold with: the compiled tick (the
-# default) and the Python reference with DAQP. The reference with pedi_drake.control.dense_qp equals
-# the compiled tick to rounding (tests/test_compiled_controller.py); OSQP, the slow baseline, runs
-# only in the benchmark.
+# default) and the Python reference, both with DAQP (tests/test_compiled_controller.py holds them
+# equal tick for tick); OSQP, the slow baseline, runs only in the benchmark.
 BACKENDS = ("compiled", "daqp")
 
 

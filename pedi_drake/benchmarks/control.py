@@ -8,10 +8,8 @@ on scenarios/wbc_demos.yaml, through MakePedipulationDiagram) in simulation (500
 
 * controller tick (state in, command out, hierarchical QP solved) on three legs with the
   paper-000 stack: DAQP called directly, against the same stack solved level by level through
-  `MathematicalProgram` + `OsqpSolver` (the baseline, `qp_backend: osqp`) and by
-  `pedi_drake.control.dense_qp` (`qp_backend: dense_qp`), measured in the same run; median and
-  p99 over all ticks on three legs of `--repeats` runs (`pedi_drake.benchmarks.dense_qp` times
-  the level QPs alone);
+  `MathematicalProgram` + `OsqpSolver` (the baseline, `qp_backend: osqp`), measured in the same
+  run; median and p99 over all ticks on three legs of `--repeats` runs;
 * closed-loop real-time factor (sim time / wall time, no visualisation);
 * three-leg hold: FR foot error, trunk drift, stance-foot slip, peak torque / effort limit;
 * paper 003's push test: 30 N horizontal on the trunk for 5 s while on three legs, without
@@ -58,7 +56,6 @@ def cases(repeats: int) -> list[Case]:
     return [
         Case("three_leg_hold daqp", "three_leg_hold", {}, repeats),
         Case("three_leg_hold osqp (baseline)", "three_leg_hold", {"qp_backend": "osqp"}, 1),
-        Case("three_leg_hold dense_qp", "three_leg_hold", {"qp_backend": "dense_qp"}, repeats),
         Case("three_leg_hold paper003", "three_leg_hold", {"stack": "paper003"}, 1),
         Case("stand 1 kHz", "stand", {"period": 0.001}, 1),
         Case("push_no_prongs", "push_no_prongs", {}, 1),

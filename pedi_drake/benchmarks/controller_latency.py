@@ -1,7 +1,7 @@
 """Latency of the controller side of a hardware run, against a replay of recorded status messages.
 
     python -m pedi_drake.benchmarks.controller_latency [--mission hit_target_front] [--period 0.002]
-        [--qp-backend compiled|daqp|dense_qp] [--callbacks [--window START:END]] [--parts]
+        [--qp-backend compiled|daqp] [--callbacks [--window START:END]] [--parts]
         [--framework-floor] [--out benchmarks/results/controller_latency.json]
 
 1. Records: the mission in simulation (seed 0); the status the robot would have sent at every
@@ -567,7 +567,7 @@ def main() -> None:
     parser.add_argument(
         "--qp-backend",
         default=None,
-        help="the whole-body controller's tick: compiled (the default) or the reference with daqp or dense_qp",
+        help="the whole-body controller's tick: compiled (the default) or the Python reference with daqp",
     )
     parser.add_argument("--callbacks", action="store_true", help="one more pass: every Python callback timed")
     parser.add_argument(

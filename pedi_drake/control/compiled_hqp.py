@@ -27,7 +27,7 @@ import math
 
 import numpy as np
 
-from pedi_drake.control import dense_qp
+from pedi_drake.control import daqp_kernel
 from pedi_drake.control.hqp import HqpSettings, Level
 from pedi_drake.control.small_linalg import (
     cholesky_solve,
@@ -223,16 +223,17 @@ def _meets(G: np.ndarray, upper: np.ndarray, z: np.ndarray, tolerance: float) ->
 
 
 @kernel
-def _solve_level_qp(H, f, C, upper, eps_prox, y, workspace) -> int:
-    """min 0.5 y'Hy + f'y s.t. C y <= upper into y (hqp._solve_dense_qp with dense_qp); a status.
-    `workspace`: dense_qp's scratch arrays (matrices, transposed, vectors, integers) for at least
-    this size (`new_workspace`)."""
+def _solve_level_qp(H, f, C, upper, eps_prox, eta_prox, y) -> int:
+    """min 0.5 y'Hy + f'y s.t. C y <= upper into y by DAQP, as hqp._solve_level_qp; a status."""
     n, m = f.shape[0], upper.shape[0]
     if m == 0:
         y[:] = np.linalg.lstsq(H, -f, rcond=np.finfo(np.float64).eps * n)[0]
         return STATUS_OK
-    status = dense_qp.solve_with_defaults(H, f, C, upper, eps_prox, y, workspace)
-    if status != dense_qp.OPTIMAL:
+    lower = np.full(m, -daqp_kernel.INFINITE_BOUND)
+    exit_flag = daqp_kernel.solve_qp(
+        H, f, C, upper, lower, np.zeros(m, np.int32), eps_prox, eta_prox, 0.0, y, np.empty(m)
+    )
+    if not daqp_kernel.solved(exit_flag):
         return STATUS_INFEASIBLE
     for v in y:
         if not math.isfinite(v):
@@ -283,10 +284,9 @@ def solve_strict(
     eps_prox,
     x,
     residuals,
-    workspace,
 ) -> int:
     """Solves the levels in strict priority order (hqp.solve_hqp) into x (n,) and the levels'
-    equality residuals (L,); returns a status. `workspace`: `new_workspace` for the table's sizes."""
+    equality residuals (L,); returns a status."""
     num_levels = len(eq_start) - 1
     for i in range(n):
         x[i] = 0.0
@@ -384,7 +384,7 @@ def solve_strict(
                     C[mh + i, :nz] = GsZ[i]
                     C[mh + i, nz + i] = -1.0
                 y = np.empty(size)
-                status = _solve_level_qp(H, f, C, upper, eps_prox, y, workspace)
+                status = _solve_level_qp(H, f, C, upper, eps_prox, daqp_kernel.QP_FIXED_POINT, y)
                 if status != STATUS_OK:
                     return status
                 z[:] = y[:nz]
@@ -444,11 +444,9 @@ def solve_weighted(
     eps_prox,
     x,
     residuals,
-    workspace,
 ) -> int:
     """One QP with level k's equalities and soft rows weighted by level_weights[k], hard rows kept
-    hard (hqp.solve_weighted), into x (n,) and the residuals (L,); returns a status. `workspace`:
-    `new_workspace` for the table's sizes."""
+    hard (hqp.solve_weighted), into x (n,) and the residuals (L,); returns a status."""
     num_levels = len(eq_start) - 1
     mh = hard_G.shape[0]
     ms = soft_G.shape[0]
@@ -477,7 +475,7 @@ def solve_weighted(
         C[mh + i, n + i] = -1.0
         upper[mh + i] = soft_h[i]
     y = np.empty(size)
-    status = _solve_level_qp(H, f, C, upper, eps_prox, y, workspace)
+    status = _solve_level_qp(H, f, C, upper, eps_prox, daqp_kernel.AUTOMATIC_FIXED_POINT, y)
     if status != STATUS_OK:
         return status
     x[:] = y[:n]
@@ -486,13 +484,6 @@ def solve_weighted(
         r = eq_A[e0:e1] @ x - eq_b[e0:e1]
         residuals[level] = math.sqrt(r @ r)
     return STATUS_OK
-
-
-def new_workspace(n: int, max_hard: int, max_soft: int) -> tuple:
-    """dense_qp's scratch arrays for every level QP of a table with `n` variables, at most
-    `max_hard` hard and `max_soft` soft rows (a level's QP has n + soft variables and hard + soft
-    rows at most)."""
-    return dense_qp.workspace_arrays(n + max_soft, max_hard + max_soft)
 
 
 def solve_table_strict(table: RowTable, settings: HqpSettings | None = None) -> tuple[int, np.ndarray, np.ndarray]:
@@ -516,7 +507,6 @@ def solve_table_strict(table: RowTable, settings: HqpSettings | None = None) -> 
         settings.proximal_weight,
         x,
         residuals,
-        new_workspace(table.n, len(table.hard_h), len(table.soft_h)),
     )
     return status, x, residuals
 
@@ -544,6 +534,5 @@ def solve_table_weighted(
         settings.proximal_weight,
         x,
         residuals,
-        new_workspace(table.n, len(table.hard_h), len(table.soft_h)),
     )
     return status, x, residuals

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from pedi_drake.control import dense_qp
+from pedi_drake.control import daqp_kernel
 from pedi_drake.control.small_decompositions import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
 from pedi_drake.control.small_linalg import multiply, multiply_transposed
 from pedi_drake.friction import write_pyramid_faces
@@ -392,7 +392,7 @@ def contact_forces(
     M vdot + h, ramp (k,), force_share (3k,)): the forces lam (3k,) [N], the torques tau (12,)
     [N m] and |Jc,u^T lam - r_u| in equality_residual[0]; returns CONTACT_FORCES_OK or
     CONTACT_FORCES_INFEASIBLE (lam and tau then meaningless). The QP goes to
-    `dense_qp.solve_with_defaults` with `proximal_weight` [units of its Hessian]."""
+    DAQP (`daqp_kernel.solve_qp`) with `proximal_weight` [units of its Hessian]."""
     n = Jc.shape[0]
     k = n // 3
     na = actuated.shape[0]
@@ -504,8 +504,12 @@ def contact_forces(
         for i in range(rows):
             upper[i] = g[i] - upper[i]
         z = np.zeros(nz)
-        workspace = dense_qp.workspace_arrays(nz, rows)
-        if dense_qp.solve_with_defaults(H, f, C, upper, proximal_weight, z, workspace) != dense_qp.OPTIMAL:
+        lower = np.full(rows, -daqp_kernel.INFINITE_BOUND)
+        sense = np.zeros(rows, np.int32)
+        exit_flag = daqp_kernel.solve_qp(
+            H, f, C, upper, lower, sense, proximal_weight, daqp_kernel.QP_FIXED_POINT, 0.0, z, np.empty(rows)
+        )
+        if not daqp_kernel.solved(exit_flag):
             return CONTACT_FORCES_INFEASIBLE
         for i in range(nz):
             if not math.isfinite(z[i]):

@@ -19,7 +19,7 @@ import math
 import numpy as np
 
 from pedi_drake import robot
-from pedi_drake.control import dense_qp, references
+from pedi_drake.control import references
 from pedi_drake.control.config import WholeBodyControllerConfig
 from pedi_drake.control.stacks import SLIDING_SPEED
 from pedi_drake.control.tasks import GRAVITY
@@ -119,16 +119,8 @@ def table_dtype(nv: int, nc: int) -> np.dtype:
     max_eq = (6 + 3 * nc) + 30 + (24 + 3 * nc)
     max_hard = 6 * nc + 48
     max_soft = references.SAFETY_POLYGON_MAX_VERTICES + nc
-    # dense_qp's scratch arrays for the largest level QP (compiled_hqp.new_workspace), kept here so
-    # no tick allocates them.
-    n_qp, m_qp = n + max_soft, max_hard + max_soft
-    length = max(n_qp, m_qp)
     return np.dtype(
         [
-            ("qp_matrices", "f8", (dense_qp.NUM_MATRICES, n_qp, n_qp)),
-            ("qp_transposed", "f8", (n_qp, m_qp)),
-            ("qp_vectors", "f8", (dense_qp.NUM_VECTORS, length)),
-            ("qp_integers", "i8", (dense_qp.NUM_INTEGER_ROWS, length)),
             ("eq_A", "f8", (max_eq, n)),
             ("eq_b", "f8", max_eq),
             ("eq_start", "i8", MAX_LEVELS + 1),

@@ -8,7 +8,7 @@ import math
 
 STACKS = ("paper000", "paper003")
 HQP_MODES = ("strict", "weighted")
-QP_BACKENDS = ("compiled", "daqp", "dense_qp", "osqp")
+QP_BACKENDS = ("compiled", "daqp", "osqp")
 
 
 @dataclasses.dataclass
@@ -32,10 +32,9 @@ class WholeBodyControllerConfig:
     # Weighted mode: weight of each level of the stack, top first [-]. Empty: 100^(L-1-k) for the
     # L levels of the stack (physics 1e6 ... regularisation 1 for paper000).
     level_weights: list[float] = dataclasses.field(default_factory=list)
-    # How a tick is computed: "compiled" (the whole tick in one compiled call, with the project's
-    # dense QP solver: whole_body_tick.py), or the reference implementation in Python with its
-    # level QPs solved by "daqp" (dense active set, called directly), "dense_qp" (the compiled
-    # solver, pedi_drake.control.dense_qp) or "osqp" (MathematicalProgram, the baseline).
+    # How a tick is computed: "compiled" (the whole tick in one compiled call, its QPs by DAQP:
+    # whole_body_tick.py), or the reference implementation in Python with its level QPs solved by
+    # "daqp" (dense active set, called directly) or "osqp" (MathematicalProgram, the baseline).
     qp_backend: str = "compiled"
     # paper003 only: also keep the capture point in the safety polygon in its first level.
     paper003_balance: bool = True

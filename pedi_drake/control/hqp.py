@@ -16,22 +16,19 @@ al. 2014):
 Every level QP is dense and small (about 20 to 40 variables for the Go1), so it goes to DAQP,
 a dense active-set solver called directly; see
 `pedi_drake.benchmarks.control` for the measured comparison with MathematicalProgram + OSQP.
-The `dense_qp` backend solves the same exact (semi-definite) problems with
-`pedi_drake.control.dense_qp`, compiled with numba and so callable from compiled code too.
 Levels without inequalities are plain least squares.
 """
 
 import dataclasses
 import functools
 import math
-import threading
 import time
 
 import daqp
 import numpy as np
 from scipy.linalg import lapack
 
-from pedi_drake.control import dense_qp
+from pedi_drake.control import daqp_kernel
 from pedi_drake.exceptions import QpInfeasible
 
 # DAQP treats bounds beyond this magnitude as infinite.
@@ -104,9 +101,8 @@ class HqpSettings:
     rank_tolerance: float = 1e-9
     # Slack allowed on a fixed soft inequality beyond its optimum, absorbs solver tolerance [-].
     fix_tolerance: float = 1e-7
-    # Level QP backend: "daqp" (called directly), "dense_qp" (pedi_drake.control.dense_qp, compiled)
-    # or "osqp" (MathematicalProgram + OsqpSolver, the baseline: Drake sets up a new OSQP workspace
-    # on every solve).
+    # Level QP backend: "daqp" (called directly) or "osqp" (MathematicalProgram + OsqpSolver, the
+    # baseline: Drake sets up a new OSQP workspace on every solve).
     backend: str = "daqp"
 
 
@@ -173,43 +169,23 @@ def _solve_osqp(H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, 
     return result.GetSolution(y)
 
 
-# Scratch arrays of dense_qp, one set per thread (the kernel releases the GIL), grown on demand.
-_dense_qp_scratch = threading.local()
-
-
-@functools.lru_cache(maxsize=8)
-def _dense_qp_settings(eps_prox: float) -> dense_qp.DenseQpSettings:
-    return dense_qp.DenseQpSettings(prox_weight=eps_prox)
-
-
-def _dense_qp_workspace(n: int, m: int) -> dense_qp.DenseQpWorkspace:
-    workspace = getattr(_dense_qp_scratch, "workspace", None)
-    if workspace is None or workspace.n_max < n or workspace.m_max < m:
-        workspace = dense_qp.make_workspace(max(n, 48), max(m, 128))
-        _dense_qp_scratch.workspace = workspace
-    return workspace
-
-
-def _solve_with_dense_qp(H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, level: str, eps_prox: float):
-    y, status = dense_qp.solve_qp(H, f, C, upper, _dense_qp_settings(eps_prox), _dense_qp_workspace(*C.shape[::-1]))
-    if status != dense_qp.OPTIMAL:
-        raise QpInfeasible(f"HQP level {level!r}: dense_qp {dense_qp.STATUS_NAMES.get(status, status)}")
-    return y
-
-
-def _solve_dense_qp(
-    H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, level: str, eps_prox: float, backend: str = "daqp"
+def _solve_level_qp(
+    H: np.ndarray,
+    f: np.ndarray,
+    C: np.ndarray,
+    upper: np.ndarray,
+    level: str,
+    eps_prox: float,
+    backend: str = "daqp",
+    eta_prox: float = daqp_kernel.QP_FIXED_POINT,
 ) -> np.ndarray:
-    """min 0.5 y'Hy + f'y s.t. C y <= upper, by DAQP (or dense_qp, or OSQP); raises QpInfeasible
-    on failure."""
+    """min 0.5 y'Hy + f'y s.t. C y <= upper, by DAQP (or OSQP); raises QpInfeasible on failure.
+    eta_prox: when DAQP's proximal iterations stop (daqp_kernel.QP_FIXED_POINT for a strict level,
+    AUTOMATIC_FIXED_POINT for the weighted QP)."""
     if C.shape[0] == 0:
         return np.linalg.lstsq(H, -f, rcond=None)[0]
     if backend == "osqp":
         return _solve_osqp(H, f, C, upper, level)
-    if backend == "dense_qp":
-        # The same proximal weight: the solution does not depend on it (an exact step ends the
-        # proximal iterations), only the number of iterations does.
-        return _solve_with_dense_qp(H, f, C, upper, level, eps_prox)
     lower = np.full(len(upper), -_INFINITY)
     # A positive eps_prox makes DAQP run proximal-point iterations, which solve the exact
     # (semi-definite) problem instead of a regularised one: strict priorities stay exact.
@@ -220,6 +196,7 @@ def _solve_dense_qp(
         np.ascontiguousarray(upper),
         lower,
         eps_prox=eps_prox,
+        eta_prox=eta_prox,
     )
     if exitflag not in _DAQP_OK or not np.isfinite(y).all():
         raise QpInfeasible(f"HQP level {level!r}: DAQP exit flag {exitflag}")
@@ -377,7 +354,7 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
                 upper[mh:] = hs - Gs @ x
             if settings.regularization:
                 H[np.diag_indices(nz + ms)] += settings.regularization
-            z = _solve_dense_qp(H, f, C, upper, level.name, settings.proximal_weight, settings.backend)[:nz]
+            z = _solve_level_qp(H, f, C, upper, level.name, settings.proximal_weight, settings.backend)[:nz]
         x = x + Z @ z
         num_verified = len(h_all)
         if ms:
@@ -432,8 +409,15 @@ def solve_weighted(
         Hfull[n:, n:] = np.diag(np.concatenate(soft_w)) + settings.regularization * np.eye(ms)
     C = np.vstack([np.hstack([Gh, np.zeros((len(hh), ms))]), np.hstack([Gs, -np.eye(ms)])])
     upper = np.concatenate([hh, hs])
-    y = _solve_dense_qp(
-        Hfull, np.concatenate([f, np.zeros(ms)]), C, upper, "weighted", settings.proximal_weight, settings.backend
+    y = _solve_level_qp(
+        Hfull,
+        np.concatenate([f, np.zeros(ms)]),
+        C,
+        upper,
+        "weighted",
+        settings.proximal_weight,
+        settings.backend,
+        daqp_kernel.AUTOMATIC_FIXED_POINT,
     )
     x = y[:n]
     residuals, inequalities = [], []

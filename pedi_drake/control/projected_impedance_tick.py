@@ -89,7 +89,7 @@ TICK_PARAMS_DTYPE = np.dtype(
         ("torque_weight", "f8"),  # [1/(N m)^2]
         ("force_weight", "f8"),  # [1/N^2]
         ("total_weight", "f8"),  # m g [N]
-        ("qp_proximal_weight", "f8"),  # dense_qp's proximal weight [units of the QP's Hessian]
+        ("qp_proximal_weight", "f8"),  # DAQP's eps_prox [units of the QP's Hessian]
         ("force_estimate_filter_time", "f8"),  # [s]
         ("joint_kp", "f8"),  # [N m/rad]
         ("joint_kd", "f8"),  # [N m s/rad]
@@ -102,9 +102,9 @@ TICK_PARAMS_DTYPE = np.dtype(
     ]
 )
 
-# The contact QP's proximal weight: the dense QP solver's default (it makes a semi-definite
-# Hessian definite without changing the solution, which the solver's exact step recovers).
-CONTACT_QP_PROXIMAL_WEIGHT = 1e-5
+# The contact QP's eps_prox: DAQP's default, as projected_dynamics solves it (negative: proximal
+# iterations only if the Hessian turns out singular; the force weight makes it definite).
+CONTACT_QP_PROXIMAL_WEIGHT = -1e-6
 
 
 def tick_params(

@@ -8,7 +8,7 @@ divide-and-conquer machinery, which pays off only for matrices in the hundreds. 
 algorithm below (Householder reduction to tridiagonal form, then implicit QL iterations with
 Wilkinson shifts: EISPACK's tred2 and tql2 as published in JAMA) is several times faster there,
 to the same accuracy (eigenvalues to about machine epsilon times the largest one, orthonormal
-eigenvectors); `python -m pedi_drake.benchmarks.dense_qp` measures the solvers built on it.
+eigenvectors).
 
 * `symmetric_eigen(A, w, W)`: A = W^T diag(w) W with w ascending, as LAPACK returns them, and
   the eigenvectors as the rows of W (LAPACK's columns). Reads the lower triangle of A. False (w,

@@ -34,7 +34,7 @@ import numpy as np
 from pydrake.systems.framework import Context, DiscreteValues
 
 from pedi_drake import robot
-from pedi_drake.control import compiled_stack, dense_qp, references, tasks, whole_body_tick
+from pedi_drake.control import compiled_stack, references, tasks, whole_body_tick
 from pedi_drake.control.config import HQP_MODES, QP_BACKENDS, STACKS, WholeBodyControllerConfig
 from pedi_drake.control.go1_dynamics import add_trunk_external_wrench
 from pedi_drake.control.hqp import HqpSettings, solve_hqp, solve_weighted
@@ -111,8 +111,6 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         self.layout = tasks.VariableLayout(self.model.nv, nc, self.model.plant_map.v_index)
         self.builder = StackBuilder(config, self.layout, self.model.total_mass)
         self.hqp_settings = HqpSettings(backend=config.qp_backend)
-        if config.qp_backend == "dense_qp":
-            dense_qp.warm_up()
         if config.level_weights and len(config.level_weights) != self.builder.num_levels:
             raise ConfigError(
                 f"whole_body.level_weights: the {config.stack} stack has {self.builder.num_levels} levels, "

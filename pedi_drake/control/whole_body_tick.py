@@ -157,7 +157,6 @@ def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
             tp.proximal_weight,
             x,
             residuals[:num_levels],
-            (t.qp_matrices, t.qp_transposed, t.qp_vectors, t.qp_integers),
         )
     else:
         weights = np.empty(num_levels)
@@ -190,7 +189,6 @@ def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
             tp.proximal_weight,
             x,
             residuals[:num_levels],
-            (t.qp_matrices, t.qp_transposed, t.qp_vectors, t.qp_integers),
         )
     if status == compiled_hqp.STATUS_OK and not _all_finite(x):
         status = compiled_hqp.STATUS_INFEASIBLE

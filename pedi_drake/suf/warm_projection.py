@@ -11,8 +11,8 @@ path where the robot moves a few millimetres per tick:
    scaled to a unit normal) and F = F_0 + N_F z. Row k of G is always the same constraint (a
    motor's torque limit, a contact's pyramid face), whatever N is, so a set of active rows means
    the same vertex from one configuration to the next.
-2. LPs by the compiled dense QP solver (pedi_drake.control.dense_qp, H = 0: its proximal-point
-   iterations end on an exact vertex), each started from an active set: max a . F from the
+2. LPs by DAQP called from compiled code (pedi_drake.control.daqp_kernel, H = 0: its
+   proximal-point iterations end on an exact vertex), each started from an active set: max a . F from the
    active set of the facet's first vertex, which usually is already optimal or one step from it.
 3. Warm start: the directions that produced the previous polytope's vertices, each with its
    vertex's active set. The first LPs re-find those vertices in the new configuration (one
@@ -43,7 +43,7 @@ import time
 
 import numpy as np
 
-from pedi_drake.control import dense_qp
+from pedi_drake.control import daqp_kernel
 from pedi_drake.exceptions import SufError
 from pedi_drake.runtime.jit import kernel
 from pedi_drake.suf import hull3d
@@ -87,9 +87,13 @@ MULTIPLIER_TOLERANCE = 1e-9
 POINT_CAP = 400
 FACE_CAP = 2000
 DEFAULT_MAX_LPS = 5000
-# Proximal weight of the LPs (dense_qp's default): any positive weight gives the same vertex.
+# DAQP's proximal weight for the LPs (H = 0): any positive weight gives the same vertex.
 _PROX_WEIGHT = 1e-5
-_NO_BOUND = dense_qp.INFINITE_BOUND
+# Constraint violation accepted at an LP's solution [N, the rows are unit normals].
+_PRIMAL_TOLERANCE = 1e-9
+_NO_BOUND = daqp_kernel.INFINITE_BOUND
+# The part of a unit row outside the span of the rows before it below which it is dependent [-].
+_INDEPENDENT_ROW = 1e-6
 
 
 @kernel
@@ -168,45 +172,92 @@ def eliminate_equalities(A_eq, b_eq, A_in, b_in, ray_cap):
 
 
 @kernel
+def _solve_lp(H, f, G, h, lower, sense, y, multipliers) -> int:
+    """min f'y s.t. lower <= G y <= h (H = 0, its proximal term) by DAQP; its exit flag."""
+    return daqp_kernel.solve_qp(
+        H, f, G, h, lower, sense, _PROX_WEIGHT, daqp_kernel.AUTOMATIC_FIXED_POINT, _PRIMAL_TOLERANCE, y, multipliers
+    )
+
+
+@kernel
 def _support(G, h, N_F, F0, a, start_active, num_start, active_out, F_out, lp):
-    """max a . F over the RFP from the active set start_active[:num_start]; (status, value,
-    num_active), the maximiser in F_out and its active set in active_out. `lp`: the scratch
-    tuple of `_lp_scratch`."""
-    H, f, y, multipliers, active, matrices, transposed, vectors, integers = lp
+    """max a . F over the RFP, DAQP started from the working set start_active[:num_start];
+    (DAQP's exit flag, value, num_active), the maximiser in F_out and the rows with a nonzero
+    multiplier (its active set) in active_out. `lp`: the scratch tuple of `_lp_scratch`."""
+    H, f, y, multipliers, lower, sense = lp
     nz = G.shape[1]
     for k in range(nz):
         f[k] = -(N_F[0, k] * a[0] + N_F[1, k] * a[1] + N_F[2, k] * a[2])
+    sense[:] = 0
     for k in range(num_start):
-        active[k] = start_active[k]
-    status, q, _ = dense_qp.solve_dense_qp_kernel(
-        H, f, G, h, _PROX_WEIGHT, 1e-9, 1e-9, 1e-9, 1000, y, multipliers, active, num_start,
-        matrices, transposed, vectors, integers,
-    )  # fmt: skip
+        sense[start_active[k]] = daqp_kernel.SENSE_ACTIVE
+    exit_flag = _solve_lp(H, f, G, h, lower, sense, y, multipliers)
+    if num_start > 0 and not daqp_kernel.solved(exit_flag):
+        # A start whose rows are dependent in this configuration: solve cold.
+        sense[:] = 0
+        exit_flag = _solve_lp(H, f, G, h, lower, sense, y, multipliers)
     for i in range(3):
         value = F0[i]
         for k in range(nz):
             value += N_F[i, k] * y[k]
         F_out[i] = value
-    for k in range(q):
-        active_out[k] = active[k]
-    return status, a[0] * F_out[0] + a[1] * F_out[1] + a[2] * F_out[2], q
+    q = 0
+    if daqp_kernel.solved(exit_flag):
+        q = _vertex_rows(G, h, y, active_out, daqp_kernel.active_rows(multipliers, active_out))
+    return exit_flag, a[0] * F_out[0] + a[1] * F_out[1] + a[2] * F_out[2], q
+
+
+@kernel
+def _vertex_rows(G, h, y, rows, q) -> int:
+    """Completes the rows[:q] of nonzero multiplier at the solution y with further rows tight there
+    (within VERTEX_FEASIBILITY) and independent of those before, up to nz: at a degenerate
+    vertex (more tight rows than nz, some with zero multipliers) the nz rows that determine it,
+    which `_vertex` and `_optimal_at` need. Returns the number of rows."""
+    nz = G.shape[1]
+    # An orthonormal basis of the rows so far (modified Gram-Schmidt), one row per basis vector.
+    basis = np.zeros((nz, nz))
+    size = 0
+    candidate = np.empty(nz)
+    for i in range(G.shape[0] + q):
+        if size == nz:
+            break
+        if i < q:
+            row = rows[i]
+        else:
+            row = i - q
+            if h[row] >= _NO_BOUND:
+                continue
+            slack = h[row]
+            for k in range(nz):
+                slack -= G[row, k] * y[k]
+            if abs(slack) > VERTEX_FEASIBILITY:
+                continue
+        candidate[:] = G[row]
+        for b in range(size):
+            projection = 0.0
+            for k in range(nz):
+                projection += basis[b, k] * candidate[k]
+            for k in range(nz):
+                candidate[k] -= projection * basis[b, k]
+        norm = math.sqrt(np.sum(candidate * candidate))
+        if norm <= _INDEPENDENT_ROW:
+            continue
+        basis[size] = candidate / norm
+        rows[size] = row
+        size += 1
+    return size
 
 
 @kernel
 def _lp_scratch(nz, m):
-    """(H, f, y, multipliers, active, matrices, transposed, vectors, integers) for LPs of nz
-    variables and m rows."""
-    matrices, transposed, vectors, integers = dense_qp.workspace_arrays(nz, m)
+    """(H, f, y, multipliers, lower, sense) for LPs of nz variables and m rows (H = 0)."""
     return (
         np.zeros((nz, nz)),
         np.zeros(nz),
         np.zeros(nz),
         np.zeros(m),
-        np.zeros(max(nz, 1), dtype=np.int64),
-        matrices,
-        transposed,
-        vectors,
-        integers,
+        np.full(m, -daqp_kernel.INFINITE_BOUND),
+        np.zeros(m, dtype=np.int32),
     )
 
 
@@ -399,9 +450,9 @@ def project_within(
                 status, _, q = _support(G, h, N_F, F0, a, warm_active[k] if warm else active, start, active, F, lp)
                 progress[_LPS] += 1
                 work += LP_WORK
-                if status == dense_qp.INFEASIBLE:
+                if status == daqp_kernel.EXIT_INFEASIBLE:
                     return _finished(progress, INFEASIBLE), work
-                if status != dense_qp.OPTIMAL:
+                if not daqp_kernel.solved(status):
                     return _finished(progress, NUMERICAL), work
             for i in range(3):
                 points[num_points, i] = F[i]
@@ -481,7 +532,7 @@ def project_within(
             status, value, q = _support(G, h, N_F, F0, a, actives[first], num_actives[first], active, F, lp)
             progress[_LPS] += 1
             work += LP_WORK
-            if status != dense_qp.OPTIMAL:
+            if not daqp_kernel.solved(status):
                 return _finished(progress, NUMERICAL), work
             if value > offsets[f] + tol:
                 k = counts[0]
@@ -573,15 +624,13 @@ def ray_suf(G, h, N_F, F0, d):
             u[i] = _NO_BOUND
     gradient = np.dot(d, N_F)  # (nz,)
     f = -np.dot(gradient, M)
-    matrices, transposed, vectors, integers = dense_qp.workspace_arrays(ny, m)
     y = np.zeros(ny)
-    status, _, _ = dense_qp.solve_dense_qp_kernel(
-        np.zeros((ny, ny)), f, C, u, _PROX_WEIGHT, 1e-9, 1e-9, 1e-9, 1000, y, np.zeros(m),
-        np.zeros(max(ny, 1), dtype=np.int64), 0, matrices, transposed, vectors, integers,
-    )  # fmt: skip
-    if status == dense_qp.INFEASIBLE:
+    exit_flag = _solve_lp(
+        np.zeros((ny, ny)), f, C, u, np.full(m, -daqp_kernel.INFINITE_BOUND), np.zeros(m, np.int32), y, np.zeros(m)
+    )
+    if exit_flag == daqp_kernel.EXIT_INFEASIBLE:
         return INFEASIBLE, 0.0
-    if status != dense_qp.OPTIMAL:
+    if not daqp_kernel.solved(exit_flag):
         return NUMERICAL, 0.0
     z = z0 + np.dot(M, y)
     value = np.dot(d, F0 + np.dot(N_F, z))
