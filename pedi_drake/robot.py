@@ -35,6 +35,7 @@ FOOT_RADIUS = 0.02  # [m]
 TRUNK_HALF_EXTENTS = (0.1881, 0.04675, 0.057)
 PRONG_ROD_RADIUS = 0.006  # [m] of a prong's rod (drawn; the tip sphere is its collision geometry)
 TOTAL_MASS = 13.100448  # [kg] without prongs, rotors and IMU included.
+GRAVITY = 9.81  # [m/s^2], the magnitude the simulated plant uses
 
 # URDF limits in Unitree motor order.
 Q_LOWER = np.tile([-0.863, -0.686, -2.818], 4)  # [rad]

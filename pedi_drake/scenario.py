@@ -19,7 +19,6 @@ from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import (
     FORCE_ESTIMATES,
     HQP_MODES,
-    QP_BACKENDS,
     STACKS,
     ProjectedImpedanceConfig,
     StandControllerConfig,
@@ -301,7 +300,6 @@ class Scenario:
         for field, value, allowed in (
             ("whole_body.stack", self.whole_body.stack, STACKS),
             ("whole_body.hqp_mode", self.whole_body.hqp_mode, HQP_MODES),
-            ("whole_body.qp_backend", self.whole_body.qp_backend, QP_BACKENDS),
         ):
             need(value in allowed, field, f"must be one of {allowed}, got {value!r}")
         need(self.whole_body.period > 0, "whole_body.period", f"must be > 0 s, got {self.whole_body.period}")

@@ -12,12 +12,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from pydrake.math import RotationMatrix
+from reference_stacks import ResolvedInputs
+from reference_whole_body_tick import ReferenceTick
 
 from pedi_drake import robot
 from pedi_drake.benchmarks.demos import simulate_demo
 from pedi_drake.control import references
 from pedi_drake.control.config import WholeBodyControllerConfig
-from pedi_drake.control.stacks import ResolvedInputs
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.evaluation.box_lift import BoxLiftTrace, box_corners_B, judge_box_lift
 from pedi_drake.exceptions import MissionFileError
@@ -107,7 +108,7 @@ def test_a_legs_own_gains_set_its_foot_rows_and_no_other():
             friction=0.6,
             ground_height=0.0,
         )
-        return {row.name: row.b for row in controller.builder.leg_tasks(snapshot, inputs)}
+        return {row.name: row.b for row in ReferenceTick(controller).builder.leg_tasks(snapshot, inputs)}
 
     low, default = foot_rhs(50.0), foot_rhs(0.0)
     bias = snapshot.Jdot_v_contacts[3:6]

@@ -10,14 +10,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from reference_hqp import EqualityTask, HqpSettings, InequalityTask, Level, row_table, solve_hqp
 
 from pedi_drake.control import compiled_hqp
-from pedi_drake.control.hqp import EqualityTask, HqpSettings, InequalityTask, Level, solve_hqp
 from pedi_drake.control.small_linalg import householder_q_columns
 from pedi_drake.exceptions import QpInfeasible
 
 N = 30
-SETTINGS = HqpSettings(backend="daqp")
+SETTINGS = HqpSettings()
 
 
 def sparse_rows(rng: np.random.Generator, rows: int, nonzeros: int) -> np.ndarray:
@@ -62,7 +62,7 @@ def stack_like_levels(rng: np.random.Generator, tight: float, redundant: int = 0
 def test_strict_solve_equals_the_python_reference(seed, tight, redundant):
     levels = stack_like_levels(np.random.default_rng(seed), tight, redundant)
     expected = solve_hqp(levels, N, SETTINGS)
-    status, x, residuals = compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, N), SETTINGS)
+    status, x, residuals = compiled_hqp.solve_table_strict(row_table(levels, N), SETTINGS)
     assert status == compiled_hqp.STATUS_OK
     np.testing.assert_allclose(x, expected.x, rtol=0, atol=1e-8 * max(1.0, np.abs(expected.x).max()))
     np.testing.assert_allclose(residuals, expected.equality_residuals, rtol=1e-8, atol=1e-9)
@@ -85,7 +85,7 @@ def test_random_dense_levels_equal_the_python_reference():
             expected = solve_hqp(levels, n, SETTINGS)
         except QpInfeasible:
             continue
-        status, x, _ = compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, n), SETTINGS)
+        status, x, _ = compiled_hqp.solve_table_strict(row_table(levels, n), SETTINGS)
         assert status == compiled_hqp.STATUS_OK
         np.testing.assert_allclose(x, expected.x, rtol=0, atol=1e-8 * max(1.0, np.abs(expected.x).max()))
 
@@ -100,7 +100,7 @@ def test_infeasible_hard_rows_are_reported():
     ]
     with pytest.raises(QpInfeasible):
         solve_hqp(levels, N, SETTINGS)
-    status, _, _ = compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, N), SETTINGS)
+    status, _, _ = compiled_hqp.solve_table_strict(row_table(levels, N), SETTINGS)
     assert status == compiled_hqp.STATUS_INFEASIBLE
 
 
@@ -141,7 +141,7 @@ def test_a_level_the_levels_above_already_fix_takes_no_step():
     expected = solve_hqp(without, N, SETTINGS)
     for solution in (
         solve_hqp(levels, N, SETTINGS).x,
-        compiled_hqp.solve_table_strict(compiled_hqp.RowTable.from_levels(levels, N), SETTINGS)[1],
+        compiled_hqp.solve_table_strict(row_table(levels, N), SETTINGS)[1],
     ):
         np.testing.assert_allclose(solution, expected.x, rtol=0, atol=1e-9)
 

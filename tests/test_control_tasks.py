@@ -2,13 +2,13 @@
 
 import numpy as np
 import pytest
+import reference_tasks as tasks
 from pydrake.common.eigen_geometry import AngleAxis
 from pydrake.math import RollPitchYaw, RotationMatrix
 from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 
 from pedi_drake import robot
-from pedi_drake.control import tasks
 from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.polygon import polygon_halfplanes
 from pedi_drake.prongs import ProngDesign

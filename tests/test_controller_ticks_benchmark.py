@@ -28,7 +28,7 @@ def ticks(count: int) -> list[dict[str, np.ndarray]]:
 @pytest.mark.parametrize("controller", ["whole_body", "projected_impedance"])
 def test_the_warm_call_leaves_the_state_the_single_call_leaves(controller):
     scenario = demo_scenario("three_leg_hold")
-    once, twice = _Variant(scenario, controller, "compiled"), _Variant(scenario, controller, "compiled")
+    once, twice = _Variant(scenario, controller), _Variant(scenario, controller)
     for inputs in ticks(5):
         _, solved_once, not_timed = once.tick(inputs)
         _, solved_twice, again = twice.tick(inputs, warm=True)

@@ -1,7 +1,7 @@
 """docs/extending.md's Python blocks run, in order, in one namespace: the guide cannot rot.
 
 The blocks add a phase kind (`crouch`) and run it in a short simulated mission, build a task's
-rows and solve them, check a config's problems, load a scene object from a model of its own,
+rows, check a config's problems, load a scene object from a model of its own,
 run an operator source and write a benchmark's JSON and its row. The phase kind the guide
 registers is removed again afterwards, so no other test sees it.
 """

@@ -11,12 +11,13 @@ solves both in one level, trades one against the other.
 import numpy as np
 import pytest
 from pydrake.math import RigidTransform
+from reference_hqp import solve_hqp
+from reference_stacks import ResolvedInputs
+from reference_whole_body_tick import ReferenceTick
 
 from pedi_drake import robot
 from pedi_drake.control import references
 from pedi_drake.control.config import WholeBodyControllerConfig
-from pedi_drake.control.hqp import solve_hqp
-from pedi_drake.control.stacks import ResolvedInputs
 from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.ik.analytic import solve_leg_ik_analytic
 from pedi_drake.leg_kinematics import foot_position_B
@@ -60,8 +61,9 @@ def _trunk_task_residuals(stack: str, prongs: ProngDesign | None) -> dict[str, f
         friction=controller.config.friction,
         ground_height=0.0,
     )
-    levels = controller.builder.levels(snapshot, inputs)
-    x = solve_hqp(levels, controller.layout.size, controller.hqp_settings).x
+    oracle = ReferenceTick(controller)
+    levels = oracle.builder.levels(snapshot, inputs)
+    x = solve_hqp(levels, oracle.layout.size, oracle.hqp_settings).x
     tasks = {task.name: task for level in levels for task in level.equalities}
     return {
         name: float(np.linalg.norm(tasks[name].A @ x - tasks[name].b))

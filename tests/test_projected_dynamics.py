@@ -3,9 +3,9 @@ contact-force QP and the impedance force estimate, at random Go1 states."""
 
 import numpy as np
 import pytest
+import reference_projected_dynamics as pd
 
 from pedi_drake import robot
-from pedi_drake.control import projected_dynamics as pd
 from pedi_drake.control.robot_model import ControllerModel
 from pedi_drake.exceptions import QpInfeasible
 from pedi_drake.prongs import ProngDesign

@@ -2,8 +2,6 @@
 compiled tick and the Python reference), the scenario's settings, and short simulations of the
 foot impedance and the force estimate."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
@@ -21,15 +19,8 @@ from pedi_drake.scenario import RobotConfig, load_scenario
 from pedi_drake.station.initial_state import initial_trunk_pose
 
 
-@pytest.fixture(params=["compiled", "daqp"])
-def backend(request) -> str:
-    """The path a standalone tick takes: the compiled tick or the Python reference."""
-    return request.param
-
-
-def standing_controller(backend: str, config: ProjectedImpedanceConfig | None = None):
-    config = dataclasses.replace(config or ProjectedImpedanceConfig(), qp_backend=backend)
-    controller = ProjectedImpedanceController(config)
+def standing_controller(config: ProjectedImpedanceConfig | None = None):
+    controller = ProjectedImpedanceController(config or ProjectedImpedanceConfig())
     context = controller.CreateDefaultContext()
     X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
     base = np.concatenate([X.rotation().ToQuaternion().wxyz(), X.translation(), np.zeros(6)])
@@ -47,8 +38,8 @@ def tick(controller, context, n: int = 1):
     return controller.command_port.Eval(context).copy(), controller.diagnostics_port.Eval(context).copy()
 
 
-def test_unconnected_references_stand_in_place_on_four_feet(backend):
-    controller, context = standing_controller(backend)
+def test_unconnected_references_stand_in_place_on_four_feet():
+    controller, context = standing_controller()
     command, diag = tick(controller, context, 3)
     layout = controller.diag
     assert diag[layout["status"]][0] == STATUS_OK
@@ -62,15 +53,15 @@ def test_unconnected_references_stand_in_place_on_four_feet(backend):
 def test_diagnostics_keep_the_whole_body_controller_layout_first():
     from pedi_drake.control.whole_body_controller import diagnostics_layout
 
-    controller, _ = standing_controller("daqp")
+    controller, _ = standing_controller()
     for name, where in diagnostics_layout(controller.num_contacts).items():
         assert controller.diag[name] == where
 
 
-def test_infeasible_qp_holds_and_damps_the_last_good_command_and_recovers(backend):
+def test_infeasible_qp_holds_and_damps_the_last_good_command_and_recovers():
     # 200 N minimum per loaded foot: four feet cannot balance a 13 kg robot.
     config = ProjectedImpedanceConfig(min_normal_force=200.0, contact_ramp_time=0.02)
-    controller, context = standing_controller(backend, config)
+    controller, context = standing_controller(config)
     controller.contact_set_port.FixValue(context, np.zeros(4))
     good, diag = tick(controller, context, 2)
     assert diag[controller.diag["status"]][0] == STATUS_OK
@@ -90,8 +81,8 @@ def test_infeasible_qp_holds_and_damps_the_last_good_command_and_recovers(backen
     assert diag[controller.diag["status"]][0] == STATUS_OK
 
 
-def test_non_finite_reference_is_rejected_without_nan(backend):
-    controller, context = standing_controller(backend)
+def test_non_finite_reference_is_rejected_without_nan():
+    controller, context = standing_controller()
     good, _ = tick(controller, context, 2)
     body = references.body_reference_vector(np.array([0.0, 0.0, np.nan]), initial_trunk_pose(RobotConfig()).rotation())
     controller.body_reference_port.FixValue(context, body)
@@ -101,11 +92,11 @@ def test_non_finite_reference_is_rejected_without_nan(backend):
     np.testing.assert_allclose(command[48:60], good[48:60])
 
 
-def test_contact_removal_ramps_the_force_bound_down(backend):
+def test_contact_removal_ramps_the_force_bound_down():
     # Standing with the centre of mass on the FL-RR diagonal, FR's force can only shrink so far
     # before balance needs it: the ramp bounds the force at every tick it solves.
     config = ProjectedImpedanceConfig(contact_ramp_time=0.3)
-    controller, context = standing_controller(backend, config)
+    controller, context = standing_controller(config)
     tick(controller, context, 3)
     controller.contact_set_port.FixValue(context, references.contact_set_vector(("FL", "RR", "RL")))
     ramps, forces = [], []

@@ -1,7 +1,7 @@
-"""The compiled tick of paper 002's controller (`qp_backend: compiled`) against its Python
-reference (`qp_backend: daqp`, built on projected_dynamics.py).
+"""The compiled tick of paper 002's controller against its oracle (reference_projected_impedance_tick,
+built on reference_projected_dynamics).
 
-* Shadow runs: short simulations of paper 002's missions driven by the reference tick, in which
+* Shadow runs: short simulations of paper 002's missions driven by the oracle's tick, in which
   every tick the compiled tick also runs on the same context; the two must give the same status
   and the same next state (command, joint reference, ramps, held pose, Eq. 11 filter state,
   diagnostics but the timings) within ATOL + RTOL |reference|. The bound allows rounding (the
@@ -9,26 +9,28 @@ reference (`qp_backend: daqp`, built on projected_dynamics.py).
   conditioning) and the contact QP solvers' tolerances (1e-9), and nothing of the size of a
   control effect.
 * Standalone ticks: non-finite and invalid inputs, an infeasible contact QP, the first tick.
-* The kernels against their plain-Python source (`.py_func`) and against projected_dynamics.py
+* The kernels against their plain-Python source (`.py_func`) and against reference_projected_dynamics
   on random inputs.
 """
 
 import dataclasses
+import functools
 
 import numpy as np
 import pytest
+import reference_projected_dynamics as pd
 from pydrake.systems.analysis import Simulator
+from reference_projected_impedance_tick import ReferenceTick
 
 from pedi_drake import robot
 from pedi_drake.control import compiled_projected_dynamics as cpd
-from pedi_drake.control import projected_dynamics as pd
 from pedi_drake.control import projected_impedance_tick, references
 from pedi_drake.control.config import ProjectedImpedanceConfig
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.small_decompositions import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
 from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.exceptions import ConfigError, QpInfeasible, ScenarioError
+from pedi_drake.exceptions import QpInfeasible
 from pedi_drake.mission.spec import missions_dir
 from pedi_drake.runtime import jit
 from pedi_drake.scenario import RobotConfig, load_scenario
@@ -60,22 +62,32 @@ class ShadowTick:
 
 
 def shadow_run(scenario_text: str, duration: float) -> list[ShadowTick]:
-    """Simulates `duration` [s] of the scenario with the reference tick driving the robot and the
+    """Simulates `duration` [s] of the scenario with the oracle's tick driving the robot and the
     compiled tick shadowing it on the same context, tick for tick."""
     scenario = load_scenario(scenario_text=scenario_text)
-    scenario.projected_impedance.qp_backend = "daqp"
     scenario.simulation_duration = duration
-    built = MakePedipulationDiagram(scenario)
+    compiled_update = ProjectedImpedanceController._update
+    shadowed: dict[int, object] = {}
+
+    def dispatch(self, context, discrete_state) -> None:
+        # The periodic event holds the class's update as it was when the controller was built.
+        shadowed.get(id(self), functools.partial(compiled_update, self))(context, discrete_state)
+
+    ProjectedImpedanceController._update = dispatch
+    try:
+        built = MakePedipulationDiagram(scenario)
+    finally:
+        ProjectedImpedanceController._update = compiled_update
     controller = built.diagram.GetSubsystemByName("controller")
-    assert isinstance(controller, ProjectedImpedanceController) and not controller.compiled
-    controller._warm_up()
-    reference_update = controller._update_reference
+    assert isinstance(controller, ProjectedImpedanceController)
+    reference_update = ReferenceTick(controller).update
     shadow = controller.AllocateDiscreteVariables()
     names = ("command", "reference", "ramp", "hold", "estimate", "diagnostics")
     ticks = []
 
     def update(context, discrete_state) -> None:
-        controller._update_compiled(context, shadow)
+        shadow.SetFrom(context.get_discrete_state())  # as the framework hands it to an update
+        compiled_update(controller, context, shadow)
         reference_update(context, discrete_state)
         worst, worst_state = 0.0, ""
         for name, index in zip(names, controller._state_indices, strict=True):
@@ -103,7 +115,7 @@ def shadow_run(scenario_text: str, duration: float) -> list[ShadowTick]:
             )
         )
 
-    controller._update_reference = update
+    shadowed[id(controller)] = update
     Simulator(built.diagram).AdvanceTo(duration)
     return ticks
 
@@ -166,9 +178,8 @@ def test_shadow_run_covers_its_mission(shadow):
 # Standalone ticks of both paths.
 
 
-def standing_controller(backend: str, config: ProjectedImpedanceConfig | None = None):
-    config = dataclasses.replace(config or ProjectedImpedanceConfig(), qp_backend=backend)
-    controller = ProjectedImpedanceController(config)
+def standing_controller(config: ProjectedImpedanceConfig | None = None):
+    controller = ProjectedImpedanceController(config or ProjectedImpedanceConfig())
     context = controller.CreateDefaultContext()
     X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
     base = np.concatenate([X.rotation().ToQuaternion().wxyz(), X.translation(), np.zeros(6)])
@@ -192,8 +203,8 @@ def next_states(controller, context, update) -> dict[str, np.ndarray]:
 def assert_paths_agree(controller, context) -> dict[str, np.ndarray]:
     """Ticks both paths on `context` (the compiled one first) and checks they agree; advances the
     context with the reference's states and returns them."""
-    compiled, _ = next_states(controller, context, controller._update_compiled)
-    reference, values = next_states(controller, context, controller._update_reference)
+    compiled, _ = next_states(controller, context, controller._update)
+    reference, values = next_states(controller, context, ReferenceTick(controller).update)
     for index in controller._state_indices:
         np.testing.assert_allclose(compiled[index], reference[index], rtol=RTOL, atol=ATOL)
     context.SetDiscreteState(values)
@@ -207,7 +218,7 @@ def status_of(controller, states) -> float:
 @pytest.fixture(scope="module")
 def standing() -> ProjectedImpedanceController:
     """A controller on the compiled path (so both paths are ready to tick), standing on four feet."""
-    controller, _ = standing_controller("compiled")
+    controller, _ = standing_controller()
     return controller
 
 
@@ -287,7 +298,7 @@ def test_zero_quaternion_fails_without_nan_on_both_paths(standing):
 def test_infeasible_contact_qp_fails_and_recovers_alike_on_both_paths():
     # 200 N minimum per loaded foot: four feet cannot balance a 13 kg robot.
     config = ProjectedImpedanceConfig(min_normal_force=200.0, contact_ramp_time=0.02)
-    controller, context = standing_controller("compiled", config)
+    controller, context = standing_controller(config)
     controller.contact_set_port.FixValue(context, np.zeros(4))
     statuses = []
     for _ in range(2):
@@ -310,7 +321,7 @@ def test_lifting_a_foot_to_a_world_pose_agrees_on_both_paths(mode):
     # fixed, so the centre of mass stays on the FL-RR diagonal; a trunk reference 2 cm towards FR
     # asks for an acceleration that way, which moves the centre of pressure into the FL-RR-RL
     # triangle and keeps the contact QP feasible.
-    controller, context = standing_controller("compiled", ProjectedImpedanceConfig(contact_ramp_time=0.02))
+    controller, context = standing_controller(ProjectedImpedanceConfig(contact_ramp_time=0.02))
     base = controller.base_state_port.Eval(context)
     s = controller.model.update(base, robot.STANDING_Q, np.zeros(12))
     X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
@@ -338,7 +349,7 @@ def test_lifting_a_foot_to_a_world_pose_agrees_on_both_paths(mode):
 def test_no_tick_compiles_whichever_inputs_are_connected():
     if not jit.ENABLED:
         pytest.skip("PEDI_DRAKE_JIT=0: nothing is compiled")
-    controller, context = standing_controller("compiled")
+    controller, context = standing_controller()
     compiled_signatures = len(projected_impedance_tick.projected_impedance_tick.signatures)
     X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
     optional = {
@@ -350,20 +361,13 @@ def test_no_tick_compiles_whichever_inputs_are_connected():
     }
     for port, value in optional.items():
         port.FixValue(context, value)
-        next_states(controller, context, controller._update_compiled)
+        next_states(controller, context, controller._update)
         fresh = controller.CreateDefaultContext()  # this input alone among the optional ones
         for required in (controller.base_state_port, controller.position_port, controller.velocity_port):
             required.FixValue(fresh, required.Eval(context))
         port.FixValue(fresh, value)
-        next_states(controller, fresh, controller._update_compiled)
+        next_states(controller, fresh, controller._update)
     assert len(projected_impedance_tick.projected_impedance_tick.signatures) == compiled_signatures
-
-
-def test_qp_backend_names_its_field_when_unknown():
-    with pytest.raises(ScenarioError, match=r"projected_impedance\.qp_backend"):
-        load_scenario(scenario_text="{controller: projected_impedance, projected_impedance: {qp_backend: osqp}}")
-    with pytest.raises(ConfigError, match=r"qp_backend"):
-        ProjectedImpedanceController(ProjectedImpedanceConfig(qp_backend="fast"))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -612,6 +616,7 @@ def test_prioritized_force_and_torques_equal_projected_dynamics(rng):
 
 def test_contact_forces_kernel_solves_the_reference_qp(standing):
     controller = standing
+    oracle = ReferenceTick(controller)
     rng = np.random.default_rng(RNG_SEED)
     solved = 0
     for _ in range(30):
@@ -622,12 +627,12 @@ def test_contact_forces_kernel_solves_the_reference_qp(standing):
         Jc = s.J_contacts[rows]
         ramp = rng.uniform(0.2, 1.0, len(held))
         share = np.zeros(3 * len(held))
-        share[2::3] = ramp * controller.total_weight / ramp.sum()
+        share[2::3] = ramp * oracle.total_weight / ramp.sum()
         vdot = rng.normal(0, 0.5, 18)
         problem = pd.ContactForceProblem(
             Jc=Jc,
             r=s.M @ vdot + s.h,
-            unactuated=controller.unactuated,
+            unactuated=oracle.unactuated,
             actuated=controller.v_index,
             ramp=ramp,
             friction=0.6 / np.sqrt(2.0),

@@ -4,12 +4,13 @@ import dataclasses
 
 import numpy as np
 import pytest
+import reference_tasks
+from reference_stacks import ResolvedInputs, StackBuilder
 
 from pedi_drake import robot
 from pedi_drake.benchmarks.demos import demo_scenario, run_demo
 from pedi_drake.control import references
 from pedi_drake.control.config import WholeBodyControllerConfig
-from pedi_drake.control.stacks import ResolvedInputs
 from pedi_drake.control.whole_body_controller import (
     STATUS_BAD_INPUT,
     STATUS_CONTACTS_RELAXED,
@@ -21,11 +22,6 @@ from pedi_drake.prongs import ProngDesign
 from pedi_drake.scenario import RobotConfig
 from pedi_drake.station.initial_state import initial_trunk_pose
 from pedi_drake.vector3 import orientation_error_W
-
-# The tick implementations every closed-loop property must hold with: the compiled tick (the
-# default) and the Python reference, both with DAQP (tests/test_compiled_controller.py holds them
-# equal tick for tick); OSQP, the slow baseline, runs only in the benchmark.
-BACKENDS = ("compiled", "daqp")
 
 
 def standing_controller(config: WholeBodyControllerConfig | None = None):
@@ -50,9 +46,8 @@ def tick(controller, context, n: int = 1):
     )
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_unconnected_references_stand_in_place(backend):
-    controller, context = standing_controller(WholeBodyControllerConfig(qp_backend=backend))
+def test_unconnected_references_stand_in_place():
+    controller, context = standing_controller(WholeBodyControllerConfig())
     command, diag = tick(controller, context, 3)
     layout = controller.diag
     assert diag[layout["status"]][0] == STATUS_OK
@@ -64,10 +59,9 @@ def test_unconnected_references_stand_in_place(backend):
     assert np.all(np.abs(command[48:60]) < 0.5 * robot.EFFORT_LIMIT)
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_infeasible_qp_holds_last_good_command_and_recovers(backend):
+def test_infeasible_qp_holds_last_good_command_and_recovers():
     # 200 N minimum per loaded foot cannot be produced within the knee torque limits.
-    config = WholeBodyControllerConfig(min_normal_force=200.0, contact_ramp_time=0.02, qp_backend=backend)
+    config = WholeBodyControllerConfig(min_normal_force=200.0, contact_ramp_time=0.02)
     controller, context = standing_controller(config)
     controller.contact_set_port.FixValue(context, np.zeros(4))
     good, diag = tick(controller, context, 2)
@@ -115,9 +109,9 @@ def test_contact_removal_ramps_the_force_down():
     assert np.max(steps) <= bound_step + 0.5
 
 
-@pytest.fixture(scope="module", params=BACKENDS)
-def three_leg(request):
-    return run_demo("three_leg_hold", demo_scenario("three_leg_hold", qp_backend=request.param))
+@pytest.fixture(scope="module")
+def three_leg():
+    return run_demo("three_leg_hold", demo_scenario("three_leg_hold"))
 
 
 def test_three_leg_hold_meets_floors(three_leg):
@@ -135,12 +129,9 @@ def test_three_leg_contact_switch_has_no_force_jump(three_leg):
     assert three_leg.max_force_jump < 5.0
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_stand_on_four_legs_at_1khz_in_weighted_mode(backend):
+def test_stand_on_four_legs_at_1khz_in_weighted_mode():
     scenario = demo_scenario("stand")
-    scenario.whole_body = dataclasses.replace(
-        scenario.whole_body, period=0.001, hqp_mode="weighted", qp_backend=backend
-    )
+    scenario.whole_body = dataclasses.replace(scenario.whole_body, period=0.001, hqp_mode="weighted")
     r = run_demo("stand", scenario)
     assert r.mission_succeeded and not r.fell and r.qp_failures == 0
     assert r.stance_slip_whole_run < 0.002
@@ -155,22 +146,20 @@ def test_five_targets_reached():
     assert r.max_torque_ratio <= 1.0
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_prongs_carry_the_trunk_with_both_front_feet_lifted(backend):
-    r = run_demo("prongs", demo_scenario("prongs", qp_backend=backend))
+def test_prongs_carry_the_trunk_with_both_front_feet_lifted():
+    r = run_demo("prongs", demo_scenario("prongs"))
     assert r.mission_succeeded and not r.fell and r.qp_failures == 0
     assert r.prong_load > 20.0
     assert max(r.foot_errors) < 0.005
     assert r.max_torque_ratio <= 1.0
 
 
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_sliding_prongs_that_friction_cannot_stop_brake_at_the_limit_instead_of_failing(backend):
+def test_sliding_prongs_that_friction_cannot_stop_brake_at_the_limit_instead_of_failing():
     # Trunk and loaded prong tips slide at 1.5 m/s (a push): stopping the tips, which are fixed to
     # the trunk, at the no-motion task's rate needs more horizontal force than friction allows, so
     # the strict stack is infeasible. The controller then demotes contact no-motion below the
     # force limits rather than fail: the contacts brake at the friction limit.
-    controller = WholeBodyController(WholeBodyControllerConfig(qp_backend=backend), ProngDesign())
+    controller = WholeBodyController(WholeBodyControllerConfig(), ProngDesign())
     context = controller.CreateDefaultContext()
     X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
     sliding = np.concatenate([X.rotation().ToQuaternion().wxyz(), X.translation(), np.zeros(3), [1.5, 0.0, 0.0]])
@@ -220,9 +209,13 @@ def test_hqp_takes_the_optional_5d_foot_task_and_the_6d_shank_task(mode, calf_ro
         friction=0.6,
         ground_height=0.0,
     )
-    names = [task.name for task in controller.builder.leg_tasks(snapshot, inputs)]
+    layout = reference_tasks.VariableLayout(
+        controller.model.nv, controller.num_contacts, controller.model.plant_map.v_index
+    )
+    builder = StackBuilder(controller.config, layout, controller.model.total_mass)
+    names = [task.name for task in builder.leg_tasks(snapshot, inputs)]
     assert names == ["foot_FR", "calf_FR"]
-    calf = controller.builder.leg_tasks(snapshot, inputs)[1]
+    calf = builder.leg_tasks(snapshot, inputs)[1]
     assert calf.A.shape[0] == calf_rows  # the 5-D task leaves the yaw free, the 6-D holds it
 
 

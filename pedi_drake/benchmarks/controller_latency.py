@@ -1,7 +1,7 @@
 """Latency of the controller side of a hardware run, against a replay of recorded status messages.
 
     python -m pedi_drake.benchmarks.controller_latency [--mission hit_target_front] [--period 0.002]
-        [--qp-backend compiled|daqp] [--callbacks [--window START:END]] [--parts]
+        [--callbacks [--window START:END]] [--parts]
         [--framework-floor] [--out benchmarks/results/controller_latency.json]
 
 1. Records: the mission in simulation (seed 0); the status the robot would have sent at every
@@ -131,9 +131,8 @@ NO_OPS = (
 )
 
 
-def _scenario(mission: str, period: float, lcm_url: str = "", qp_backend: str | None = None, scenario_text: str = "{}"):
-    backend = f", qp_backend: {qp_backend}" if qp_backend else ""
-    periods = f"whole_body: {{period: {period}{backend}}}, kalman: {{period: {period}}}"
+def _scenario(mission: str, period: float, lcm_url: str = "", scenario_text: str = "{}"):
+    periods = f"whole_body: {{period: {period}}}, kalman: {{period: {period}}}"
     text = f"{{{periods}, go1_driver: {{safety: {{period: {period}}}}}}}"
     scenario = apply_scenario_text(load_scenario(scenario_text=text), scenario_text)
     scenario.mission, scenario.controller = mission, "whole_body"
@@ -182,19 +181,17 @@ def _distribution(x_ms: np.ndarray) -> dict:
 
 class Replay:
     """The hardware diagram on an in-process bus, fed the recorded status tick by tick
-    (`qp_backend`: the whole-body controller's level QP solver; `scenario_text`: YAML onto the
-    scenario)."""
+    (`scenario_text`: YAML onto the scenario)."""
 
     def __init__(
         self,
         mission: str,
         period: float,
         samples: np.ndarray,
-        qp_backend: str | None = None,
         scenario_text: str = "{}",
     ):
         self.period, self.samples = period, samples
-        self.scenario = _scenario(mission, period, "memq://", qp_backend, scenario_text)
+        self.scenario = _scenario(mission, period, "memq://", scenario_text)
         self.built = MakePedipulationDiagram(self.scenario, hardware=True)
         self.diagram = self.built.diagram
         self.link = hardware_link(self.diagram)
@@ -564,11 +561,6 @@ def main() -> None:
     parser.add_argument("--out", default="benchmarks/results/controller_latency.json")
     parser.add_argument("--record-reference", type=Path, help="write the reference ticks here and stop")
     parser.add_argument("--reference-ticks", type=int, default=4000)
-    parser.add_argument(
-        "--qp-backend",
-        default=None,
-        help="the whole-body controller's tick: compiled (the default) or the Python reference with daqp",
-    )
     parser.add_argument("--callbacks", action="store_true", help="one more pass: every Python callback timed")
     parser.add_argument(
         "--window",
@@ -597,12 +589,12 @@ def main() -> None:
     ticks = len(samples) - 1
     period_ms = 1e3 * args.period
 
-    default_gc = Replay(args.mission, args.period, samples, args.qp_backend).run(ticks)
-    replay = Replay(args.mission, args.period, samples, args.qp_backend)
+    default_gc = Replay(args.mission, args.period, samples).run(ticks)
+    replay = Replay(args.mission, args.period, samples)
     with hardware_run(replay.diagram, shutdown_damping_duration=0.0):
         frozen_gc = replay.run(ticks)
     with stage_timers(ticks) as stage_times:
-        timed = Replay(args.mission, args.period, samples, args.qp_backend)
+        timed = Replay(args.mission, args.period, samples)
     timed_run = timed.run(ticks, stage_times)
     stages = {}
     for name, _, _ in STAGES:
@@ -630,10 +622,7 @@ def main() -> None:
 
     rows = {"python_gc": _summary(default_gc, period_ms), "hardware_run_gc": _summary(frozen_gc, period_ms)}
     load_end = Path("/proc/loadavg").read_text().split()[:3] if Path("/proc/loadavg").exists() else None
-    print(
-        f"controller side of {args.mission} at {1 / args.period:.0f} Hz, {ticks} replayed ticks, "
-        f"whole-body tick: {args.qp_backend or 'default'}"
-    )
+    print(f"controller side of {args.mission} at {1 / args.period:.0f} Hz, {ticks} replayed ticks")
     print(f"load average (1, 5, 15 min) at the start {load_start}, at the end {load_end}")
     print(f"bare plant (station_fixed_cmd): {baseline_ms:.3f} ms per {period_ms:.1f} ms step (RTF {baseline_rtf:.2f})")
     header = f"{'pass':<18}{'median':>8}{'p99':>8}{'p99.9':>8}{'max':>9}{'miss/1e4':>10}{'median/plant':>14}"
@@ -709,7 +698,6 @@ def main() -> None:
                 {
                     "mission": args.mission,
                     "period_s": args.period,
-                    "qp_backend": args.qp_backend,
                     "machine": machine,
                     "loadavg_start": load_start,
                     "loadavg_end": load_end,

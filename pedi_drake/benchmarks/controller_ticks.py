@@ -1,33 +1,29 @@
-"""CPU time per tick of the two whole-body controllers, Python reference against compiled, on the
-same recorded inputs.
+"""CPU time per tick of the two whole-body controllers on the same recorded inputs.
 
     python -m pedi_drake.benchmarks.controller_ticks [--demo three_leg_hold] [--passes 3] [--warm]
         [--out benchmarks/results/controller_ticks.json]
 
-1. Records: the demo (ground-truth estimator) is simulated on paper 002's controller, its Python
-   path; every tick's controller inputs (the eight input ports, as the diagram evaluated them)
-   are kept.
-2. Replays: each controller variant, paper 002's `projected_impedance` and the paper-000 HQP
-   `whole_body`, each on its Python path (`qp_backend: daqp`) and its compiled one (`qp_backend:
-   compiled`), gets every recorded tick's inputs fixed on its own context and runs its discrete
-   update (the controller's state carries over from tick to tick; the plant does not respond:
-   the same inputs for every variant). Only the update is timed, in the thread's CPU time
-   (`time.thread_time`, which a loaded machine disturbs less than wall time). The variants
-   alternate tick by tick, so a change of the machine's load falls on all of them alike; one
-   untimed pass first compiles or loads every kernel.
+1. Records: the demo (ground-truth estimator) is simulated on paper 002's controller; every
+   tick's controller inputs (the eight input ports, as the diagram evaluated them) are kept.
+2. Replays: paper 002's `projected_impedance` and the paper-000 HQP `whole_body` each get every
+   recorded tick's inputs fixed on their own context and run their discrete update (the
+   controller's state carries over from tick to tick; the plant does not respond: the same
+   inputs for both). Only the update is timed, in the thread's CPU time (`time.thread_time`,
+   which a loaded machine disturbs less than wall time). The controllers alternate tick by tick,
+   so a change of the machine's load falls on both alike; one untimed pass first compiles or
+   loads every kernel.
 
 With `--warm`, every update is run a second time at once on the same inputs and state (the
 same result), and that second call is timed too: the cost with the update's code and data in the
-processor's caches, against the first call's, which follows the other variants' updates as a
+processor's caches, against the first call's, which follows the other controller's update as a
 control loop's update follows the rest of its tick.
 
-Prints the median and 99th percentile per tick of each variant [ms] and the share of ticks each
+Prints the median and 99th percentile per tick of each controller [ms] and the share of ticks each
 solved (status 0), and writes them as JSON. Three-leg hold is the acceptance case of paper 002's
 tick (a median under 0.5 ms with three stance feet).
 """
 
 import argparse
-import dataclasses
 import json
 import platform
 import time
@@ -51,22 +47,16 @@ PORTS = (
     "safety_polygon",
     "friction",
 )
-VARIANTS = (
-    ("projected_impedance", "daqp"),
-    ("projected_impedance", "compiled"),
-    ("whole_body", "daqp"),
-    ("whole_body", "compiled"),
-)
+CONTROLLERS = ("projected_impedance", "whole_body")
 
 
 def record_inputs(demo: str) -> tuple[list[dict[str, np.ndarray]], object]:
     """(every tick's controller inputs by port name, the demo's scenario) of `demo` simulated on
-    paper 002's controller (Python path)."""
+    paper 002's controller."""
     scenario = demo_scenario(demo)
     scenario.controller = "projected_impedance"
-    scenario.projected_impedance = dataclasses.replace(scenario.projected_impedance, qp_backend="daqp")
     ticks: list[dict[str, np.ndarray]] = []
-    original = ProjectedImpedanceController._update_reference
+    original = ProjectedImpedanceController._update
 
     def recording(controller, context, discrete_state):
         ticks.append(
@@ -78,25 +68,23 @@ def record_inputs(demo: str) -> tuple[list[dict[str, np.ndarray]], object]:
         )
         original(controller, context, discrete_state)
 
-    ProjectedImpedanceController._update_reference = recording
+    ProjectedImpedanceController._update = recording
     try:
         simulate_demo(demo, scenario)
     finally:
-        ProjectedImpedanceController._update_reference = original
+        ProjectedImpedanceController._update = original
     return ticks, scenario
 
 
 class _Variant:
-    """One controller on one path, with its own context, replaying the recorded inputs."""
+    """One controller with its own context, replaying the recorded inputs."""
 
-    def __init__(self, scenario, controller: str, backend: str) -> None:
+    def __init__(self, scenario, controller: str) -> None:
         if controller == "projected_impedance":
-            config = dataclasses.replace(scenario.projected_impedance, qp_backend=backend)
-            self.system = ProjectedImpedanceController(config, scenario.robot.prongs)
+            self.system = ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs)
         else:
-            config = dataclasses.replace(scenario.whole_body, qp_backend=backend)
-            self.system = WholeBodyController(config, scenario.robot.prongs)
-        self.name = f"{controller} ({backend})"
+            self.system = WholeBodyController(scenario.whole_body, scenario.robot.prongs)
+        self.name = controller
         self.context = self.system.CreateDefaultContext()
         self.values = self.system.AllocateDiscreteVariables()
         self.ports = {name: self.system.GetInputPort(name) for name in PORTS}
@@ -121,10 +109,10 @@ class _Variant:
 
 
 def measure(demo: str, passes: int, warm: bool = False) -> list[dict]:
-    """One row per variant: median and p99 CPU per tick [ms] over `passes` replays of the demo
+    """One row per controller: median and p99 CPU per tick [ms] over `passes` replays of the demo
     (and of the update run again at once, with `warm`)."""
     ticks, scenario = record_inputs(demo)
-    variants = [_Variant(scenario, controller, backend) for controller, backend in VARIANTS]
+    variants = [_Variant(scenario, controller) for controller in CONTROLLERS]
     times: dict[str, list[float]] = {v.name: [] for v in variants}
     warm_times: dict[str, list[float]] = {v.name: [] for v in variants}
     solved: dict[str, list[bool]] = {v.name: [] for v in variants}

@@ -263,14 +263,14 @@ ROWS: tuple[Row, ...] = (
     Row(
         "Whole-body HQP tick (compiled), three-leg hold",
         "controller_ticks.json",
-        lambda d: _tick(d, "whole_body (compiled)"),
+        lambda d: _tick(d, "whole_body"),
         "python -m pedi_drake.benchmarks.controller_ticks",
         summary=True,
     ),
     Row(
         "Paper 002 controller tick (compiled), three-leg hold",
         "controller_ticks.json",
-        lambda d: _tick(d, "projected_impedance (compiled)"),
+        lambda d: _tick(d, "projected_impedance"),
         "python -m pedi_drake.benchmarks.controller_ticks",
     ),
     Row(

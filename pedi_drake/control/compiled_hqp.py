@@ -1,13 +1,31 @@
-"""The hierarchical QP of `hqp.py` as one compiled kernel over a table of rows.
+"""Hierarchical quadratic programme: strictly prioritised levels, or one weighted QP, as compiled
+kernels over a table of rows.
 
-`hqp.solve_hqp` and `hqp.solve_weighted` take Python lists of tasks; the controller's compiled
-tick cannot build those, so it writes every level's rows into a `RowTable` of flat arrays and
-calls `solve_strict` or `solve_weighted` here. The algorithm is `hqp.py`'s, step for step (its
-module docstring gives the maths), so the two agree to rounding and to the QP solver's
-tolerance; `tests/test_compiled_hqp.py` compares them on random levels and on levels shaped like
-the whole-body stack's. Two things differ in how, not in what: the products of the rows with the
-null-space basis Z skip the rows' zero entries (most rows of the stack touch one to a dozen of
-its 30 variables), and no product is formed while Z is still the identity (the top level).
+Each level holds equality tasks (A x = b, minimised in least squares) and inequality tasks
+(G x <= h), each inequality either *hard* (a constraint from its level down) or *soft* (its
+violation w >= G x - h is minimised in least squares at its level). Level k is solved within the
+optimal set of levels 0..k-1 (the sequential scheme of Kanoun et al. 2011 / Escande et al. 2014):
+
+* For least squares over a convex set the optimal value of (A_k x, w_k) is unique, so the optimal
+  set of level k is {x feasible : A_k x = A_k x_k*, G_k,soft x <= h_k,soft + w_k*}.
+* Equalities are fixed by restricting x to the affine set x = x_k* + Z_k z, where Z_k is an
+  orthonormal basis of the null space of the stacked fixed equalities (a Householder QR of their
+  transpose, pivoted when the rows come near rank deficiency, so redundant rows cost nothing and
+  never make a QP degenerate).
+* Inequalities (hard ones and fixed soft ones) are carried down as constraints on z.
+* A level without inequalities, or whose least-squares step already meets them, is plain least
+  squares; any other goes to DAQP (`daqp_kernel`) as a dense QP in (z, w), its Hessian
+  semi-definite, solved exactly by DAQP's proximal iterations (`HqpSettings.proximal_weight`).
+
+The weighted mode (`solve_weighted`) instead solves one QP in which level k's equalities and soft
+rows weigh `level_weights[k]` and every hard row stays hard.
+
+The controller's tick writes every level's rows into a `RowTable` of flat arrays and calls
+`solve_strict` or `solve_weighted`. The products of the rows with the null-space basis Z skip the
+rows' zero entries (most rows of the stack touch one to a dozen of its 30 variables), and no
+product is formed while Z is still the identity (the top level). tests/reference_hqp.py is the
+same algorithm in numpy on Python lists of tasks, the oracle of tests/test_compiled_hqp.py, with
+brute force over random small cases as its own.
 
 A RowTable holds, for levels 0..L-1 in priority order (rows of a level contiguous, levels in
 order; `*_start[k]:*_start[k+1]` are level k's rows):
@@ -18,8 +36,8 @@ order; `*_start[k]:*_start[k+1]` are level k's rows):
                                                    soft inequalities and their weights [-]
 
 Every kernel returns a status: STATUS_OK, or STATUS_INFEASIBLE when a level's QP has no
-solution (hqp.py raises QpInfeasible there), or STATUS_NUMERICAL when a factorisation failed
-(numpy's LinAlgError in hqp.py). x and the residuals are only meaningful with STATUS_OK.
+solution, or STATUS_NUMERICAL when a factorisation failed. x and the residuals are only
+meaningful with STATUS_OK.
 """
 
 import dataclasses
@@ -28,7 +46,6 @@ import math
 import numpy as np
 
 from pedi_drake.control import daqp_kernel
-from pedi_drake.control.hqp import HqpSettings, Level
 from pedi_drake.control.small_linalg import (
     cholesky_solve,
     forward_substitute_transposed,
@@ -42,7 +59,21 @@ from pedi_drake.runtime.jit import kernel
 
 STATUS_OK, STATUS_INFEASIBLE, STATUS_NUMERICAL = 0, 1, 2
 # The tall least-squares step is accepted only when its Cholesky factor's diagonal spreads less
-# than sqrt(rank_tolerance) (hqp._least_squares_step).
+# than sqrt(rank_tolerance) (reference_hqp._least_squares_step).
+
+
+@dataclasses.dataclass
+class HqpSettings:
+    """Numerical settings of the hierarchical QP."""
+
+    # DAQP's proximal-point weight for the (semi-definite) level Hessians [-].
+    proximal_weight: float = 1e-5
+    # Tikhonov term added to the weighted mode's Hessian (0: none) [-].
+    regularization: float = 0.0
+    # Relative singular-value tolerance that decides the rank of fixed equality rows [-].
+    rank_tolerance: float = 1e-9
+    # Slack allowed on a fixed soft inequality beyond its optimum, absorbs solver tolerance [-].
+    fix_tolerance: float = 1e-7
 
 
 @dataclasses.dataclass
@@ -65,53 +96,9 @@ class RowTable:
     def num_levels(self) -> int:
         return len(self.eq_start) - 1
 
-    @classmethod
-    def from_levels(cls, levels: list[Level], n: int) -> "RowTable":
-        """The table of `hqp.Level`s (tests, and the Python path's cross-check)."""
-        eq_A, eq_b, hard_G, hard_h, soft_G, soft_h, soft_w = [], [], [], [], [], [], []
-        eq_start, hard_start, soft_start = [0], [0], [0]
-        for level in levels:
-            for t in level.equalities:
-                scale = math.sqrt(t.weight)
-                eq_A.append(np.asarray(t.A, float) * scale)
-                eq_b.append(np.asarray(t.b, float) * scale)
-            for t in level.inequalities:
-                if t.hard:
-                    hard_G.append(np.asarray(t.G, float))
-                    hard_h.append(np.asarray(t.h, float))
-            for t in level.inequalities:
-                if not t.hard:
-                    soft_G.append(np.asarray(t.G, float))
-                    soft_h.append(np.asarray(t.h, float))
-                    soft_w.append(np.full(len(t.h), float(t.weight)))
-            eq_start.append(eq_start[-1] + sum(len(t.b) for t in level.equalities))
-            hard_start.append(hard_start[-1] + sum(len(t.h) for t in level.inequalities if t.hard))
-            soft_start.append(soft_start[-1] + sum(len(t.h) for t in level.inequalities if not t.hard))
-
-        def rows(blocks, width):
-            return np.ascontiguousarray(np.vstack(blocks)) if blocks else np.zeros((0, width))
-
-        def values(blocks):
-            return np.concatenate(blocks) if blocks else np.zeros(0)
-
-        index = np.int64
-        return cls(
-            n,
-            rows(eq_A, n),
-            values(eq_b),
-            np.array(eq_start, index),
-            rows(hard_G, n),
-            values(hard_h),
-            np.array(hard_start, index),
-            rows(soft_G, n),
-            values(soft_h),
-            values(soft_w),
-            np.array(soft_start, index),
-        )
-
 
 # ------------------------------------------------------------------------------------------------
-# Row space and null space of a level's rows (hqp._row_space_split).
+# Row space and null space of a level's rows (reference_hqp._row_space_split).
 
 
 # How a level's rows were split: full row rank (A = R^T Q[:, :m]^T), rank-deficient with m <= n (a QR
@@ -130,7 +117,7 @@ def _row_space_split(
 
     A Householder QR of A^T first; when its diagonal comes within the square root of the
     tolerance of rank deficiency, the same QR with pivoting, which reveals the rank in its
-    diagonal (hqp.py takes an SVD there: the two agree on the rank when A's singular values are
+    diagonal (tests/reference_hqp.py takes an SVD there: the two agree on the rank when A's singular values are
     clearly above or below the tolerance, as the stack's are: a stance's redundant contact rows
     give singular values of 1e-17 of the largest, the others 1e-2 and more). An SVD only when A
     has more rows than columns."""
@@ -176,7 +163,7 @@ def _row_space_split(
 
 @kernel
 def _min_norm_least_squares(A, r, W, tau, rank, R, order, kind, z) -> None:
-    """argmin ||z|| among the minimisers of ||A z - r|| (hqp._min_norm_least_squares), from the
+    """argmin ||z|| among the minimisers of ||A z - r|| (reference_hqp._min_norm_least_squares), from the
     `_row_space_split` of A (its reflectors, rank, R, row order and kind)."""
     m, n = A.shape
     if rank == 0:
@@ -224,7 +211,7 @@ def _meets(G: np.ndarray, upper: np.ndarray, z: np.ndarray, tolerance: float) ->
 
 @kernel
 def _solve_level_qp(H, f, C, upper, eps_prox, eta_prox, y) -> int:
-    """min 0.5 y'Hy + f'y s.t. C y <= upper into y by DAQP, as hqp._solve_level_qp; a status."""
+    """min 0.5 y'Hy + f'y s.t. C y <= upper into y by DAQP, as reference_hqp._solve_level_qp; a status."""
     n, m = f.shape[0], upper.shape[0]
     if m == 0:
         y[:] = np.linalg.lstsq(H, -f, rcond=np.finfo(np.float64).eps * n)[0]
@@ -285,7 +272,7 @@ def solve_strict(
     x,
     residuals,
 ) -> int:
-    """Solves the levels in strict priority order (hqp.solve_hqp) into x (n,) and the levels'
+    """Solves the levels in strict priority order (reference_hqp.solve_hqp) into x (n,) and the levels'
     equality residuals (L,); returns a status."""
     num_levels = len(eq_start) - 1
     for i in range(n):
@@ -446,7 +433,7 @@ def solve_weighted(
     residuals,
 ) -> int:
     """One QP with level k's equalities and soft rows weighted by level_weights[k], hard rows kept
-    hard (hqp.solve_weighted), into x (n,) and the residuals (L,); returns a status."""
+    hard (reference_hqp.solve_weighted), into x (n,) and the residuals (L,); returns a status."""
     num_levels = len(eq_start) - 1
     mh = hard_G.shape[0]
     ms = soft_G.shape[0]
@@ -459,7 +446,7 @@ def solve_weighted(
         e0, e1 = eq_start[level], eq_start[level + 1]
         A = eq_A[e0:e1]
         weight = level_weights[level]
-        # Grouped as hqp.solve_weighted does: the weights span many decades, so the rounding of
+        # Grouped as reference_hqp.solve_weighted does: the weights span many decades, so the rounding of
         # this sum is the solution's (the weighted QP is that ill-conditioned).
         weighted_At = weight * A.T
         H[:n, :n] += weighted_At @ A

@@ -1,16 +1,88 @@
-"""`projected_dynamics.py`'s control law as compiled kernels on plain arrays, for the compiled tick.
+"""Paper 002's whole-body control law as compiled kernels on plain arrays: projected inverse
+dynamics, a Cartesian impedance for the lifted foot with the torso in its dynamically consistent
+null space, a QP over the contact forces (by DAQP, `daqp_kernel`), and the impedance-based
+estimate of the external force at the foot.
 
-`projected_dynamics.py` states the maths (Eqs. 2 to 11 of paper 002) and is the readable
-reference. These kernels compute the same quantities by the same formulas, in the same order,
-with the same rank rule and tolerances, so both agree to rounding (and to the QP solver's
-tolerance for the contact forces): `tests/test_projected_impedance_tick.py` compares them. What
-differs is only how: loops over caller-owned arrays instead of numpy calls (a numpy call on an
-18 x 18 costs more in dispatch than in arithmetic), pseudo-inverses from
-`small_decompositions.symmetric_eigen` instead of LAPACK's dsyevd, and a status returned instead
-of an exception raised, so that a control tick calling them always returns.
+Notation (SI units; nv = 18 generalised velocities, 12 of them joints):
 
-Matrices are C-ordered; task rows are passed stacked, with `*_start` arrays giving each task's
-rows where there are several.
+    M (nv, nv) [kg, kg m, kg m^2]  mass matrix          h (nv,) [N, N m]  bias: C v - tau_g + damping
+    S (12, nv)                     joint selection      tau (12,) [N m]   joint torques
+    Jc (3k, nv)                    world translational Jacobian of the k held contact points
+    lam (3k,) [N]                  contact forces (world frame, on the robot)
+
+Eq. 1, equations of motion:   M vdot + h = S^T tau + Jc^T lam,   with the contacts held still,
+Jc vdot + Jcdot v = 0. (The contact velocity damping kd [1/s] of the HQP is kept: the held
+contacts obey Jc vdot = -(Jcdot v + kd Jc v), which bleeds estimator drift off.)
+
+Eq. 2, projector. P = I - Jc^+ Jc (nv, nv, dimensionless) is the orthogonal projector onto the
+null space of Jc: the motions the contacts allow. Jc^+ is the pseudo-inverse from the singular
+value decomposition, with singular values below `rank_tolerance * sigma_max` dropped (computed as
+Jc^T (Jc Jc^T)^+ from the eigendecomposition of Jc Jc^T, whose eigenvalues are the squared
+singular values and whose eigenvectors the left singular vectors); two prong tips on the rigid trunk give rows
+that are linearly dependent (the trunk can still roll about the line through them), and the
+SVD removes that dependency instead of failing. P is symmetric and idempotent and P Jc^T = 0.
+
+Eqs. 3 and 4, the split. Multiplying Eq. 1 by P removes the constraint forces (P Jc^T = 0):
+
+    constraint-free (Eq. 3):  P M vdot + P h = P S^T tau
+    constrained     (Eq. 4):  (I - P)(M vdot + h - S^T tau) = Jc^T lam
+
+Eq. 5, the constrained acceleration. With M_c = P M + I - P (invertible whenever M is, [mixed]),
+adding (I - P) vdot = -Jc^+ (Jcdot v + kd Jc v) to Eq. 3 gives
+
+    vdot = M_c^-1 (P S^T tau - P h - Jc^+ (Jcdot v + kd Jc v)) = A u + vdot_0,
+
+with u = P S^T tau [N, N m] the projected generalised force, A = M_c^-1 P [1/kg ...] the
+constrained inverse inertia (symmetric, positive semi-definite, rank nv - rank Jc) and vdot_0 the
+acceleration of the unforced constrained system [m/s^2, rad/s^2].
+
+Eqs. 9 and 10, the impedance law. An operational task x with Jacobian J (m, nv) accelerates as
+xddot = J A u + J vdot_0 + Jdot v. Its constrained operational-space inertia is
+Lambda = (J A J^T)^+ [kg | kg m^2], and the impedance force
+
+    F = Lambda (xddot_ref - J vdot_0 - Jdot v) - K e - D edot,   e = x - x_ref,
+
+(the term Lambda (J vdot_0 + Jdot v) is the operational-space bias mu of the paper) applied as
+u = J^T F gives the closed loop Lambda eddot + D edot + K e = F_ext: a spring K [N/m] and damper
+D [N s/m] against any external force F_ext on the task point, the inertia left natural so that no
+force sensor is needed. The lifted (pedipulation) feet are the first task. The torso (6 rows:
+angular, linear, world frame) is the second, in the foot's dynamically consistent null space:
+with Jbar = A J^T Lambda and N = I - Jbar J, the projected generalised force N^T J_b^T F_b does
+not change xddot of the foot (J A N^T = 0), so the torso yields wherever the foot needs it. The
+torso's force is F_b = Lambda_b|s (a_b* - J_b vdot_0 - Jdot_b v - J_b A u_s) with
+Lambda_b|s = (J_b A N^T J_b^T)^+, where a_b* = a_ref + Kp (x_ref - x) + Kd (v_ref - v) uses
+gains per unit of its (null-space, possibly rank-deficient) inertia [1/s^2, 1/s]. Further tasks
+(a joint posture) follow the same recursion in the null space of all the tasks above.
+
+Torques of the constraint-free space: tau_m = (P S^T)^+ u. With at least three non-collinear
+held feet (or the prongs plus two feet) P S^T spans the range of P and P S^T tau_m = u; if not,
+u is replaced by what the joints can produce, u = P S^T tau_m, so what follows stays consistent.
+
+Eqs. 6 to 8, the QP over contact forces. The planned acceleration vdot fixes r = M vdot + h
+[N, N m]. Eq. 1 then says S^T tau + Jc^T lam = r: its six floating-base rows constrain the
+forces, Jc,u^T lam = r_u (the trunk's wrench balance), and its joint rows give the torques,
+tau = r_a - Jc,a^T lam. The contact QP (Eq. 7) is
+
+    min_lam   w_tau ||tau||^2 + w_f ||lam - lam_share||^2
+    s.t.      Jc,u^T lam = r_u,
+              ramp_i f_min <= f_z,i <= ramp_i f_max               (unilateral, minimum normal force)
+              |f_x,i|, |f_y,i| <= mu_eff f_z,i                     (4-edge friction pyramid)
+              |r_a - Jc,a^T lam| <= scale * tau_max                (torque limits)
+
+with lam_share an even share of the weight [N]. The equalities are eliminated (lam = lam_0 + Z z
+with Z a null-space basis of Jc,u^T) and the rest goes to DAQP. The final torque is
+tau = tau_m + tau_c (Eq. 8) with tau_c = tau - tau_m; because r - Jc^T lam lies in the range of
+I - P, P S^T tau_c = 0: the constrained-space torque never disturbs the impedance.
+
+Eq. 11, the force estimate. From the closed loop, the external force on the foot is estimated
+from the motion alone: F_ext_hat = Lambda eddot + D edot + K e [N]; the torso's error does not
+enter because the torso lives in the foot's null space.
+
+The kernels loop over caller-owned arrays (a numpy call on an 18 x 18 costs more in dispatch than
+in arithmetic) and return a status instead of raising, so that a control tick calling them always
+returns. Matrices are C-ordered; task rows are passed stacked, with `*_start` arrays giving each
+task's rows where there are several. tests/reference_projected_dynamics.py is the same law in
+numpy on LAPACK and DAQP's Python module: the oracle of tests/test_projected_impedance_tick.py.
 """
 
 import math

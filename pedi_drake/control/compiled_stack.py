@@ -1,17 +1,41 @@
-"""The task stacks of `stacks.py` written as rows of a compiled RowTable, for the compiled tick.
+"""The task stacks of the two papers: the rows one control instant gives every HQP level.
 
-`stacks.StackBuilder` with the task classes of `tasks.py` is the readable reference: one class
-per task, Python lists of levels. At 500 Hz its hundred-odd small numpy calls cost most of a
-control tick, so `build_levels` here writes the same rows, in the same order and with the same
-arithmetic, straight into preallocated arrays (`compiled_hqp.RowTable` layout) inside one
-compiled call. `tests/test_compiled_controller.py` checks that both give the same rows and the
-same solution on random and recorded controller states.
+Decision variables x = [vdot (nv = 18); f (3 nc)]: generalised accelerations (trunk angular and
+linear acceleration in world, then joint accelerations in the plant's order) and one world-frame
+force per contact point (the four feet, then the prongs). Joint torques are eliminated with the
+actuated rows of the dynamics, tau = M_a vdot + h_a - J_c,a^T f, so every torque task (limits,
+minimisation) is linear in x: the QP shrinks from 18 + 12 + 3 nc to 18 + 3 nc variables, and
+dense active-set solvers scale with the cube of the size (paper 003 uses the same trick, its ref.
+[34]). Contacts out of contact keep their force variables, bounded to zero: the QP keeps a fixed
+size and adding or removing a contact is a continuous change of bounds (the ramp). Acceleration
+tasks follow Eq. 1 of paper 000: J vdot = a_ref + Kp (x_ref - x) + Kd (v_ref - v) - Jdot v.
+
+The paper's level 0 is solved as two sub-levels: "physics" (floating-base dynamics and contact
+no-motion, equalities that some x always meets exactly, so solving them first by null-space
+projection loses nothing and halves the size of every QP below) then "feasibility".
+
+paper000 (Sec. III-B, two TSID levels, here strict):
+    level 0 "physics" + "feasibility": floating-base dynamics, contact no-motion; contact force
+        limits and friction pyramid, torque limits, joint limits (hard), capture point in the
+        safety polygon (soft);
+    level 1 "pose": trunk position and attitude, pedipulation foot / leg joint reference (or the
+        optional 5-D foot pose: foot position and the calf's roll and pitch), idle legs;
+    level 2 "regularisation" (added so the optimum is unique): posture, contact forces, torques.
+paper003 (Sec. VI, five levels):
+    0 dynamic feasibility (as above; the capture point optionally, `paper003_balance`),
+    1 torso angular acceleration, 2 torso translational acceleration, 3 swing foot acceleration
+    (and leg joint references, idle legs), 4 torque minimisation (with light posture and force terms).
+Prong contacts sit in the same augmented contact Jacobian as the feet (paper 003).
+
+`build_levels` writes the rows straight into preallocated arrays (`compiled_hqp.RowTable` layout)
+inside one compiled call. tests/reference_stacks.py and tests/reference_tasks.py are the same
+stacks in numpy, one class per task: the oracle of tests/test_compiled_controller.py, which
+checks that both give the same rows and the same solution on random and recorded states.
 
 Inputs are records (one-element structured arrays, indexed [0] in compiled code): the stack
 parameters (constants of the configured controller, built once by `stack_params`), a snapshot
 (the dynamics terms of `robot_model.RobotSnapshot`, `go1_dynamics.output_dtype`) and the resolved
-references of the instant (`stacks.ResolvedInputs`, as arrays); the rows go into a table record
-(`table_dtype`).
+references of the instant, as arrays; the rows go into a table record (`table_dtype`).
 """
 
 import math
@@ -21,8 +45,6 @@ import numpy as np
 from pedi_drake import robot
 from pedi_drake.control import references
 from pedi_drake.control.config import WholeBodyControllerConfig
-from pedi_drake.control.stacks import SLIDING_SPEED
-from pedi_drake.control.tasks import GRAVITY
 from pedi_drake.friction import pyramid_slope, write_pyramid_faces
 from pedi_drake.runtime.jit import kernel, new_record
 from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rotation_matrix_kernel
@@ -104,11 +126,19 @@ def stack_params(
     r["posture_weight"] = config.posture_weight
     r["force_regularization_weight"] = config.force_regularization_weight
     r["torque_weight"] = config.torque_weight
-    r["total_weight"] = total_mass * GRAVITY
+    r["total_weight"] = total_mass * robot.GRAVITY
     return record
 
 
 MAX_LEVELS = 7  # paper003's six, and the sliding contacts' level
+# A held contact moving faster than this along the ground is sliding [m/s] (well above the
+# estimator's velocity noise of a few mm/s).
+SLIDING_SPEED = 0.02
+
+
+def num_levels(stack: str) -> int:
+    """How many HQP levels the stack `stack` has (without the sliding contacts' level)."""
+    return 6 if stack == "paper003" else 4
 
 
 def table_dtype(nv: int, nc: int) -> np.dtype:
@@ -136,14 +166,14 @@ def table_dtype(nv: int, nc: int) -> np.dtype:
 
 
 # ------------------------------------------------------------------------------------------------
-# Small geometry (tasks.py's scalar forms).
+# Small geometry.
 
 
 @kernel
 def capture_point(s, ground_height: float, xi: np.ndarray) -> float:
-    """The capture point xi (2,) [m] into `xi`; returns omega [1/s] (tasks.CapturePointBalance)."""
+    """The capture point xi (2,) [m] into `xi`; returns omega [1/s]."""
     z = max(s.p_com[2] - ground_height, 0.05)
-    omega = np.sqrt(GRAVITY / z)
+    omega = np.sqrt(robot.GRAVITY / z)
     xi[0] = s.p_com[0] + s.v_com[0] / omega
     xi[1] = s.p_com[1] + s.v_com[1] / omega
     return omega
@@ -155,7 +185,7 @@ def capture_point(s, ground_height: float, xi: np.ndarray) -> float:
 
 @kernel
 def torque_map(p, s, T: np.ndarray, t0: np.ndarray) -> None:
-    """tau = T x + t0 (Unitree order) from the actuated dynamics rows (tasks.torque_map)."""
+    """tau = T x + t0 (Unitree order) from the actuated dynamics rows."""
     nv = p.nv
     for r in range(12):
         row = p.v_joints[r]
@@ -167,7 +197,7 @@ def torque_map(p, s, T: np.ndarray, t0: np.ndarray) -> None:
 
 
 @kernel
-def _pd_row_targets(J, v, p_error, v_ref, a_ref, kp, kd, bias, A, b, row) -> int:
+def pd_rows(J, v, p_error, v_ref, a_ref, kp, kd, bias, A, b, row) -> int:
     """Writes the rows [J 0] x = a_ref + kp p_error + kd (v_ref - J v) - bias; returns the next row."""
     nv = J.shape[1]
     for i in range(J.shape[0]):
@@ -338,7 +368,7 @@ def build_levels(
     R_ref = rotation_matrix_kernel(body[3:7])
     orientation_error_kernel(R_ref, s.R_WB, error)
     kp, kd = p.trunk_orientation_gains[0], p.trunk_orientation_gains[1]
-    row = _pd_row_targets(
+    row = pd_rows(
         s.J_trunk[:3], s.v, error, body[13:16], body[16:19], kp, kd, s.Jdot_v_trunk[:3], eq_A, eq_b, row
     )
     if p.stack == STACK_PAPER003:
@@ -346,7 +376,7 @@ def build_levels(
     for i in range(3):
         error[i] = body[i] - s.p_WB[i]
     kp, kd = p.trunk_position_gains[0], p.trunk_position_gains[1]
-    row = _pd_row_targets(
+    row = pd_rows(
         s.J_trunk[3:], s.v, error, body[7:10], body[10:13], kp, kd, s.Jdot_v_trunk[3:], eq_A, eq_b, row
     )
     if p.stack == STACK_PAPER003:
@@ -366,7 +396,7 @@ def build_levels(
                 error[k] = block[1 + k] - s.p_contacts[i, k]
             a_ref = block[7:10] if mode == _FOOT else zero3
             J = s.J_contacts[3 * i : 3 * i + 3]
-            row = _pd_row_targets(
+            row = pd_rows(
                 J, s.v, error, block[4:7], a_ref, kp, kd, s.Jdot_v_contacts[3 * i : 3 * i + 3], eq_A, eq_b, row
             )
             if mode == _FOOT_POSE or mode == _SHANK_POSE:

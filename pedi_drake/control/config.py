@@ -8,7 +8,6 @@ import math
 
 STACKS = ("paper000", "paper003")
 HQP_MODES = ("strict", "weighted")
-QP_BACKENDS = ("compiled", "daqp", "osqp")
 
 
 @dataclasses.dataclass
@@ -32,10 +31,6 @@ class WholeBodyControllerConfig:
     # Weighted mode: weight of each level of the stack, top first [-]. Empty: 100^(L-1-k) for the
     # L levels of the stack (physics 1e6 ... regularisation 1 for paper000).
     level_weights: list[float] = dataclasses.field(default_factory=list)
-    # How a tick is computed: "compiled" (the whole tick in one compiled call, its QPs by DAQP:
-    # whole_body_tick.py), or the reference implementation in Python with its level QPs solved by
-    # "daqp" (dense active set, called directly) or "osqp" (MathematicalProgram, the baseline).
-    qp_backend: str = "compiled"
     # paper003 only: also keep the capture point in the safety polygon in its first level.
     paper003_balance: bool = True
 
@@ -97,7 +92,6 @@ class WholeBodyControllerConfig:
 
 
 FORCE_ESTIMATES = ("impedance", "joint_torque")
-PROJECTED_IMPEDANCE_BACKENDS = ("compiled", "daqp")
 
 
 @dataclasses.dataclass
@@ -106,10 +100,6 @@ class ProjectedImpedanceConfig:
 
     # Control period [s] (500 Hz default).
     period: float = 0.002
-    # How a tick is computed: "compiled" (the whole tick in one compiled call with the project's
-    # dense QP solver: projected_impedance_tick.py), or "daqp" (the reference implementation in
-    # Python, projected_dynamics.py, its contact QP solved by DAQP; the same commands to rounding).
-    qp_backend: str = "compiled"
     # Stiffness of the lifted feet along world x, y, z [N/m] (Eq. 10, K_s).
     foot_stiffness: list[float] = dataclasses.field(default_factory=lambda: [600.0, 600.0, 600.0])
     # Damping of the lifted feet along world x, y, z [N s/m] (Eq. 10, D_s).
@@ -221,11 +211,6 @@ class ProjectedImpedanceConfig:
         need(self.torque_limit_scale <= 1.0, "torque_limit_scale", "must be at most 1")
         need(self.min_normal_force <= self.max_normal_force, "min_normal_force", "must not exceed max_normal_force")
         need(len(self.nominal_leg_posture) == 3, "nominal_leg_posture", "expected [hip, thigh, calf] in radians")
-        need(
-            self.qp_backend in PROJECTED_IMPEDANCE_BACKENDS,
-            "qp_backend",
-            f"must be one of {PROJECTED_IMPEDANCE_BACKENDS}, got {self.qp_backend!r}",
-        )
         for name in ("trunk_position", "trunk_orientation", "posture"):
             gains = getattr(self, name)
             need(gains.kp >= 0 and gains.kd >= 0, name, "kp and kd must be >= 0")

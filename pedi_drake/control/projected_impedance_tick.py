@@ -29,7 +29,6 @@ from pedi_drake.control.compiled_stack import (
     capture_point,
 )
 from pedi_drake.control.go1_dynamics import add_trunk_external_wrench, go1_dynamics
-from pedi_drake.control.tasks import GRAVITY
 from pedi_drake.control.whole_body_tick import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
 from pedi_drake.friction import pyramid_slope
@@ -151,7 +150,7 @@ def tick_params(
     r["f_min"], r["f_max"] = config.min_normal_force, config.max_normal_force
     r["torque_limit"] = config.torque_limit_scale * np.asarray(robot.EFFORT_LIMIT, float)
     r["force_weight"] = config.force_regularization_weight
-    r["total_weight"] = total_mass * GRAVITY
+    r["total_weight"] = total_mass * robot.GRAVITY
     r["qp_proximal_weight"] = CONTACT_QP_PROXIMAL_WEIGHT
     r["leg_offsets"] = leg_offsets()
     r["diagnostics"] = [diagnostics_layout[name].start for name in DIAGNOSTICS_FIELDS]

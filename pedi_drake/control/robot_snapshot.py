@@ -32,7 +32,7 @@ class RobotSnapshot:
     v_joints: np.ndarray  # (12,) Unitree order [rad/s]
     V_trunk: np.ndarray  # (6,) trunk spatial velocity [w; v] in world [rad/s, m/s]
     v_com: np.ndarray  # (3,) centre-of-mass velocity in world [m/s]
-    # (T, t0) of tasks.torque_map, filled on first use.
+    # (T, t0) of the torque map (tau = T x + t0), filled on first use.
     torque_map: tuple[np.ndarray, np.ndarray] | None = None
     # ControllerModel.calf_orientation of the legs with a 5-D foot task, by Unitree leg index.
     calf_orientations: dict = dataclasses.field(default_factory=dict)

@@ -25,7 +25,6 @@ from pedi_drake.mission import spec
 from pedi_drake.mission.progress import SUCCEEDED
 from pedi_drake.run_logs import SignalLog
 
-GRAVITY = 9.81  # [m/s^2]
 FORCE_JUMP_AFTER = 0.1  # [s] the contact forces settle from their zero initial guess before this
 PRONG_LOAD_WINDOW = 0.5  # [s] the prong load is averaged over the run's last this long
 
@@ -185,7 +184,7 @@ def controller_metrics(record, judged: dict) -> ControllerMetrics:
         last = feet.times >= feet.times[-1] - PRONG_LOAD_WINDOW
         # The prongs belong to the Go1's model instance (robot.add_go1).
         model = plant.GetBodyByName(robot.TRUNK_BODY_NAME).model_instance()
-        weight = plant.CalcTotalMass(plant.CreateDefaultContext(), [model]) * GRAVITY
+        weight = plant.CalcTotalMass(plant.CreateDefaultContext(), [model]) * robot.GRAVITY
         result.prong_load = float(weight - np.mean(np.sum(feet.data[:, last], axis=0)))
     responses = [r for r in (push_response(plant, logs, push) for push in pushes) if r is not None]
     if responses:

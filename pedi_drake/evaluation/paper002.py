@@ -12,11 +12,11 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.control.projected_impedance_controller import projected_diagnostics_layout
-from pedi_drake.control.tasks import orientation_error_W
 from pedi_drake.estimation.base_state import BaseState
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.spec import MissionSpec
 from pedi_drake.run_logs import SignalLog
+from pedi_drake.vector3 import orientation_error_W
 
 # Acceptance floors of the IV-A evaluation (foot held within them while the torso circles).
 FOOT_POSITION_FLOOR_M = 0.005

@@ -28,7 +28,6 @@ from pedi_drake.station.disturbance import push_force_W
 STANCE_FOOT_SLIDE_LIMIT = 0.01
 # The knee torques "before the push" are the mean over this long before its start [s].
 BEFORE_PUSH_WINDOW = 0.5
-GRAVITY = 9.81  # [m/s^2]
 KNEES = [3 * i + 2 for i in range(4)]  # the calf motors in Unitree order
 
 
@@ -121,7 +120,7 @@ def push_response(plant, logs: dict[str, SignalLog], push: Push) -> PushResponse
     contact = logs["sim.foot_contact_forces"]
     at_full = _window(contact.times, full_start, full_end)
     model = plant.GetBodyByName(robot.TRUNK_BODY_NAME).model_instance()
-    weight = plant.CalcTotalMass(plant.CreateDefaultContext(), [model]) * GRAVITY
+    weight = plant.CalcTotalMass(plant.CreateDefaultContext(), [model]) * robot.GRAVITY
     if len(at_full):
         feet_force = contact.data[:, at_full].reshape(4, 3, -1).sum(axis=0).mean(axis=1)  # on the feet [N]
         direction = np.asarray(push.direction, float) / np.linalg.norm(push.direction)

@@ -581,7 +581,7 @@ class _MissionFile:
     robot: RobotConfig | None = None
     # The foot force estimate press phases use: "joint_torque" or "impedance"; empty: the scenario's.
     force_estimate: str = ""
-    # The task stack the whole-body controller runs the mission on (pedi_drake.control.stacks):
+    # The task stack the whole-body controller runs the mission on (pedi_drake.control.compiled_stack):
     # "paper000" or "paper003"; empty: the scenario's. Ignored by the other controllers.
     stack: str = ""
     pushes: list[Push] = dataclasses.field(default_factory=list)

@@ -210,7 +210,9 @@ def kernel(function):
         return function
     # numba reads its cache folder when the kernel is decorated (as its module is imported).
     module_file = getattr(sys.modules.get(function.__module__), "__file__", None)
-    if module_file is not None and Path(module_file).resolve().is_relative_to(_PACKAGE):
+    if module_file is None:  # defined in code run from a string (a guide's example): nothing to key a cache by
+        return numba.njit(cache=False, nogil=True, error_model="numpy")(function)
+    if Path(module_file).resolve().is_relative_to(_PACKAGE):
         numba.config.CACHE_DIR = str(cache_folder(module_file))
     else:  # a kernel outside the package (a test's): numba's own time-stamp check only
         numba.config.CACHE_DIR = str(cache_root() / "outside")

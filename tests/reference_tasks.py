@@ -1,4 +1,5 @@
-"""Whole-body tasks: each a small class producing rows over the decision variables.
+"""The oracle of the compiled stack's tasks (pedi_drake.control.compiled_stack): each task a small
+class producing rows over the decision variables, in numpy.
 
 Decision variables x = [vdot (nv = 18); f (3 nc)]: generalised accelerations (trunk angular and
 linear acceleration in world, then joint accelerations in the plant's order) and one world-frame
@@ -21,13 +22,14 @@ import dataclasses
 import functools
 
 import numpy as np
+from reference_hqp import EqualityTask, InequalityTask
 
-from pedi_drake.control.hqp import EqualityTask, InequalityTask
+from pedi_drake import robot
 from pedi_drake.control.robot_model import RobotSnapshot
 from pedi_drake.friction import friction_pyramid_edges
 from pedi_drake.vector3 import orientation_error_W
 
-GRAVITY = 9.81  # [m/s^2]
+GRAVITY = robot.GRAVITY
 
 
 @dataclasses.dataclass(frozen=True)

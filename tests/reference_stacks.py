@@ -1,4 +1,5 @@
-"""Task stacks of the two papers, as presets that turn one control instant into HQP levels.
+"""The oracle of the compiled stacks (pedi_drake.control.compiled_stack): the task stacks of the
+two papers, as presets that turn one control instant into reference_hqp levels.
 
 The paper's level 0 is solved as two sub-levels: "physics" (floating-base dynamics and contact
 no-motion, equalities that some x always meets exactly, so solving them first by null-space
@@ -21,11 +22,12 @@ Prong contacts sit in the same augmented contact Jacobian as the feet (paper 003
 import dataclasses
 
 import numpy as np
+import reference_tasks as tasks
+from reference_hqp import EqualityTask, Level
 
 from pedi_drake import robot
-from pedi_drake.control import tasks
+from pedi_drake.control.compiled_stack import SLIDING_SPEED
 from pedi_drake.control.config import WholeBodyControllerConfig
-from pedi_drake.control.hqp import EqualityTask, Level
 from pedi_drake.control.references import (
     CALF_ORIENTATION_ROWS,
     LEG_MODE_FOOT,
@@ -35,10 +37,6 @@ from pedi_drake.control.references import (
 )
 from pedi_drake.control.robot_model import RobotSnapshot
 from pedi_drake.vector3 import axis_angle_matrix
-
-# A held contact moving faster than this along the ground is sliding [m/s] (well above the
-# estimator's velocity noise of a few mm/s).
-SLIDING_SPEED = 0.02
 
 
 @dataclasses.dataclass

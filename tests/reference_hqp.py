@@ -1,22 +1,10 @@
-"""Hierarchical quadratic programme: any number of strictly prioritised levels, plus a weighted mode.
+"""The oracle of the compiled hierarchical QP (pedi_drake.control.compiled_hqp): the same algorithm
+in numpy on Python lists of tasks, as readable as the maths in compiled_hqp's docstring.
 
-Each level holds equality tasks (A x = b, minimised in least squares) and inequality tasks
-(G x <= h), each inequality either *hard* (a constraint from its level down) or *soft* (its
-violation w >= G x - h is minimised in least squares at its level). Level k is solved within the
-optimal set of levels 0..k-1 (the classic sequential scheme of Kanoun et al. 2011 / Escande et
-al. 2014):
-
-* For least squares over a convex set the optimal value of (A_k x, w_k) is unique, so the optimal
-  set of level k is {x feasible : A_k x = A_k x_k*, G_k,soft x <= h_k,soft + w_k*}.
-* Equalities are fixed by restricting x to the affine set x = x_k* + Z_k z, where Z_k is an
-  orthonormal basis of the null space of the stacked fixed equalities (SVD with a rank
-  tolerance, so redundant rows cost nothing and never make the QP degenerate).
-* Inequalities (hard ones and fixed soft ones) are carried down as constraints on z.
-
-Every level QP is dense and small (about 20 to 40 variables for the Go1), so it goes to DAQP,
-a dense active-set solver called directly; see
-`pedi_drake.benchmarks.control` for the measured comparison with MathematicalProgram + OSQP.
-Levels without inequalities are plain least squares.
+Levels of `EqualityTask`s and `InequalityTask`s, solved in strict priority (`solve_hqp`) or as one
+weighted QP (`solve_weighted`), each level QP by DAQP through its Python module; `row_table`
+turns levels into the compiled solver's RowTable. tests/test_hqp.py holds this against brute
+force, tests/test_compiled_hqp.py the compiled solver against this.
 """
 
 import dataclasses
@@ -29,6 +17,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from pedi_drake.control import daqp_kernel
+from pedi_drake.control.compiled_hqp import HqpSettings, RowTable
 from pedi_drake.exceptions import QpInfeasible
 
 # DAQP treats bounds beyond this magnitude as infinite.
@@ -89,23 +78,6 @@ class HqpSolution:
         ]
 
 
-@dataclasses.dataclass
-class HqpSettings:
-    """Numerical settings of the solver."""
-
-    # Proximal-point weight of DAQP for the (semi-definite) level Hessians [-].
-    proximal_weight: float = 1e-5
-    # Tikhonov term added to level Hessians (0: none, the proximal iterations handle singularity) [-].
-    regularization: float = 0.0
-    # Relative singular-value tolerance that decides the rank of fixed equality rows [-].
-    rank_tolerance: float = 1e-9
-    # Slack allowed on a fixed soft inequality beyond its optimum, absorbs solver tolerance [-].
-    fix_tolerance: float = 1e-7
-    # Level QP backend: "daqp" (called directly) or "osqp" (MathematicalProgram + OsqpSolver, the
-    # baseline: Drake sets up a new OSQP workspace on every solve).
-    backend: str = "daqp"
-
-
 def _stack_equalities(tasks: list[EqualityTask], n: int) -> tuple[np.ndarray, np.ndarray]:
     if not tasks:
         return np.zeros((0, n)), np.zeros(0)
@@ -151,24 +123,6 @@ def _meets(G: np.ndarray, h: np.ndarray, x: np.ndarray, tolerance: float) -> boo
     return len(h) == 0 or bool((G @ x - h).max() <= tolerance)
 
 
-def _solve_osqp(H: np.ndarray, f: np.ndarray, C: np.ndarray, upper: np.ndarray, level: str) -> np.ndarray:
-    """The same level QP through MathematicalProgram + OsqpSolver (benchmark baseline)."""
-    from pydrake.solvers import MathematicalProgram, OsqpSolver, SolverOptions
-
-    prog = MathematicalProgram()
-    y = prog.NewContinuousVariables(len(f), "y")
-    prog.AddQuadraticCost(H, f, y, is_convex=True)
-    prog.AddLinearConstraint(C, np.full(len(upper), -np.inf), upper, y)
-    options = SolverOptions()
-    options.SetOption(OsqpSolver.id(), "eps_abs", 1e-6)
-    options.SetOption(OsqpSolver.id(), "eps_rel", 1e-6)
-    options.SetOption(OsqpSolver.id(), "polishing", True)  # OSQP >= 1.0 name
-    result = OsqpSolver().Solve(prog, None, options)
-    if not result.is_success():
-        raise QpInfeasible(f"HQP level {level!r}: OSQP {result.get_solution_result()}")
-    return result.GetSolution(y)
-
-
 def _solve_level_qp(
     H: np.ndarray,
     f: np.ndarray,
@@ -176,16 +130,13 @@ def _solve_level_qp(
     upper: np.ndarray,
     level: str,
     eps_prox: float,
-    backend: str = "daqp",
     eta_prox: float = daqp_kernel.QP_FIXED_POINT,
 ) -> np.ndarray:
-    """min 0.5 y'Hy + f'y s.t. C y <= upper, by DAQP (or OSQP); raises QpInfeasible on failure.
+    """min 0.5 y'Hy + f'y s.t. C y <= upper, by DAQP; raises QpInfeasible on failure.
     eta_prox: when DAQP's proximal iterations stop (daqp_kernel.QP_FIXED_POINT for a strict level,
     AUTOMATIC_FIXED_POINT for the weighted QP)."""
     if C.shape[0] == 0:
         return np.linalg.lstsq(H, -f, rcond=None)[0]
-    if backend == "osqp":
-        return _solve_osqp(H, f, C, upper, level)
     lower = np.full(len(upper), -_INFINITY)
     # A positive eps_prox makes DAQP run proximal-point iterations, which solve the exact
     # (semi-definite) problem instead of a regularised one: strict priorities stay exact.
@@ -354,7 +305,7 @@ def solve_hqp(levels: list[Level], num_variables: int, settings: HqpSettings | N
                 upper[mh:] = hs - Gs @ x
             if settings.regularization:
                 H[np.diag_indices(nz + ms)] += settings.regularization
-            z = _solve_level_qp(H, f, C, upper, level.name, settings.proximal_weight, settings.backend)[:nz]
+            z = _solve_level_qp(H, f, C, upper, level.name, settings.proximal_weight)[:nz]
         x = x + Z @ z
         num_verified = len(h_all)
         if ms:
@@ -416,7 +367,6 @@ def solve_weighted(
         upper,
         "weighted",
         settings.proximal_weight,
-        settings.backend,
         daqp_kernel.AUTOMATIC_FIXED_POINT,
     )
     x = y[:n]
@@ -426,3 +376,47 @@ def solve_weighted(
         residuals.append(float(np.linalg.norm(A @ x - b)) if len(b) else 0.0)
         inequalities.append([(t.G, t.h) for t in level.inequalities])
     return HqpSolution(x, residuals, time.perf_counter() - start, inequalities)
+
+
+def row_table(levels: list[Level], n: int) -> RowTable:
+    """The compiled HQP's RowTable of `levels`."""
+    eq_A, eq_b, hard_G, hard_h, soft_G, soft_h, soft_w = [], [], [], [], [], [], []
+    eq_start, hard_start, soft_start = [0], [0], [0]
+    for level in levels:
+        for t in level.equalities:
+            scale = math.sqrt(t.weight)
+            eq_A.append(np.asarray(t.A, float) * scale)
+            eq_b.append(np.asarray(t.b, float) * scale)
+        for t in level.inequalities:
+            if t.hard:
+                hard_G.append(np.asarray(t.G, float))
+                hard_h.append(np.asarray(t.h, float))
+        for t in level.inequalities:
+            if not t.hard:
+                soft_G.append(np.asarray(t.G, float))
+                soft_h.append(np.asarray(t.h, float))
+                soft_w.append(np.full(len(t.h), float(t.weight)))
+        eq_start.append(eq_start[-1] + sum(len(t.b) for t in level.equalities))
+        hard_start.append(hard_start[-1] + sum(len(t.h) for t in level.inequalities if t.hard))
+        soft_start.append(soft_start[-1] + sum(len(t.h) for t in level.inequalities if not t.hard))
+
+    def rows(blocks, width):
+        return np.ascontiguousarray(np.vstack(blocks)) if blocks else np.zeros((0, width))
+
+    def values(blocks):
+        return np.concatenate(blocks) if blocks else np.zeros(0)
+
+    index = np.int64
+    return RowTable(
+        n,
+        rows(eq_A, n),
+        values(eq_b),
+        np.array(eq_start, index),
+        rows(hard_G, n),
+        values(hard_h),
+        np.array(hard_start, index),
+        rows(soft_G, n),
+        values(soft_h),
+        values(soft_w),
+        np.array(soft_start, index),
+    )
