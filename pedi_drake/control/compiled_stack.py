@@ -368,17 +368,13 @@ def build_levels(
     R_ref = rotation_matrix_kernel(body[3:7])
     orientation_error_kernel(R_ref, s.R_WB, error)
     kp, kd = p.trunk_orientation_gains[0], p.trunk_orientation_gains[1]
-    row = pd_rows(
-        s.J_trunk[:3], s.v, error, body[13:16], body[16:19], kp, kd, s.Jdot_v_trunk[:3], eq_A, eq_b, row
-    )
+    row = pd_rows(s.J_trunk[:3], s.v, error, body[13:16], body[16:19], kp, kd, s.Jdot_v_trunk[:3], eq_A, eq_b, row)
     if p.stack == STACK_PAPER003:
         level = _close_level(table, level, row, hard, soft)
     for i in range(3):
         error[i] = body[i] - s.p_WB[i]
     kp, kd = p.trunk_position_gains[0], p.trunk_position_gains[1]
-    row = pd_rows(
-        s.J_trunk[3:], s.v, error, body[7:10], body[10:13], kp, kd, s.Jdot_v_trunk[3:], eq_A, eq_b, row
-    )
+    row = pd_rows(s.J_trunk[3:], s.v, error, body[7:10], body[10:13], kp, kd, s.Jdot_v_trunk[3:], eq_A, eq_b, row)
     if p.stack == STACK_PAPER003:
         level = _close_level(table, level, row, hard, soft)
 
