@@ -13,7 +13,6 @@ import pytest
 from reference_hqp import EqualityTask, HqpSettings, InequalityTask, Level, row_table, solve_hqp
 
 from pedi_drake.control import compiled_hqp
-from pedi_drake.control.small_linalg import householder_q_columns
 from pedi_drake.exceptions import QpInfeasible
 
 N = 30
@@ -104,24 +103,23 @@ def test_infeasible_hard_rows_are_reported():
     assert status == compiled_hqp.STATUS_INFEASIBLE
 
 
-def test_the_pivoted_split_finds_the_rank_and_the_null_space():
+def test_the_split_finds_the_rank_the_null_space_and_the_least_norm_step():
     rng = np.random.default_rng(11)
-    for m, deficiency in ((6, 1), (18, 1), (21, 3), (24, 24)):
+    for m, deficiency in ((6, 0), (18, 0), (6, 1), (18, 1), (21, 3), (24, 24), (40, 12)):
         A = rng.normal(size=(m - deficiency, N))
         A = np.vstack([A, rng.normal(size=(deficiency, m - deficiency)) @ A]) if m > deficiency else np.zeros((m, N))
-        W, Nb, R = np.empty((N, N)), np.empty((N, N)), np.empty((N, N))
-        tau, order = np.empty(N), np.empty(N, dtype=np.int64)
-        rank, kind = compiled_hqp._row_space_split(A, 1e-9, W, tau, Nb, R, order)
-        assert rank == m - deficiency and kind == compiled_hqp.SPLIT_PIVOTED
-        np.testing.assert_allclose(A @ Nb[:, : N - rank], 0.0, atol=1e-12 * max(1.0, np.abs(A).max()))
-        Q = np.empty((N, N))
-        householder_q_columns(W, tau, m, N, 0, Q)
-        np.testing.assert_array_equal(Q[:, rank:], Nb[:, : N - rank])  # the same columns, bit for bit
-        np.testing.assert_allclose(Q.T @ Q, np.eye(N), atol=1e-12)
+        rank, kind, Y, Nb, R, U, sigma = compiled_hqp._row_space_split(A, 1e-9)
+        assert rank == np.linalg.matrix_rank(A) == min(m, N) - max(0, deficiency - max(0, m - N))
+        expected_kind = compiled_hqp.SPLIT_FULL_RANK if deficiency == 0 and m <= N else compiled_hqp.SPLIT_SVD
+        assert kind == expected_kind
+        scale = max(1.0, np.abs(A).max())
+        np.testing.assert_allclose(A @ Nb, 0.0, atol=1e-12 * scale)
+        basis = np.hstack([Y, Nb])
+        np.testing.assert_allclose(basis.T @ basis, np.eye(N), atol=1e-12)
         # The least-norm least-squares step, against numpy's (an SVD).
         r = rng.normal(size=m)
         z = np.empty(N)
-        compiled_hqp._min_norm_least_squares(A, r, W, tau, rank, R, order, kind, z)
+        compiled_hqp._min_norm_least_squares(r, rank, kind, Y, R, U, sigma, z)
         np.testing.assert_allclose(z, np.linalg.lstsq(A, r, rcond=None)[0], atol=1e-9)
 
 
@@ -154,9 +152,7 @@ def test_redundant_contact_rows_are_found_rank_deficient_as_the_svd_finds_them()
     recorded = np.load(Path(__file__).parent / "fixtures" / "hqp_redundant_prong_contacts.npz")
     n = int(recorded["n"])
     A = recorded["eq_A"][: recorded["eq_start"][1]]
-    W, N, R = (np.empty((n, n)) for _ in range(3))
-    tau, order = np.empty(n), np.empty(n, dtype=np.int64)
-    rank, _ = compiled_hqp._row_space_split(A, float(recorded["rank_tolerance"]), W, tau, N, R, order)
+    rank, *_ = compiled_hqp._row_space_split(A, float(recorded["rank_tolerance"]))
     singular = np.linalg.svd(A, compute_uv=False)
     assert rank == np.sum(singular > float(recorded["rank_tolerance"]) * singular[0]) == 23
     table = compiled_hqp.RowTable(

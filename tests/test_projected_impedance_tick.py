@@ -25,9 +25,9 @@ from reference_projected_impedance_tick import ReferenceTick
 from pedi_drake import robot
 from pedi_drake.control import compiled_projected_dynamics as cpd
 from pedi_drake.control import projected_impedance_tick, references
+from pedi_drake.control.compiled_projected_dynamics import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
 from pedi_drake.control.config import ProjectedImpedanceConfig
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
-from pedi_drake.control.small_decompositions import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
 from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.exceptions import QpInfeasible

@@ -46,15 +46,6 @@ import math
 import numpy as np
 
 from pedi_drake.control import daqp_kernel
-from pedi_drake.control.small_linalg import (
-    cholesky_solve,
-    forward_substitute_transposed,
-    householder_factor,
-    householder_q_columns,
-    householder_q_times,
-    multiply,
-    multiply_transposed,
-)
 from pedi_drake.runtime.jit import kernel
 
 STATUS_OK, STATUS_INFEASIBLE, STATUS_NUMERICAL = 0, 1, 2
@@ -101,71 +92,55 @@ class RowTable:
 # Row space and null space of a level's rows (reference_hqp._row_space_split).
 
 
-# How a level's rows were split: full row rank (A = R^T Q[:, :m]^T), rank-deficient with m <= n (a QR
-# of A^T with pivoting, A^T P = Q R), or an SVD (more rows than columns).
-SPLIT_FULL_RANK, SPLIT_PIVOTED, SPLIT_SVD = 0, 1, 2
+# How a level's rows were split: full row rank by a QR of their transpose (A = R^T Y^T), or by an
+# SVD (rank-deficient rows, or more rows than columns).
+SPLIT_FULL_RANK, SPLIT_SVD = 0, 1
 
 
 @kernel
-def _row_space_split(
-    A: np.ndarray, tolerance: float, W: np.ndarray, tau: np.ndarray, N: np.ndarray, R: np.ndarray, order: np.ndarray
-):
-    """Null-space basis N (n, n - r) of A (m, n) of rank r, and its row space kept as Householder
-    reflectors: writes N, and unless by SVD the reflectors (W, tau), the triangular factor R
-    (m, m) and the row order (small_linalg.householder_factor) into the leading blocks of the
-    given buffers (W, N, R: (n, n); tau, order: (n,)) and returns (rank, SPLIT_* kind).
+def _row_space_split(A: np.ndarray, tolerance: float):
+    """(rank r, kind, Y (n, r), N (n, n - r), R, U, sigma) of A (m, n): orthonormal bases of its row
+    space Y and null space N, by LAPACK (numba's np.linalg).
 
-    A Householder QR of A^T first; when its diagonal comes within the square root of the
-    tolerance of rank deficiency, the same QR with pivoting, which reveals the rank in its
-    diagonal (tests/reference_hqp.py takes an SVD there: the two agree on the rank when A's singular values are
-    clearly above or below the tolerance, as the stack's are: a stance's redundant contact rows
-    give singular values of 1e-17 of the largest, the others 1e-2 and more). An SVD only when A
-    has more rows than columns."""
+    A Householder QR of A^T first (dgeqrf, then the whole of Q: the square [A^T 0] has the complete
+    Q, its first m columns span the rows); full rank is taken only when the triangular factor's
+    diagonal stays the square root of the tolerance away from rank deficiency: a QR's diagonal
+    bounds the smallest singular value only from above (a stance's redundant contact rows can leave
+    1e-8 there over a singular value of 1e-17). Anything closer, or more rows than columns, goes
+    to an SVD, which decides the rank (singular values above tolerance * max(1, largest)). R is
+    the triangular factor (m, m) of a full-rank split; U and sigma the SVD's (else empty)."""
     m, n = A.shape
+    empty = np.zeros((0, 0))
     if m == 0:
-        for i in range(n):
-            for j in range(n):
-                N[i, j] = 1.0 if i == j else 0.0
-        return 0, SPLIT_FULL_RANK
+        return 0, SPLIT_FULL_RANK, np.zeros((n, 0)), np.eye(n), empty, empty, np.zeros(0)
     if m <= n:
-        Rm = np.empty((m, m))
-        householder_factor(A, W, tau, Rm, order, False)
+        square = np.zeros((n, n))
+        square[:, :m] = A.T
+        Q, R_square = np.linalg.qr(square)
         largest, smallest = 0.0, np.inf
         for i in range(m):
-            d = abs(Rm[i, i])
+            d = abs(R_square[i, i])
             largest = max(largest, d)
             smallest = min(smallest, d)
-        kind = SPLIT_FULL_RANK
-        rank = m
-        # An unpivoted QR's diagonal bounds the smallest singular value only from above (a stance's
-        # redundant contact rows can leave 1e-8 there over a singular value of 1e-17), so full
-        # rank is taken only with a wide margin: the square root of the tolerance. Anything
-        # closer goes to the pivoted QR, whose diagonal reveals the rank.
-        if not smallest > math.sqrt(tolerance) * max(1.0, largest):
-            householder_factor(A, W, tau, Rm, order, True)
-            kind = SPLIT_PIVOTED
-            top = abs(Rm[0, 0])
-            rank = 0
-            while rank < m and abs(Rm[rank, rank]) > tolerance * max(1.0, top):
-                rank += 1
-        householder_q_columns(W, tau, m, n, rank, N)
-        R[:m, :m] = Rm
-        return rank, kind
+        if smallest > math.sqrt(tolerance) * max(1.0, largest):
+            Y = np.ascontiguousarray(Q[:, :m])
+            N = np.ascontiguousarray(Q[:, m:])
+            return m, SPLIT_FULL_RANK, Y, N, np.ascontiguousarray(R_square[:m, :m]), empty, np.zeros(0)
     U, sigma, Vt = np.linalg.svd(A)
     top = sigma[0] if len(sigma) else 0.0
     rank = 0
-    for s in sigma:
-        if s > tolerance * max(1.0, top):
+    for value in sigma:
+        if value > tolerance * max(1.0, top):
             rank += 1
-    N[:n, : n - rank] = Vt[rank:].T
-    return rank, SPLIT_SVD
+    Y = np.ascontiguousarray(Vt[:rank].T)
+    N = np.ascontiguousarray(Vt[rank:].T)
+    return rank, SPLIT_SVD, Y, N, empty, U, sigma
 
 
 @kernel
-def _min_norm_least_squares(A, r, W, tau, rank, R, order, kind, z) -> None:
-    """argmin ||z|| among the minimisers of ||A z - r|| (reference_hqp._min_norm_least_squares), from the
-    `_row_space_split` of A (its reflectors, rank, R, row order and kind)."""
-    m, n = A.shape
+def _min_norm_least_squares(r, rank, kind, Y, R, U, sigma, z) -> None:
+    """argmin ||z|| among the minimisers of ||A z - r|| (reference_hqp._min_norm_least_squares),
+    from the `_row_space_split` of A."""
     if rank == 0:
         # Every row lies (within the rank tolerance) in the span of the levels above: any z gives
         # the same residual, and the least norm is z = 0 (a least-squares solve would instead
@@ -173,28 +148,39 @@ def _min_norm_least_squares(A, r, W, tau, rank, R, order, kind, z) -> None:
         z[:] = 0.0
         return
     if kind == SPLIT_FULL_RANK:
+        # A = R^T Y^T: R^T w = r by forward substitution, z = Y w.
         w = np.empty(rank)
-        if forward_substitute_transposed(R[:rank, :rank], r, w):
-            householder_q_times(W, tau, m, n, w, rank, z)
-            return
-    elif kind == SPLIT_PIVOTED and rank > 0:
-        # A = P [R1^T 0] Q^T with R1 = R[:rank] (rank, m) in pivoted column order, so the
-        # minimiser of least norm is z = Q[:, :rank] w, w the least-squares solution of
-        # R1^T w = P^T r: by its normal equations R1 R1^T w = R1 P^T r (R1's leading block is
-        # well conditioned).
-        S = np.empty((rank, rank))
-        multiply_transposed(R[:rank, :m], R[:rank, :m], S)
-        rhs = np.empty(rank)
         for i in range(rank):
-            s = 0.0
-            for k in range(m):
-                s += R[i, k] * r[order[k]]
-            rhs[i] = s
-        w = np.empty(rank)
-        if cholesky_solve(S, rhs, w):
-            householder_q_times(W, tau, m, n, w, rank, z)
-            return
-    z[:] = np.linalg.lstsq(A, r, rcond=np.finfo(np.float64).eps * max(m, n))[0]
+            value = r[i]
+            for k in range(i):
+                value -= R[k, i] * w[k]
+            w[i] = value / R[i, i]
+        z[:] = np.dot(Y, w)
+        return
+    # A = U diag(sigma) V^T: z = V_r diag(1 / sigma_r) U_r^T r.
+    w = np.dot(np.ascontiguousarray(U[:, :rank].T), r) / sigma[:rank]
+    z[:] = np.dot(Y, w)
+
+
+@kernel
+def _normal_equations_step(A: np.ndarray, r: np.ndarray, tolerance: float, z: np.ndarray) -> bool:
+    """argmin ||A z - r|| for A with more rows than columns, by its normal equations (a Cholesky
+    factor, LAPACK's dpotrf), into z; accepted only when the factor's diagonal spreads less than
+    sqrt(tolerance) (reference_hqp._least_squares_step), else False."""
+    S = np.dot(A.T, A)
+    try:
+        L = np.linalg.cholesky(S)
+    except Exception:  # numba raises LinAlgError when S is not positive definite
+        return False
+    largest, smallest = 0.0, np.inf
+    for i in range(L.shape[0]):
+        largest = max(largest, abs(L[i, i]))
+        smallest = min(smallest, abs(L[i, i]))
+    if not smallest > math.sqrt(tolerance) * largest:
+        return False
+    y = np.linalg.solve(L, np.dot(A.T, r))
+    z[:] = np.linalg.solve(L.T, y)
+    return True
 
 
 @kernel
@@ -231,7 +217,7 @@ def _solve_level_qp(H, f, C, upper, eps_prox, eta_prox, y) -> int:
 @kernel
 def _rows_times(M: np.ndarray, Z: np.ndarray, nz: int, identity: bool, out: np.ndarray) -> None:
     """out[i, :nz] = M[i] @ Z[:, :nz] for every row i of M (m, n); Z is the identity when
-    `identity`. M's zero entries are skipped (small_linalg.multiply): the stack's rows are sparse
+    `identity`. M's zero entries are skipped, which BLAS cannot know: the stack's rows are sparse
     (a joint limit touches one variable, a force limit two, a torque limit about a dozen of 30)."""
     m, n = M.shape
     if identity:
@@ -239,7 +225,14 @@ def _rows_times(M: np.ndarray, Z: np.ndarray, nz: int, identity: bool, out: np.n
             for c in range(n):
                 out[i, c] = M[i, c]
         return
-    multiply(M, Z[:, :nz], out)
+    for i in range(m):
+        for c in range(nz):
+            out[i, c] = 0.0
+        for p in range(n):
+            a = M[i, p]
+            if a != 0.0:
+                for c in range(nz):
+                    out[i, c] += a * Z[p, c]
 
 
 @kernel
@@ -291,11 +284,6 @@ def solve_strict(
     # G_all Z for the first `gz_rows` carried rows, kept from level to level while Z stays.
     GZ_all = np.empty((capacity, n))
     gz_rows = 0
-    W = np.empty((n, n))  # a level's row space as Householder reflectors (with tau)
-    tau = np.empty(n)
-    N = np.empty((n, n))
-    R = np.empty((n, n))
-    order = np.empty(n, dtype=np.int64)
     for level in range(num_levels):
         e0, e1 = eq_start[level], eq_start[level + 1]
         s0, s1 = soft_start[level], soft_start[level + 1]
@@ -317,13 +305,14 @@ def solve_strict(
         for i in range(m):
             rz[i] = eq_b[e0 + i] - _row_dot(eq_A, e0 + i, x)
         have_split = False
-        rank, kind = 0, SPLIT_FULL_RANK
+        rank = 0
+        N = np.zeros((0, 0))
         z = np.zeros(nz)
         if mh == 0 and ms == 0:
             if m:
-                rank, kind = _row_space_split(Az, rank_tolerance, W, tau, N, R, order)
+                rank, kind, Y, N, R, U, sigma = _row_space_split(Az, rank_tolerance)
                 have_split = True
-                _min_norm_least_squares(Az, rz, W, tau, rank, R, order, kind, z)
+                _min_norm_least_squares(rz, rank, kind, Y, R, U, sigma, z)
             solved = True
         else:
             if gz_rows < mh:
@@ -343,18 +332,11 @@ def solve_strict(
             solved = True
             if m and nz:
                 if m <= nz:
-                    rank, kind = _row_space_split(Az, rank_tolerance, W, tau, N, R, order)
+                    rank, kind, Y, N, R, U, sigma = _row_space_split(Az, rank_tolerance)
                     have_split = True
-                    _min_norm_least_squares(Az, rz, W, tau, rank, R, order, kind, z)
+                    _min_norm_least_squares(rz, rank, kind, Y, R, U, sigma, z)
                 else:
-                    S = Az.T @ Az
-                    solved = cholesky_solve(S, Az.T @ rz, z)
-                    if solved:
-                        largest, smallest = 0.0, np.inf
-                        for i in range(nz):
-                            largest = max(largest, abs(S[i, i]))
-                            smallest = min(smallest, abs(S[i, i]))
-                        solved = smallest > math.sqrt(rank_tolerance) * largest
+                    solved = _normal_equations_step(Az, rz, rank_tolerance, z)
             if solved:
                 solved = _meets(GZ, upper[:mh], z, 0.0) and (ms == 0 or _meets(GsZ, upper[mh:], z, 0.0))
             if not solved:
@@ -393,12 +375,12 @@ def solve_strict(
                 mh += 1
         if m and nz and level + 1 < num_levels:
             if not have_split:
-                rank, kind = _row_space_split(Az, rank_tolerance, W, tau, N, R, order)
+                rank, _, _, N, _, _, _ = _row_space_split(Az, rank_tolerance)
             kept = nz - rank
             if identity:
                 Z[:, :kept] = N[:n, :kept]
             else:
-                multiply(Z[:, :nz], N[:nz, :kept], Z_next)
+                Z_next[:, :kept] = np.dot(np.ascontiguousarray(Z[:, :nz]), N)
                 Z, Z_next = Z_next, Z
             identity = False
             gz_rows = 0  # GZ_all is recomputed for the new Z, from the sparse rows

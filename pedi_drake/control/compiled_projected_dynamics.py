@@ -90,8 +90,6 @@ import math
 import numpy as np
 
 from pedi_drake.control import daqp_kernel
-from pedi_drake.control.small_decompositions import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
-from pedi_drake.control.small_linalg import multiply, multiply_transposed
 from pedi_drake.friction import write_pyramid_faces
 from pedi_drake.runtime.jit import kernel
 
@@ -161,6 +159,92 @@ def _symmetrize(A: np.ndarray) -> None:
             value = 0.5 * (A[i, j] + A[j, i])
             A[i, j] = value
             A[j, i] = value
+
+
+# ------------------------------------------------------------------------------------------------
+# Decompositions by LAPACK, products by BLAS (numba's np.linalg and np.dot). A decomposition that
+# fails (a non-finite input, no convergence) returns a failure instead of raising.
+
+
+@kernel
+def multiply(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
+    """out[:rows of A, :columns of B] = A B."""
+    out[: A.shape[0], : B.shape[1]] = np.dot(A, B)
+
+
+@kernel
+def multiply_transposed(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
+    """out[:rows of A, :rows of B] = A B^T."""
+    out[: A.shape[0], : B.shape[0]] = np.dot(A, B.T)
+
+
+@kernel
+def _finite(A: np.ndarray) -> bool:
+    for value in A.ravel():
+        if not math.isfinite(value):
+            return False
+    return True
+
+
+@kernel
+def symmetric_eigen(A: np.ndarray, w: np.ndarray, W: np.ndarray) -> bool:
+    """A = W^T diag(w) W for symmetric A (n, n), w ascending, the eigenvectors as the rows of W
+    (LAPACK's dsyevd); False (w, W meaningless) for a non-finite A or no convergence."""
+    if not _finite(A):
+        return False
+    try:
+        values, vectors = np.linalg.eigh(A)
+    except Exception:  # numba raises LinAlgError on no convergence; a tick must return
+        return False
+    w[:] = values
+    W[:, :] = vectors.T
+    return True
+
+
+@kernel
+def symmetric_pseudo_inverse(A: np.ndarray, rank_tolerance: float, scale: float, out: np.ndarray) -> int:
+    """A^+ of a symmetric positive semi-definite A (n, n) into out (n, n); returns its rank, or -1
+    when the decomposition fails. Eigenvalues above `rank_tolerance * scale` are kept, a negative
+    `scale` meaning the largest eigenvalue; a largest eigenvalue (or scale) that is not positive
+    gives zero and rank 0. A task projected into a null space passes the scale of its unprojected
+    matrix, so that a used-up null space (every eigenvalue at rounding level) gives rank 0 instead
+    of amplified rounding noise."""
+    n = A.shape[0]
+    out[:, :] = 0.0
+    if n == 0:
+        return 0
+    w = np.empty(n)
+    W = np.empty((n, n))
+    if not symmetric_eigen(A, w, W):
+        return -1
+    reference = w[n - 1] if scale < 0.0 else scale
+    if w[n - 1] <= 0.0 or reference <= 0.0:
+        return 0
+    threshold = rank_tolerance * reference
+    rank = 0
+    for k in range(n):
+        if w[k] > threshold:
+            rank += 1
+            inverse = 1.0 / w[k]
+            for i in range(n):
+                scaled = W[k, i] * inverse
+                for j in range(n):
+                    out[i, j] += scaled * W[k, j]
+    return rank
+
+
+@kernel
+def lu_solve(A: np.ndarray, B: np.ndarray) -> bool:
+    """A X = B for square A (n, n) and B (n, k) by LU with partial pivoting (LAPACK's dgesv), X
+    written over B; False for a non-finite or singular A (B then meaningless)."""
+    if not _finite(A):
+        return False
+    try:
+        X = np.linalg.solve(A, B)
+    except Exception:  # numba raises LinAlgError on a singular A; a tick must return
+        return False
+    B[:, :] = X
+    return True
 
 
 # ------------------------------------------------------------------------------------------------
