@@ -16,10 +16,10 @@ from pydrake.systems.framework import Context, DiscreteValues
 
 from pedi_drake import robot
 from pedi_drake.control import references
-from pedi_drake.control.go1_dynamics import add_trunk_external_wrench
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.robot_model import RobotSnapshot
-from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
+from pedi_drake.control.tick_steps import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
+from pedi_drake.dynamics.go1_dynamics import add_trunk_external_wrench
 from pedi_drake.exceptions import QpInfeasible
 from pedi_drake.friction import pyramid_slope
 from pedi_drake.go1_command import held_command

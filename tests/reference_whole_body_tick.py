@@ -17,15 +17,9 @@ from reference_stacks import ResolvedInputs, StackBuilder
 
 from pedi_drake import robot
 from pedi_drake.control import references
-from pedi_drake.control.go1_dynamics import add_trunk_external_wrench
-from pedi_drake.control.whole_body_controller import (
-    MAX_LEVELS,
-    STATUS_BAD_INPUT,
-    STATUS_CONTACTS_RELAXED,
-    STATUS_OK,
-    STATUS_QP_FAILED,
-    WholeBodyController,
-)
+from pedi_drake.control.tick_steps import STATUS_BAD_INPUT, STATUS_CONTACTS_RELAXED, STATUS_OK, STATUS_QP_FAILED
+from pedi_drake.control.whole_body_controller import MAX_LEVELS, WholeBodyController
+from pedi_drake.dynamics.go1_dynamics import add_trunk_external_wrench
 from pedi_drake.exceptions import PediError, QpInfeasible
 from pedi_drake.go1_command import held_command
 from pedi_drake.polygon import polygon_halfplanes

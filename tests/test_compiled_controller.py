@@ -15,7 +15,8 @@ from reference_whole_body_tick import ReferenceTick
 from test_whole_body_controller import standing_controller, tick
 
 from pedi_drake.control import whole_body_tick
-from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, WholeBodyController
+from pedi_drake.control.tick_steps import STATUS_BAD_INPUT
+from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.run import simulate
 from pedi_drake.runtime import jit
 from pedi_drake.scenario import load_scenario

@@ -17,8 +17,8 @@ from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import MultibodyPlant
 
 from pedi_drake import robot
-from pedi_drake.control import go1_dynamics as gd
 from pedi_drake.control.robot_model import ControllerModel
+from pedi_drake.dynamics import go1_dynamics as gd
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.resources import models_dir
 from pedi_drake.runtime.jit import python_records

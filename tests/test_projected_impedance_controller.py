@@ -10,7 +10,7 @@ from pedi_drake.benchmarks.demos import demo_scenario, simulate_demo
 from pedi_drake.control import references
 from pedi_drake.control.config import ProjectedImpedanceConfig
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
-from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
+from pedi_drake.control.tick_steps import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.diagram import apply_mission
 from pedi_drake.evaluation import paper002 as evaluation
 from pedi_drake.evaluation.controller_metrics import controller_metrics

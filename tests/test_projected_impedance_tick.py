@@ -28,7 +28,7 @@ from pedi_drake.control import projected_impedance_tick, references
 from pedi_drake.control.compiled_projected_dynamics import lu_solve, symmetric_eigen, symmetric_pseudo_inverse
 from pedi_drake.control.config import ProjectedImpedanceConfig
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
-from pedi_drake.control.whole_body_controller import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
+from pedi_drake.control.tick_steps import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.exceptions import QpInfeasible
 from pedi_drake.mission.spec import missions_dir

@@ -11,13 +11,8 @@ from pedi_drake import robot
 from pedi_drake.benchmarks.demos import demo_scenario, run_demo
 from pedi_drake.control import references
 from pedi_drake.control.config import WholeBodyControllerConfig
-from pedi_drake.control.whole_body_controller import (
-    STATUS_BAD_INPUT,
-    STATUS_CONTACTS_RELAXED,
-    STATUS_OK,
-    STATUS_QP_FAILED,
-    WholeBodyController,
-)
+from pedi_drake.control.tick_steps import STATUS_BAD_INPUT, STATUS_CONTACTS_RELAXED, STATUS_OK, STATUS_QP_FAILED
+from pedi_drake.control.whole_body_controller import WholeBodyController
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.scenario import RobotConfig
 from pedi_drake.station.initial_state import initial_trunk_pose

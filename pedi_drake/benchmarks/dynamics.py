@@ -28,8 +28,8 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.benchmarks.machine import stamped
-from pedi_drake.control.go1_dynamics import go1_dynamics
 from pedi_drake.control.robot_model import ControllerModel
+from pedi_drake.dynamics.go1_dynamics import go1_dynamics
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.runtime.jit import kernel
 

@@ -48,10 +48,8 @@ from pedi_drake import robot
 from pedi_drake.control import projected_impedance_tick, references
 from pedi_drake.control.config import ProjectedImpedanceConfig
 from pedi_drake.control.robot_model import ControllerModel
-from pedi_drake.control.whole_body_controller import (
-    STATUS_OK,
-    diagnostics_layout,
-)
+from pedi_drake.control.tick_steps import STATUS_OK
+from pedi_drake.control.whole_body_controller import diagnostics_layout
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.go1_command import initial_command

@@ -1,11 +1,11 @@
 """One tick of paper 002's projected-impedance controller as one compiled call.
 
-`ProjectedImpedanceController` (projected_impedance_controller.py) documents what a tick does
-and keeps the reference implementation in Python, built from `projected_dynamics.py`. This
-module is the same tick in compiled code: `projected_impedance_tick` takes the tick's inputs and
-the controller's discrete state as arrays, writes the next state and returns the tick's status,
-with the dynamics terms from `go1_dynamics`, the control law from `compiled_projected_dynamics`
-and the leg kinematics of a joint reference from `leg_odometry`. No Python object is touched
+`ProjectedImpedanceController` (projected_impedance_controller.py) documents what a tick does.
+`projected_impedance_tick` takes the tick's inputs and the controller's discrete state as arrays,
+writes the next state and returns the tick's status, with the dynamics terms from
+`go1_dynamics`, the control law from `compiled_projected_dynamics`, the leg kinematics of a
+joint reference from `leg_odometry` and the steps it shares with the HQP's tick from
+`tick_steps`. No Python object is touched
 between the first input and the last output, and the interpreter's lock is released throughout.
 
 Discrete state, as ProjectedImpedanceController declares it: command (60), reference (24: q_ref,
@@ -15,7 +15,7 @@ impedance), diagnostics (`projected_impedance_controller.projected_diagnostics_l
 
 Nothing raises: a non-finite input ends the tick as STATUS_BAD_INPUT, a failed decomposition or
 an infeasible contact QP as STATUS_QP_FAILED, both holding the last good command with damping
-(`go1_command.write_held_command`), with the status the Python path reports.
+(`tick_steps.fail`).
 """
 
 import math
@@ -24,37 +24,30 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.control import compiled_projected_dynamics as cpd
-from pedi_drake.control import references
-from pedi_drake.control.compiled_stack import (
-    capture_point,
+from pedi_drake.control import references, tick_steps
+from pedi_drake.control.tick_steps import (
+    FOOT_ERRORS,
+    FORCES,
+    RESIDUALS,
+    STATUS_BAD_INPUT,
+    STATUS_OK,
+    STATUS_QP_FAILED,
+    all_finite,
+    fail,
+    read_inputs,
+    write_command,
+    write_diagnostics,
 )
-from pedi_drake.control.go1_dynamics import add_trunk_external_wrench, go1_dynamics
-from pedi_drake.control.whole_body_tick import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
+from pedi_drake.dynamics.go1_dynamics import add_trunk_external_wrench, go1_dynamics
 from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
 from pedi_drake.friction import pyramid_slope
-from pedi_drake.go1_command import write_held_command
 from pedi_drake.runtime.jit import kernel, new_record
 from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rotation_matrix_kernel
 
-# Slices of the diagnostics vector the tick writes, in this order (projected_diagnostics_layout).
-DIAGNOSTICS_FIELDS = (
-    "status",
-    "consecutive_failures",
-    "total_failures",
-    "capture_point",
-    "trunk_position_error",
-    "trunk_orientation_error",
-    "foot_errors",
-    "level_residuals",
-    "contact_forces",
-    "tau_ff",
-    "contact_ramp",
-    "force_estimate",
-    "constraint_rank",
-)
-_STATUS, _CONSECUTIVE, _TOTAL, _CP, _TRUNK_P, _TRUNK_R, _FEET, _RESIDUALS, _FORCES, _TAU, _RAMP, _ESTIMATE, _RANK = (
-    range(13)
-)
+# Slices of the diagnostics vector the tick writes, in this order (projected_diagnostics_layout):
+# those both ticks write, then this one's own.
+DIAGNOSTICS_FIELDS = (*tick_steps.DIAGNOSTICS_FIELDS, "force_estimate", "constraint_rank")
+_ESTIMATE, _RANK = len(tick_steps.DIAGNOSTICS_FIELDS), len(tick_steps.DIAGNOSTICS_FIELDS) + 1
 _FOOT, _JOINTS, _FOOT_POSE = references.LEG_MODE_FOOT, references.LEG_MODE_JOINTS, references.LEG_MODE_FOOT_POSE
 _SHANK_POSE = references.LEG_MODE_SHANK_POSE
 _ESTIMATE_ENTRIES = 7  # per leg: error rate (3), filtered error acceleration (3), active flag
@@ -157,30 +150,6 @@ def tick_params(
     levels = diagnostics_layout["level_residuals"]
     r["max_residuals"] = levels.stop - levels.start
     return record
-
-
-@kernel
-def _all_finite(x: np.ndarray) -> bool:
-    for value in x:
-        if not math.isfinite(value):
-            return False
-    return True
-
-
-@kernel
-def _fail(tp, status, last_command, q, last_diag, ramp, record_ramp, command, diag) -> float:
-    """The held command and the failure's diagnostics (ProjectedImpedanceController._fail); the
-    ramps, when `record_ramp`, as the tick advanced them."""
-    write_held_command(last_command, q, tp.failure_kd, command)
-    d = tp.diagnostics
-    diag[:] = last_diag
-    diag[d[_STATUS]] = status
-    if record_ramp:
-        for i in range(ramp.shape[0]):
-            diag[d[_RAMP] + i] = ramp[i]
-    diag[d[_CONSECUTIVE]] += 1.0
-    diag[d[_TOTAL]] += 1.0
-    return status
 
 
 @kernel
@@ -382,7 +351,7 @@ def projected_impedance_tick(
     estimate: np.ndarray,
     diag: np.ndarray,
 ) -> float:
-    """One controller tick (ProjectedImpedanceController._update_reference) at the estimate `base`
+    """One controller tick (ProjectedImpedanceController's update) at the estimate `base`
     and the measured joints `q`, `qd`: writes the next command, reference, ramp, hold, estimate
     and diagnostics (all but the two timing entries) and returns the tick's status. The records
     are one-element arrays: TICK_PARAMS_DTYPE, go1_dynamics.model_record and the workspace
@@ -395,46 +364,23 @@ def projected_impedance_tick(
     ramp[:] = last_ramp
     hold[:] = last_hold
     estimate[:] = last_estimate
-    contact_set = np.empty(nc)
-    for i in range(nc):
-        contact_set[i] = min(max(contact_set_in[i], 0.0), 1.0)
-    if not (_all_finite(base) and _all_finite(q) and _all_finite(qd) and _all_finite(contact_set)):
-        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
-    new_hold = last_hold.copy()
-    new_ramp = last_ramp.copy()
-    q_ref = last_reference[:12].copy()
-    qd_ref = last_reference[12:].copy()
-    if new_hold[0] == 0.0:
-        new_hold[0] = 1.0
-        new_hold[1:4] = base[4:7]
-        new_hold[4:8] = base[0:4]
-        q_ref[:] = q
-        qd_ref[:] = qd
-        new_ramp[:] = contact_set
-    step = tp.period / tp.contact_ramp_time
-    for i in range(nc):
-        change = min(max(contact_set[i] - new_ramp[i], -step), step)
-        new_ramp[i] = min(max(new_ramp[i] + change, 0.0), 1.0)
-    body = np.zeros(19)
-    if has_body:
-        body[:] = body_in
-    else:
-        body[0:3] = new_hold[1:4]
-        body[3:7] = new_hold[4:8]
-    inputs_finite = _all_finite(body) and _all_finite(leg_x) and _all_finite(polygon_x) and _all_finite(mu_x)
-    if not (inputs_finite and _all_finite(trunk_wrench)):
-        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
-    if mu_x[0] <= 0.0:
-        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
+    contact_set, new_ramp, new_hold = np.empty(nc), np.empty(nc), np.empty(8)
+    q_ref, qd_ref, body = np.empty(12), np.empty(12), np.empty(19)
+    good = read_inputs(
+        tp, base, q, qd, contact_set_in, body_in, has_body, leg_x, polygon_x, mu_x, trunk_wrench,
+        last_reference, last_ramp, last_hold, contact_set, new_ramp, new_hold, q_ref, qd_ref, body,
+    )  # fmt: skip
+    if not good:
+        return fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
 
     # From here a failure keeps the advanced ramps and the held pose.
     ramp[:] = new_ramp
     hold[:] = new_hold
     go1_dynamics(dynamics_model, base, q, qd, snapshot)
     add_trunk_external_wrench(s.h, s.J_trunk, trunk_wrench)
-    s.Jdot_v_com[:] = 0.0  # the Python path's ControllerModel(com_bias=False)
-    if not (_all_finite(s.M.ravel()) and _all_finite(s.h) and _all_finite(s.J_contacts.ravel())):
-        return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+    s.Jdot_v_com[:] = 0.0  # the controller's model is ControllerModel(com_bias=False)
+    if not (all_finite(s.M.ravel()) and all_finite(s.h) and all_finite(s.J_contacts.ravel())):
+        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
     held = np.empty(nc, dtype=np.bool_)
     num_held = 0
     on_prongs = False
@@ -465,7 +411,7 @@ def projected_impedance_tick(
     vdot_0 = np.empty(nv)
     rank = cpd.constrained_dynamics(s.M, s.h, Jc, Jcdot_v, s.v, tp.contact_damping, tp.rank_tolerance, P, A, vdot_0)
     if rank < 0:
-        return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
 
     # Eqs. 9 and 10: the lifted legs' impedance, then the trunk and the posture.
     rows_of_leg = np.empty(4, dtype=np.int64)
@@ -516,11 +462,11 @@ def projected_impedance_tick(
         residuals,
     )
     if num_residuals < 0:
-        return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
     tau_m = np.empty(12)
     vdot = np.empty(nv)
     if not cpd.constraint_free_torque(A, vdot_0, P, u, tp.v_joints, tp.rank_tolerance, tau_m, vdot):
-        return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
 
     # Eqs. 6 to 8: the contact forces of the planned acceleration.
     held_ramp = np.empty(num_held)
@@ -539,9 +485,9 @@ def projected_impedance_tick(
         for j in range(nv):
             value += s.M[i, j] * vdot[j]
         r[i] = value
-    if not (_all_finite(vdot) and _all_finite(r)):
-        # The Python path finds the same at its end; the QP solver is not given non-finite terms.
-        return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+    if not (all_finite(vdot) and all_finite(r)):
+        # The QP solver is not given non-finite terms.
+        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
     lam = np.empty(3 * num_held)
     tau = np.empty(12)
     equality_residual = np.zeros(1)
@@ -564,21 +510,13 @@ def projected_impedance_tick(
         tau,
         equality_residual,
     )
-    if solved != cpd.CONTACT_FORCES_OK or not _all_finite(tau):
-        return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+    if solved != cpd.CONTACT_FORCES_OK or not all_finite(tau):
+        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
 
+    qdd = np.empty(12)
     for k in range(12):
-        qdd = vdot[tp.v_joints[k]]
-        # Integrate the planned accelerations into the joint reference, kept near the measurement.
-        rate = qd_ref[k] + qdd * tp.period
-        qd_ref[k] = min(max(rate, qd[k] - tp.max_reference_rate_deviation), qd[k] + tp.max_reference_rate_deviation)
-        angle = q_ref[k] + qd_ref[k] * tp.period
-        q_ref[k] = min(max(angle, q[k] - tp.max_reference_deviation), q[k] + tp.max_reference_deviation)
-        command[k] = q_ref[k]
-        command[12 + k] = qd_ref[k]
-        command[24 + k] = tp.joint_kp
-        command[36 + k] = tp.joint_kd
-        command[48 + k] = tau[k]
+        qdd[k] = vdot[tp.v_joints[k]]
+    write_command(tp, qdd, q, qd, tau, q_ref, qd_ref, command)
 
     # Eq. 11 per foot impedance: Lambda eddot + D edot + K e, eddot a filtered difference.
     alpha = tp.period / (tp.period + tp.force_estimate_filter_time)
@@ -615,36 +553,26 @@ def projected_impedance_tick(
         )
         estimate[7 * i + 6] = 1.0
 
-    diag[:] = last_diag
-    diag[d[_STATUS]] = STATUS_OK
-    diag[d[_CONSECUTIVE]] = 0.0
     ground = 0.0
     if num_held:
         for a in range(num_held):
             ground += s.p_contacts[held_idx[a], 2]
         ground = ground / num_held - robot.FOOT_RADIUS
-    capture_point(s, ground, diag[d[_CP] : d[_CP] + 2])
-    for k in range(3):
-        diag[d[_TRUNK_P] + k] = body[k] - s.p_WB[k]
-    orientation_error_kernel(rotation_matrix_kernel(body[3:7]), s.R_WB, diag[d[_TRUNK_R] : d[_TRUNK_R] + 3])
+    write_diagnostics(tp, s, STATUS_OK, ground, body, tau, new_ramp, last_diag, diag)
     for i in range(4):
         row = foot_row[i]
-        diag[d[_FEET] + i] = _norm3(error, row) if row >= 0 else 0.0
+        diag[d[FOOT_ERRORS] + i] = _norm3(error, row) if row >= 0 else 0.0
     for k in range(tp.max_residuals):
-        diag[d[_RESIDUALS] + k] = 0.0
+        diag[d[RESIDUALS] + k] = 0.0
     for k in range(min(num_residuals, tp.max_residuals)):
-        diag[d[_RESIDUALS] + k] = residuals[k]
+        diag[d[RESIDUALS] + k] = residuals[k]
     if num_residuals < tp.max_residuals:
-        diag[d[_RESIDUALS] + num_residuals] = equality_residual[0]
+        diag[d[RESIDUALS] + num_residuals] = equality_residual[0]
     for j in range(3 * nc):
-        diag[d[_FORCES] + j] = 0.0
+        diag[d[FORCES] + j] = 0.0
     for a in range(num_held):
         for axis in range(3):
-            diag[d[_FORCES] + 3 * held_idx[a] + axis] = lam[3 * a + axis]
-    for k in range(12):
-        diag[d[_TAU] + k] = tau[k]
-    for i in range(nc):
-        diag[d[_RAMP] + i] = new_ramp[i]
+            diag[d[FORCES] + 3 * held_idx[a] + axis] = lam[3 * a + axis]
     for j in range(12):
         diag[d[_ESTIMATE] + j] = forces_estimated[j]
     diag[d[_RANK]] = rank

@@ -23,8 +23,8 @@ from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import Context
 
 from pedi_drake import robot
-from pedi_drake.control.go1_dynamics import Go1Dynamics, contact_points
-from pedi_drake.control.robot_snapshot import RobotSnapshot
+from pedi_drake.dynamics.go1_dynamics import Go1Dynamics, contact_points
+from pedi_drake.dynamics.robot_snapshot import RobotSnapshot
 from pedi_drake.prongs import ProngDesign
 
 __all__ = ["FOOT_CONTACTS", "ControllerModel", "RobotSnapshot", "contact_names"]

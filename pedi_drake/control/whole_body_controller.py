@@ -46,9 +46,6 @@ from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.runtime.jit import new_record
 
-STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT = 0.0, 1.0, 2.0
-# Solved with sliding contacts' tangential no-motion below the force limits (compiled_stack.build_levels).
-STATUS_CONTACTS_RELAXED = 3.0
 MAX_LEVELS = 5
 
 

@@ -1,11 +1,10 @@
 """One tick of the whole-body controller as one compiled call.
 
-`WholeBodyController` (whole_body_controller.py) documents what a tick does; its reference
-implementation composes `robot_model`, `stacks`, `tasks` and `hqp` in Python. This module is the
-same tick in compiled code: `whole_body_tick` takes the tick's inputs and the controller's
-discrete state as arrays, writes the next state, and returns the tick's status, with the dynamics
-terms from `go1_dynamics`, the levels from `compiled_stack.build_levels` and the hierarchical
-solve from `compiled_hqp`. No Python object is touched between the first input and the last
+`WholeBodyController` (whole_body_controller.py) documents what a tick does. `whole_body_tick`
+takes the tick's inputs and the controller's discrete state as arrays, writes the next state, and
+returns the tick's status, with the dynamics terms from `go1_dynamics`, the levels from
+`compiled_stack.build_levels`, the hierarchical solve from `compiled_hqp` and the steps it shares
+with paper 002's tick from `tick_steps`. No Python object is touched between the first input and the last
 output, so a tick costs tens of microseconds instead of a millisecond, and the interpreter's lock
 is released throughout (the driver's receive thread runs meanwhile).
 
@@ -20,40 +19,27 @@ import numpy as np
 
 from pedi_drake import robot
 from pedi_drake.control import compiled_hqp
-from pedi_drake.control.compiled_stack import (
-    MAX_LEVELS,
-    build_levels,
-    capture_point,
-    new_record,
-    torque_map,
-)
-from pedi_drake.control.go1_dynamics import add_trunk_external_wrench, go1_dynamics
+from pedi_drake.control.compiled_stack import MAX_LEVELS, build_levels, torque_map
 from pedi_drake.control.references import SAFETY_POLYGON_MAX_VERTICES
-from pedi_drake.go1_command import write_held_command
+from pedi_drake.control.tick_steps import (
+    DIAGNOSTICS_FIELDS,
+    FOOT_ERRORS,
+    FORCES,
+    RESIDUALS,
+    STATUS_BAD_INPUT,
+    STATUS_CONTACTS_RELAXED,
+    STATUS_OK,
+    STATUS_QP_FAILED,
+    all_finite,
+    fail,
+    read_inputs,
+    write_command,
+    write_diagnostics,
+)
+from pedi_drake.dynamics.go1_dynamics import add_trunk_external_wrench, go1_dynamics
 from pedi_drake.polygon import halfplanes_kernel
-from pedi_drake.runtime.jit import kernel
-from pedi_drake.vector3 import orientation_error_kernel, rotation_matrix_kernel
+from pedi_drake.runtime.jit import kernel, new_record
 
-STATUS_OK, STATUS_QP_FAILED, STATUS_BAD_INPUT, STATUS_CONTACTS_RELAXED = 0.0, 1.0, 2.0, 3.0
-# Slices of the diagnostics vector, in this order (whole_body_controller.DIAGNOSTICS_FIELDS).
-DIAGNOSTICS_FIELDS = (
-    "status",
-    "solve_time",
-    "tick_time",
-    "consecutive_failures",
-    "total_failures",
-    "capture_point",
-    "trunk_position_error",
-    "trunk_orientation_error",
-    "foot_errors",
-    "level_residuals",
-    "contact_forces",
-    "tau_ff",
-    "contact_ramp",
-)
-_STATUS, _SOLVE, _TICK, _CONSECUTIVE, _TOTAL, _CP, _TRUNK_P, _TRUNK_R, _FEET, _RESIDUALS, _FORCES, _TAU, _RAMP = range(
-    13
-)
 _FOOT_MODE = 1
 
 
@@ -106,25 +92,6 @@ def tick_params(config, settings, diagnostics_layout: dict[str, slice], max_resi
     r["diagnostics"] = [diagnostics_layout[name].start for name in DIAGNOSTICS_FIELDS]
     r["max_residuals"] = max_residuals
     return record
-
-
-@kernel
-def _all_finite(x: np.ndarray) -> bool:
-    for value in x:
-        if not math.isfinite(value):
-            return False
-    return True
-
-
-@kernel
-def _fail(tp, status, last_command, q, diag_in, out_command, out_diag) -> float:
-    write_held_command(last_command, q, tp.failure_kd, out_command)
-    d = tp.diagnostics
-    out_diag[:] = diag_in
-    out_diag[d[_STATUS]] = status
-    out_diag[d[_CONSECUTIVE]] += 1.0
-    out_diag[d[_TOTAL]] += 1.0
-    return status
 
 
 @kernel
@@ -190,7 +157,7 @@ def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
             x,
             residuals[:num_levels],
         )
-    if status == compiled_hqp.STATUS_OK and not _all_finite(x):
+    if status == compiled_hqp.STATUS_OK and not all_finite(x):
         status = compiled_hqp.STATUS_INFEASIBLE
     return status
 
@@ -230,52 +197,20 @@ def whole_body_tick(
     last_ramp, last_hold, last_diag = ramp.copy(), hold.copy(), diag.copy()
     nv, nc = p.nv, p.nc
     d = tp.diagnostics
-    reference[:] = last_reference
-    ramp[:] = last_ramp
-    hold[:] = last_hold
-    contact_set = np.empty(nc)
-    for i in range(nc):
-        contact_set[i] = min(max(contact_set_in[i], 0.0), 1.0)
-    if not (_all_finite(base) and _all_finite(q) and _all_finite(qd) and _all_finite(contact_set)):
-        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
-    if base[0] == 0.0 and base[1] == 0.0 and base[2] == 0.0 and base[3] == 0.0:
-        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
+    contact_set, new_ramp, new_hold = np.empty(nc), np.empty(nc), np.empty(8)
+    q_ref, qd_ref, body = np.empty(12), np.empty(12), np.empty(19)
+    good = read_inputs(
+        tp, base, q, qd, contact_set_in, body_in, has_body, leg_x, polygon_x, mu_x, trunk_wrench,
+        last_reference, last_ramp, last_hold, contact_set, new_ramp, new_hold, q_ref, qd_ref, body,
+    )  # fmt: skip
+    num_vertices = round(polygon_x[0]) if good else 0
+    zero_quaternion = base[0] == 0.0 and base[1] == 0.0 and base[2] == 0.0 and base[3] == 0.0
+    if not good or zero_quaternion or (num_vertices != 0 and not 3 <= num_vertices <= SAFETY_POLYGON_MAX_VERTICES):
+        return fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
     go1_dynamics(dynamics_model, base, q, qd, snapshot)
     add_trunk_external_wrench(s.h, s.J_trunk, trunk_wrench)
     if not p.com_bias:
         s.Jdot_v_com[:] = 0.0
-    new_hold = last_hold.copy()
-    new_ramp = last_ramp.copy()
-    q_ref = last_reference[:12].copy()
-    qd_ref = last_reference[12:].copy()
-    if new_hold[0] == 0.0:
-        # First tick: hold the current trunk pose, start the reference at the measurement and the
-        # contact ramps at the commanded contact set (the robot starts on its feet).
-        new_hold[0] = 1.0
-        new_hold[1:4] = base[4:7]
-        new_hold[4:8] = base[0:4]
-        q_ref[:] = q
-        qd_ref[:] = qd
-        new_ramp[:] = contact_set
-    step = tp.period / max(tp.contact_ramp_time, 1e-9)
-    for i in range(nc):
-        change = min(max(contact_set[i] - new_ramp[i], -step), step)
-        new_ramp[i] = min(max(new_ramp[i] + change, 0.0), 1.0)
-
-    body = np.zeros(19)
-    if has_body:
-        body[:] = body_in
-    else:
-        body[0:3] = new_hold[1:4]
-        body[3:7] = new_hold[4:8]
-    inputs_finite = _all_finite(body) and _all_finite(leg_x) and _all_finite(polygon_x) and _all_finite(mu_x)
-    if not (inputs_finite and _all_finite(trunk_wrench)):
-        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
-    if mu_x[0] <= 0.0:
-        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
-    num_vertices = round(polygon_x[0])
-    if num_vertices != 0 and not 3 <= num_vertices <= SAFETY_POLYGON_MAX_VERTICES:
-        return _fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, command, diag)
 
     no_motion = np.empty(nc, dtype=np.bool_)
     num_loaded = 0
@@ -344,44 +279,25 @@ def whole_body_tick(
         if num_levels == 0 or solved != compiled_hqp.STATUS_OK:
             ramp[:] = new_ramp
             hold[:] = new_hold
-            return _fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, command, diag)
+            return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, False, command, diag)
 
     tau = T @ x + t0
+    qdd = np.empty(12)
     for k in range(12):
-        qdd = x[p.v_joints[k]]
-        # Integrate the QP's accelerations into the joint reference, kept near the measurement so
-        # a long stall (e.g. contact with an obstacle) cannot wind up the PD.
-        rate = qd_ref[k] + qdd * tp.period
-        qd_ref[k] = min(max(rate, qd[k] - tp.max_reference_rate_deviation), qd[k] + tp.max_reference_rate_deviation)
-        angle = q_ref[k] + qd_ref[k] * tp.period
-        q_ref[k] = min(max(angle, q[k] - tp.max_reference_deviation), q[k] + tp.max_reference_deviation)
-        command[k] = q_ref[k]
-        command[12 + k] = qd_ref[k]
-        command[24 + k] = tp.joint_kp
-        command[36 + k] = tp.joint_kd
-        command[48 + k] = tau[k]
+        qdd[k] = x[p.v_joints[k]]
+    write_command(tp, qdd, q, qd, tau, q_ref, qd_ref, command)
 
-    diag[:] = last_diag
-    diag[d[_STATUS]] = status
-    diag[d[_CONSECUTIVE]] = 0.0
-    capture_point(s, ground, diag[d[_CP] : d[_CP] + 2])
-    for k in range(3):
-        diag[d[_TRUNK_P] + k] = body[k] - s.p_WB[k]
-    orientation_error_kernel(rotation_matrix_kernel(body[3:7]), s.R_WB, diag[d[_TRUNK_R] : d[_TRUNK_R] + 3])
+    write_diagnostics(tp, s, status, ground, body, tau, new_ramp, last_diag, diag)
     for i in range(4):
         error = 0.0
         if round(leg_x[12 * i]) == _FOOT_MODE:
             for k in range(3):
                 error += (leg_x[12 * i + 1 + k] - s.p_contacts[i, k]) ** 2
-        diag[d[_FEET] + i] = math.sqrt(error)
+        diag[d[FOOT_ERRORS] + i] = math.sqrt(error)
     for k in range(tp.max_residuals):
-        diag[d[_RESIDUALS] + k] = residuals[k] if k < num_levels else 0.0
+        diag[d[RESIDUALS] + k] = residuals[k] if k < num_levels else 0.0
     for j in range(3 * nc):
-        diag[d[_FORCES] + j] = x[nv + j]
-    for k in range(12):
-        diag[d[_TAU] + k] = tau[k]
-    for i in range(nc):
-        diag[d[_RAMP] + i] = new_ramp[i]
+        diag[d[FORCES] + j] = x[nv + j]
     reference[:12] = q_ref
     reference[12:] = qd_ref
     ramp[:] = new_ramp

@@ -6,7 +6,7 @@ one vector (layout below) and the warm start for the next update:
 
 1. the RFP rows of paper 003 (Eqs. 1-6, 8) at that configuration, standing still (qdd_d = 0,
    v = 0, as `suf.problem.build_problem`), from the compiled Go1 dynamics
-   (pedi_drake.control.go1_dynamics: gravity and the contact Jacobians, no Drake call);
+   (pedi_drake.dynamics.go1_dynamics: gravity and the contact Jacobians, no Drake call);
 2. the exact projection warm-started from the previous update's vertices
    (pedi_drake.suf.warm_projection), within a budget of `max_lps` LPs;
 3. the SUF in the requested direction: the exact polytope's extent along it, or, when the budget
@@ -47,7 +47,7 @@ import math
 import numpy as np
 
 from pedi_drake import robot
-from pedi_drake.control.go1_dynamics import Go1Dynamics, go1_dynamics
+from pedi_drake.dynamics.go1_dynamics import Go1Dynamics, go1_dynamics
 from pedi_drake.friction import friction_pyramid_rows
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.runtime.jit import kernel

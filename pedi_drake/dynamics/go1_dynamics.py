@@ -3,10 +3,14 @@
 `go1_dynamics(model, base_state, q_joints, v_joints, out)` is a `pedi_drake.runtime.jit.kernel`: from the
 state estimate and the measured joints it fills every term of a `RobotSnapshot` (mass matrix,
 bias, contact and trunk Jacobians with their bias accelerations, centre of mass, calf
-orientations) in the plant's own velocity order, far cheaper than the Drake calls of
-`ControllerModel`'s reference path (`python -m pedi_drake.benchmarks.dynamics` measures both). It is
-nopython-callable, so a compiled controller can call it inside its own kernel; `Go1Dynamics` is
-the Python owner of its arrays.
+orientations) in the plant's own velocity order. It is nopython-callable, so a compiled
+controller calls it inside its own kernel; `Go1Dynamics` is the Python owner of its arrays.
+
+Why this exists beside Drake's MultibodyPlant, which computes the same terms (the tests hold the
+two equal; `ControllerModel(compiled=False)` is the Drake path): one update by Drake's calls takes
+about fifty times as long as this kernel, and about twice as long as the whole compiled
+whole-body tick that calls it (medians measured in one run by `python -m
+pedi_drake.benchmarks.dynamics`), which would take the controller side's tick past its budget.
 
 Parameters come from the plant (`robot.make_go1_plant(robot.design_key(prongs))`) once, in
 `Go1Model.from_plant`, never from constants: a changed URDF or prong design flows through. The
@@ -59,7 +63,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import BodyIndex, JointActuatorIndex, JointIndex
 
 from pedi_drake import robot
-from pedi_drake.control.robot_snapshot import RobotSnapshot
+from pedi_drake.dynamics.robot_snapshot import RobotSnapshot
 from pedi_drake.exceptions import PediError
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.runtime.jit import kernel, new_record
