@@ -9,9 +9,9 @@ optimal set of levels 0..k-1 (the sequential scheme of Kanoun et al. 2011 / Esca
 * For least squares over a convex set the optimal value of (A_k x, w_k) is unique, so the optimal
   set of level k is {x feasible : A_k x = A_k x_k*, G_k,soft x <= h_k,soft + w_k*}.
 * Equalities are fixed by restricting x to the affine set x = x_k* + Z_k z, where Z_k is an
-  orthonormal basis of the null space of the stacked fixed equalities (a Householder QR of their
-  transpose, pivoted when the rows come near rank deficiency, so redundant rows cost nothing and
-  never make a QP degenerate).
+  orthonormal basis of the null space of the stacked fixed equalities (a QR of their transpose,
+  or an SVD when the rows come near rank deficiency, both by LAPACK: redundant rows cost nothing
+  and never make a QP degenerate).
 * Inequalities (hard ones and fixed soft ones) are carried down as constraints on z.
 * A level without inequalities, or whose least-squares step already meets them, is plain least
   squares; any other goes to DAQP (`daqp_kernel`) as a dense QP in (z, w), its Hessian

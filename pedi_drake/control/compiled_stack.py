@@ -196,6 +196,11 @@ def torque_map(p, s, T: np.ndarray, t0: np.ndarray) -> None:
         t0[r] = s.h[row]
 
 
+# ------------------------------------------------------------------------------------------------
+# Tasks: each writes its rows from a given row of the table's arrays and returns the next row.
+# Equalities go to (A, b), hard inequalities G x <= h to (G, h), soft ones to (G, h, w).
+
+
 @kernel
 def pd_rows(J, v, p_error, v_ref, a_ref, kp, kd, bias, A, b, row) -> int:
     """Writes the rows [J 0] x = a_ref + kp p_error + kd (v_ref - J v) - bias; returns the next row."""
@@ -211,12 +216,290 @@ def pd_rows(J, v, p_error, v_ref, a_ref, kp, kd, bias, A, b, row) -> int:
 
 
 @kernel
+def floating_base_dynamics_rows(p, s, A, b, row: int) -> int:
+    """The floating base's rows of the equations of motion, M_u vdot - J_c,u^T f = -h_u (6 rows):
+    the trunk moves only by the contact forces and gravity."""
+    nv, nc = p.nv, p.nc
+    for k in range(6):
+        u = p.unactuated[k]
+        A[row, :nv] = s.M[u]
+        for j in range(3 * nc):
+            A[row, nv + j] = -s.J_contacts[j, u]
+        b[row] = -s.h[u]
+        row += 1
+    return row
+
+
+@kernel
+def _contact_velocity_row(p, s, c: int, A, b, row: int) -> int:
+    """Row c of the contacts' Jacobian held still: J_c vdot = -Jdot_c v - kd J_c v (the damping kd
+    bleeds the estimate's drift off); returns the next row."""
+    velocity = 0.0
+    for j in range(p.nv):
+        velocity += s.J_contacts[c, j] * s.v[j]
+    A[row, :] = 0.0
+    A[row, : p.nv] = s.J_contacts[c]
+    b[row] = -s.Jdot_v_contacts[c] - p.contact_damping * velocity
+    return row + 1
+
+
+@kernel
+def contact_no_motion_rows(p, s, no_motion, sliding, A, b, row: int) -> int:
+    """The held contacts (no_motion) stay still along the world's three axes; a sliding one only
+    along the vertical (3 rows a held contact, 1 a sliding one)."""
+    for i in range(p.nc):
+        if no_motion[i]:
+            for axis in range(2 if sliding[i] else 0, 3):
+                row = _contact_velocity_row(p, s, 3 * i + axis, A, b, row)
+    return row
+
+
+@kernel
+def sliding_contact_rows(p, s, sliding, A, b, row: int) -> int:
+    """The sliding contacts' horizontal no-motion (2 rows each): the fallback's level of its own."""
+    for i in range(p.nc):
+        if sliding[i]:
+            for axis in range(2):
+                row = _contact_velocity_row(p, s, 3 * i + axis, A, b, row)
+    return row
+
+
+@kernel
+def contact_force_limit_rows(p, ramp, friction: float, G, h, hard: int) -> int:
+    """Per contact (6 rows): the normal force between f_min and f_max, both scaled by the contact's
+    ramp (so a contact coming or going has its force bounded to zero), and the four faces of the
+    friction pyramid (inscribed in the cone of `friction` when p.inscribed)."""
+    slope = pyramid_slope(friction, p.inscribed)
+    for i in range(p.nc):
+        for r in range(6):
+            G[hard + r, :] = 0.0
+        f = p.nv + 3 * i
+        G[hard, f + 2] = -1.0
+        G[hard + 1, f + 2] = 1.0
+        write_pyramid_faces(G, hard + 2, f, slope)
+        h[hard] = -p.f_min * ramp[i]
+        h[hard + 1] = p.f_max * ramp[i]
+        for r in range(2, 6):
+            h[hard + r] = 0.0
+        hard += 6
+    return hard
+
+
+@kernel
+def torque_limit_rows(p, T, t0, G, h, hard: int) -> int:
+    """|tau| <= the QP's effort limit per joint (24 rows), tau = T x + t0."""
+    for r in range(12):
+        G[hard + r] = T[r]
+        G[hard + 12 + r] = -T[r]
+        h[hard + r] = p.effort_limit[r] - t0[r]
+        h[hard + 12 + r] = p.effort_limit[r] + t0[r]
+    return hard + 24
+
+
+@kernel
+def joint_limit_rows(p, s, G, h, hard: int) -> int:
+    """Joint accelerations that keep each joint within its position limits (less the margin) over
+    the horizon and within its velocity limit (24 rows); a joint already beyond both gets the
+    midpoint of the two bounds, so the rows stay feasible."""
+    horizon = p.joint_limit_horizon
+    for r in range(12):
+        q, qd = s.q_joints[r], s.v_joints[r]
+        reach = q + qd * horizon
+        upper = min((2.0 / horizon**2) * (p.q_upper[r] - p.joint_limit_margin - reach), (p.v_max[r] - qd) / horizon)
+        minus_lower = min(
+            (2.0 / horizon**2) * (reach - p.q_lower[r] - p.joint_limit_margin), (p.v_max[r] + qd) / horizon
+        )
+        if upper + minus_lower < 0.0:
+            mid = 0.5 * (upper - minus_lower)
+            upper, minus_lower = mid, -mid
+        G[hard + r, :] = 0.0
+        G[hard + 12 + r, :] = 0.0
+        G[hard + r, p.v_joints[r]] = 1.0
+        G[hard + 12 + r, p.v_joints[r]] = -1.0
+        h[hard + r] = upper
+        h[hard + 12 + r] = minus_lower
+    return hard + 24
+
+
+@kernel
+def capture_point_rows(p, s, ground_height: float, polygon_N, polygon_d, G, h, w, soft: int) -> int:
+    """The capture point predicted over the balance horizon inside the safety polygon's half-planes
+    N xi <= d (one soft row each, weight 1)."""
+    nv = p.nv
+    xi = np.empty(2)
+    omega = capture_point(s, ground_height, xi)
+    horizon = p.balance_horizon
+    for k in range(polygon_d.shape[0]):
+        n0, n1 = polygon_N[k, 0], polygon_N[k, 1]
+        G[soft, :] = 0.0
+        for j in range(nv):
+            G[soft, j] = (horizon / omega) * (n0 * s.J_com[0, j] + n1 * s.J_com[1, j])
+        predicted0 = xi[0] + horizon * s.v_com[0] + (horizon / omega) * s.Jdot_v_com[0]
+        predicted1 = xi[1] + horizon * s.v_com[1] + (horizon / omega) * s.Jdot_v_com[1]
+        h[soft] = polygon_d[k] - (n0 * predicted0 + n1 * predicted1)
+        w[soft] = 1.0
+        soft += 1
+    return soft
+
+
+@kernel
+def trunk_orientation_rows(p, s, body, A, b, row: int) -> int:
+    """The trunk's attitude to the body reference's, Eq. 1 (3 rows)."""
+    error = np.empty(3)
+    orientation_error_kernel(rotation_matrix_kernel(body[3:7]), s.R_WB, error)
+    kp, kd = p.trunk_orientation_gains[0], p.trunk_orientation_gains[1]
+    return pd_rows(s.J_trunk[:3], s.v, error, body[13:16], body[16:19], kp, kd, s.Jdot_v_trunk[:3], A, b, row)
+
+
+@kernel
+def trunk_position_rows(p, s, body, A, b, row: int) -> int:
+    """The trunk origin to the body reference's position, Eq. 1 (3 rows)."""
+    error = np.empty(3)
+    for i in range(3):
+        error[i] = body[i] - s.p_WB[i]
+    kp, kd = p.trunk_position_gains[0], p.trunk_position_gains[1]
+    return pd_rows(s.J_trunk[3:], s.v, error, body[7:10], body[10:13], kp, kd, s.Jdot_v_trunk[3:], A, b, row)
+
+
+@kernel
+def foot_rows(p, s, leg: int, block, A, b, row: int) -> int:
+    """A pedipulating foot to its world reference, Eq. 1 (3 rows), with the leg reference's own
+    gains when it carries them (kp > 0) and its acceleration feed-forward in the position mode."""
+    kp, kd = p.foot_gains[0], p.foot_gains[1]
+    if block[10] > 0.0 and block[11] >= 0.0:
+        kp, kd = block[10], block[11]
+    error = np.empty(3)
+    for k in range(3):
+        error[k] = block[1 + k] - s.p_contacts[leg, k]
+    a_ref = block[7:10] if round(block[0]) == _FOOT else np.zeros(3)
+    J, bias = s.J_contacts[3 * leg : 3 * leg + 3], s.Jdot_v_contacts[3 * leg : 3 * leg + 3]
+    return pd_rows(J, s.v, error, block[4:7], a_ref, kp, kd, bias, A, b, row)
+
+
+@kernel
+def calf_rows(p, s, leg: int, block, axes: int, A, b, row: int) -> int:
+    """The calf's attitude to the reference's (an axis-angle in block[7:10]): its roll and pitch
+    (axes 2, the 5-D foot pose) or all three axes (3, the 6-D shank pose), Eq. 1."""
+    error = np.empty(3)
+    orientation_error_kernel(axis_angle_kernel(block[7:10]), s.R_WC[leg], error)
+    kp, kd = p.calf_gains[0], p.calf_gains[1]
+    for k in range(axes):
+        rate = 0.0
+        for j in range(p.nv):
+            rate += s.J_w_calf[leg, k, j] * s.v[j]
+        A[row, :] = 0.0
+        A[row, : p.nv] = s.J_w_calf[leg, k]
+        b[row] = kp * error[k] - kd * rate - s.Jdot_w_calf[leg, k]
+        row += 1
+    return row
+
+
+@kernel
+def leg_joint_rows(p, s, leg: int, block, A, b, row: int) -> int:
+    """A lifted leg's joints to the reference's (joint mode) or to the nominal posture (a swing leg
+    without a reference), Eq. 1 on each joint (3 rows)."""
+    kp, kd = p.leg_joint_gains[0], p.leg_joint_gains[1]
+    joints_mode = round(block[0]) == _JOINTS
+    for k in range(3):
+        joint = 3 * leg + k
+        if joints_mode:
+            q_ref, qd_ref, qdd_ref = block[1 + k], block[4 + k], block[7 + k]
+        else:
+            q_ref, qd_ref, qdd_ref = p.nominal_q[joint], 0.0, 0.0
+        A[row, :] = 0.0
+        A[row, p.v_joints[joint]] = 1.0
+        b[row] = qdd_ref + kp * (q_ref - s.q_joints[joint]) + kd * (qd_ref - s.v_joints[joint])
+        row += 1
+    return row
+
+
+@kernel
+def leg_rows(p, s, legs, no_motion, A, b, row: int) -> int:
+    """Every leg's task by its reference's mode: a pedipulating foot (position, the 5-D pose or the
+    6-D shank pose), joint references, or the nominal posture for a swing leg without a reference."""
+    for i in range(4):
+        block = legs[12 * i : 12 * i + 12]
+        mode = round(block[0])
+        if mode == _FOOT or mode == _FOOT_POSE or mode == _SHANK_POSE:
+            row = foot_rows(p, s, i, block, A, b, row)
+            if mode == _FOOT_POSE or mode == _SHANK_POSE:
+                row = calf_rows(p, s, i, block, 3 if mode == _SHANK_POSE else 2, A, b, row)
+        elif mode == _JOINTS or not no_motion[i]:
+            row = leg_joint_rows(p, s, i, block, A, b, row)
+    return row
+
+
+@kernel
+def posture_rows(p, s, A, b, row: int) -> int:
+    """The joints towards the nominal posture, Eq. 1, weighted by p.posture_weight (12 rows)."""
+    scale = math.sqrt(p.posture_weight)
+    kp, kd = p.posture_gains[0], p.posture_gains[1]
+    for joint in range(12):
+        A[row, :] = 0.0
+        A[row, p.v_joints[joint]] = scale
+        target = kp * (p.nominal_q[joint] - s.q_joints[joint]) + kd * (0.0 - s.v_joints[joint])
+        b[row] = target * scale
+        row += 1
+    return row
+
+
+@kernel
+def contact_force_share_rows(p, ramp, A, b, row: int) -> int:
+    """The contact forces towards an even share of the weight by ramp, vertical, weighted by
+    p.force_regularization_weight (3 rows a contact)."""
+    scale = math.sqrt(p.force_regularization_weight)
+    total_ramp = 0.0
+    for i in range(p.nc):
+        total_ramp += ramp[i]
+    share = p.total_weight / max(total_ramp, 1e-6)
+    for j in range(3 * p.nc):
+        A[row, :] = 0.0
+        A[row, p.nv + j] = scale
+        b[row] = (ramp[j // 3] * share if j % 3 == 2 else 0.0) * scale
+        row += 1
+    return row
+
+
+@kernel
+def torque_rows(p, T, t0, A, b, row: int) -> int:
+    """The torques towards zero, weighted by p.torque_weight (12 rows), tau = T x + t0."""
+    scale = math.sqrt(p.torque_weight)
+    for r in range(12):
+        for j in range(T.shape[1]):
+            A[row, j] = T[r, j] * scale
+        b[row] = -t0[r] * scale
+        row += 1
+    return row
+
+
+@kernel
 def _close_level(table, level: int, row: int, hard: int, soft: int) -> int:
     """Ends level `level` at the given row counts; returns the next level's index."""
     table.eq_start[level + 1] = row
     table.hard_start[level + 1] = hard
     table.soft_start[level + 1] = soft
     return level + 1
+
+
+@kernel
+def sliding_contacts(p, s, no_motion, sliding) -> bool:
+    """Marks in `sliding` the held contacts whose horizontal speed exceeds SLIDING_SPEED; whether any."""
+    any_sliding = False
+    for i in range(p.nc):
+        sliding[i] = False
+        if no_motion[i]:
+            vx, vy = 0.0, 0.0
+            for j in range(p.nv):
+                vx += s.J_contacts[3 * i, j] * s.v[j]
+                vy += s.J_contacts[3 * i + 1, j] * s.v[j]
+            if math.hypot(vx, vy) > SLIDING_SPEED:
+                sliding[i] = True
+                any_sliding = True
+    return any_sliding
+
+
+# ------------------------------------------------------------------------------------------------
+# The stacks.
 
 
 @kernel
@@ -236,216 +519,51 @@ def build_levels(
     t0: np.ndarray,
     table,
 ) -> int:
-    """Writes the stack's levels into `table` (StackBuilder.levels); returns the number of levels,
-    0 when `relax_contacts` finds no sliding contact (the fallback does not apply).
+    """Writes the stack's levels into `table`; returns the number of levels, 0 when
+    `relax_contacts` finds no sliding contact (the fallback does not apply).
 
     body (19): the body reference vector; legs (48): the leg reference vector; ramp, no_motion
     (nc,); polygon_N (k, 2), polygon_d (k,): the safety polygon's half-planes; T, t0: torque_map.
+    With `relax_contacts`, the tangential no-motion rows of the sliding contacts leave the physics
+    level for a level of their own just below the limits, so that friction can brake them.
     """
-    nv, nc = p.nv, p.nc
-    eq_A, eq_b, eq_start = table.eq_A, table.eq_b, table.eq_start
-    hard_G, hard_h, hard_start = table.hard_G, table.hard_h, table.hard_start
-    soft_G, soft_h, soft_w, soft_start = table.soft_G, table.soft_h, table.soft_w, table.soft_start
+    A, b = table.eq_A, table.eq_b
+    G, h = table.hard_G, table.hard_h
+    Gs, hs, ws = table.soft_G, table.soft_h, table.soft_w
+    sliding = np.zeros(p.nc, dtype=np.bool_)
+    if relax_contacts and not sliding_contacts(p, s, no_motion, sliding):
+        return 0
+    table.eq_start[0] = table.hard_start[0] = table.soft_start[0] = 0
+    level, row, hard, soft = 0, 0, 0, 0
 
-    # Sliding contacts of the relaxed fallback (StackBuilder.sliding_contacts).
-    sliding = np.zeros(nc, dtype=np.bool_)
-    if relax_contacts:
-        any_sliding = False
-        for i in range(nc):
-            if no_motion[i]:
-                vx, vy = 0.0, 0.0
-                for j in range(nv):
-                    vx += s.J_contacts[3 * i, j] * s.v[j]
-                    vy += s.J_contacts[3 * i + 1, j] * s.v[j]
-                if math.hypot(vx, vy) > SLIDING_SPEED:
-                    sliding[i] = True
-                    any_sliding = True
-        if not any_sliding:
-            return 0
-
-    level = 0
-    row = 0
-    # Physics: the floating base's dynamics rows, then the held contacts' no-motion rows.
-    for k in range(6):
-        u = p.unactuated[k]
-        eq_A[row, :nv] = s.M[u]
-        for j in range(3 * nc):
-            eq_A[row, nv + j] = -s.J_contacts[j, u]
-        eq_b[row] = -s.h[u]
-        row += 1
-    zero3 = np.zeros(3)
-    for i in range(nc):
-        if not no_motion[i]:
-            continue
-        for axis in range(3):
-            if sliding[i] and axis < 2:
-                continue
-            c = 3 * i + axis
-            velocity = 0.0
-            for j in range(nv):
-                velocity += s.J_contacts[c, j] * s.v[j]
-            eq_A[row, :] = 0.0
-            eq_A[row, :nv] = s.J_contacts[c]
-            eq_b[row] = -s.Jdot_v_contacts[c] - p.contact_damping * velocity
-            row += 1
-    hard = 0
-    soft = 0
-    eq_start[0] = hard_start[0] = soft_start[0] = 0
+    # Physics: the floating base's dynamics, the held contacts' no-motion (a sliding one's normal only).
+    row = floating_base_dynamics_rows(p, s, A, b, row)
+    row = contact_no_motion_rows(p, s, no_motion, sliding, A, b, row)
     level = _close_level(table, level, row, hard, soft)
 
-    # Feasibility: force limits and friction, torque limits, joint limits (hard); capture point (soft).
-    slope = pyramid_slope(friction, p.inscribed)
-    for i in range(nc):
-        for r in range(6):
-            hard_G[hard + r, :] = 0.0
-        f = nv + 3 * i
-        hard_G[hard, f + 2] = -1.0
-        hard_G[hard + 1, f + 2] = 1.0
-        write_pyramid_faces(hard_G, hard + 2, f, slope)
-        hard_h[hard] = -p.f_min * ramp[i]
-        hard_h[hard + 1] = p.f_max * ramp[i]
-        for r in range(2, 6):
-            hard_h[hard + r] = 0.0
-        hard += 6
-    for r in range(12):
-        hard_G[hard + r] = T[r]
-        hard_G[hard + 12 + r] = -T[r]
-        hard_h[hard + r] = p.effort_limit[r] - t0[r]
-        hard_h[hard + 12 + r] = p.effort_limit[r] + t0[r]
-    hard += 24
-    horizon = p.joint_limit_horizon
-    for r in range(12):
-        q, qd = s.q_joints[r], s.v_joints[r]
-        reach = q + qd * horizon
-        upper = min((2.0 / horizon**2) * (p.q_upper[r] - p.joint_limit_margin - reach), (p.v_max[r] - qd) / horizon)
-        minus_lower = min(
-            (2.0 / horizon**2) * (reach - p.q_lower[r] - p.joint_limit_margin), (p.v_max[r] + qd) / horizon
-        )
-        if upper + minus_lower < 0.0:
-            mid = 0.5 * (upper - minus_lower)
-            upper, minus_lower = mid, -mid
-        hard_G[hard + r, :] = 0.0
-        hard_G[hard + 12 + r, :] = 0.0
-        hard_G[hard + r, p.v_joints[r]] = 1.0
-        hard_G[hard + 12 + r, p.v_joints[r]] = -1.0
-        hard_h[hard + r] = upper
-        hard_h[hard + 12 + r] = minus_lower
-    hard += 24
+    # Feasibility: force limits and friction, torque and joint limits (hard); capture point (soft).
+    hard = contact_force_limit_rows(p, ramp, friction, G, h, hard)
+    hard = torque_limit_rows(p, T, t0, G, h, hard)
+    hard = joint_limit_rows(p, s, G, h, hard)
     if p.balance:
-        xi = np.empty(2)
-        omega = capture_point(s, ground_height, xi)
-        horizon = p.balance_horizon
-        for k in range(polygon_d.shape[0]):
-            n0, n1 = polygon_N[k, 0], polygon_N[k, 1]
-            soft_G[soft, :] = 0.0
-            for j in range(nv):
-                soft_G[soft, j] = (horizon / omega) * (n0 * s.J_com[0, j] + n1 * s.J_com[1, j])
-            predicted0 = xi[0] + horizon * s.v_com[0] + (horizon / omega) * s.Jdot_v_com[0]
-            predicted1 = xi[1] + horizon * s.v_com[1] + (horizon / omega) * s.Jdot_v_com[1]
-            soft_h[soft] = polygon_d[k] - (n0 * predicted0 + n1 * predicted1)
-            soft_w[soft] = 1.0
-            soft += 1
+        soft = capture_point_rows(p, s, ground_height, polygon_N, polygon_d, Gs, hs, ws, soft)
     level = _close_level(table, level, row, hard, soft)
-
     if relax_contacts:
-        # The sliding contacts' tangential rows, just below the limits.
-        for i in range(nc):
-            if not sliding[i]:
-                continue
-            for axis in range(2):
-                c = 3 * i + axis
-                velocity = 0.0
-                for j in range(nv):
-                    velocity += s.J_contacts[c, j] * s.v[j]
-                eq_A[row, :] = 0.0
-                eq_A[row, :nv] = s.J_contacts[c]
-                eq_b[row] = -s.Jdot_v_contacts[c] - p.contact_damping * velocity
-                row += 1
+        row = sliding_contact_rows(p, s, sliding, A, b, row)
         level = _close_level(table, level, row, hard, soft)
 
-    # Trunk orientation and position (paper003: a level each; paper000: with the legs in "pose").
-    error = np.empty(3)
-    R_ref = rotation_matrix_kernel(body[3:7])
-    orientation_error_kernel(R_ref, s.R_WB, error)
-    kp, kd = p.trunk_orientation_gains[0], p.trunk_orientation_gains[1]
-    row = pd_rows(s.J_trunk[:3], s.v, error, body[13:16], body[16:19], kp, kd, s.Jdot_v_trunk[:3], eq_A, eq_b, row)
+    # Pose (paper003: the trunk's attitude, then its position, each a level; paper000: one level).
+    row = trunk_orientation_rows(p, s, body, A, b, row)
     if p.stack == STACK_PAPER003:
         level = _close_level(table, level, row, hard, soft)
-    for i in range(3):
-        error[i] = body[i] - s.p_WB[i]
-    kp, kd = p.trunk_position_gains[0], p.trunk_position_gains[1]
-    row = pd_rows(s.J_trunk[3:], s.v, error, body[7:10], body[10:13], kp, kd, s.Jdot_v_trunk[3:], eq_A, eq_b, row)
+    row = trunk_position_rows(p, s, body, A, b, row)
     if p.stack == STACK_PAPER003:
         level = _close_level(table, level, row, hard, soft)
-
-    # Legs: pedipulation feet (position, the 5-D pose or the 6-D shank pose), joint references, idle
-    # swing legs.
-    for i in range(4):
-        block = legs[12 * i : 12 * i + 12]
-        mode = round(block[0])
-        ref_kp, ref_kd = block[10], block[11]
-        if mode == _FOOT or mode == _FOOT_POSE or mode == _SHANK_POSE:
-            kp, kd = p.foot_gains[0], p.foot_gains[1]
-            if ref_kp > 0.0 and ref_kd >= 0.0:
-                kp, kd = ref_kp, ref_kd
-            for k in range(3):
-                error[k] = block[1 + k] - s.p_contacts[i, k]
-            a_ref = block[7:10] if mode == _FOOT else zero3
-            J = s.J_contacts[3 * i : 3 * i + 3]
-            row = pd_rows(
-                J, s.v, error, block[4:7], a_ref, kp, kd, s.Jdot_v_contacts[3 * i : 3 * i + 3], eq_A, eq_b, row
-            )
-            if mode == _FOOT_POSE or mode == _SHANK_POSE:
-                calf_error = np.empty(3)
-                orientation_error_kernel(axis_angle_kernel(block[7:10]), s.R_WC[i], calf_error)
-                kp, kd = p.calf_gains[0], p.calf_gains[1]
-                # Roll and pitch (the 5-D task), or all three axes (the 6-D shank task).
-                axes = 3 if mode == _SHANK_POSE else 2
-                for k in range(axes):
-                    rate = 0.0
-                    for j in range(nv):
-                        rate += s.J_w_calf[i, k, j] * s.v[j]
-                    eq_A[row, :] = 0.0
-                    eq_A[row, :nv] = s.J_w_calf[i, k]
-                    eq_b[row] = kp * calf_error[k] - kd * rate - s.Jdot_w_calf[i, k]
-                    row += 1
-        elif mode == _JOINTS or not no_motion[i]:
-            kp, kd = p.leg_joint_gains[0], p.leg_joint_gains[1]
-            for k in range(3):
-                joint = 3 * i + k
-                if mode == _JOINTS:
-                    q_ref, qd_ref, qdd_ref = block[1 + k], block[4 + k], block[7 + k]
-                else:
-                    q_ref, qd_ref, qdd_ref = p.nominal_q[joint], 0.0, 0.0
-                eq_A[row, :] = 0.0
-                eq_A[row, p.v_joints[joint]] = 1.0
-                eq_b[row] = qdd_ref + kp * (q_ref - s.q_joints[joint]) + kd * (qd_ref - s.v_joints[joint])
-                row += 1
+    row = leg_rows(p, s, legs, no_motion, A, b, row)
     level = _close_level(table, level, row, hard, soft)
 
     # Regularisation: posture, contact forces towards an even share of the weight, torques.
-    scale = math.sqrt(p.posture_weight)
-    kp, kd = p.posture_gains[0], p.posture_gains[1]
-    for joint in range(12):
-        eq_A[row, :] = 0.0
-        eq_A[row, p.v_joints[joint]] = scale
-        target = 0.0 + kp * (p.nominal_q[joint] - s.q_joints[joint]) + kd * (0.0 - s.v_joints[joint])
-        eq_b[row] = target * scale
-        row += 1
-    scale = math.sqrt(p.force_regularization_weight)
-    total_ramp = 0.0
-    for i in range(nc):
-        total_ramp += ramp[i]
-    share = p.total_weight / max(total_ramp, 1e-6)
-    for j in range(3 * nc):
-        eq_A[row, :] = 0.0
-        eq_A[row, nv + j] = scale
-        eq_b[row] = (ramp[j // 3] * share if j % 3 == 2 else 0.0) * scale
-        row += 1
-    scale = math.sqrt(p.torque_weight)
-    for r in range(12):
-        for j in range(T.shape[1]):
-            eq_A[row, j] = T[r, j] * scale
-        eq_b[row] = -t0[r] * scale
-        row += 1
+    row = posture_rows(p, s, A, b, row)
+    row = contact_force_share_rows(p, ramp, A, b, row)
+    row = torque_rows(p, T, t0, A, b, row)
     return _close_level(table, level, row, hard, soft)
