@@ -31,12 +31,12 @@ from pedi_drake.exceptions import ProngDesignError, ScenarioError
 from pedi_drake.go1_driver.config import Go1DriverConfig
 from pedi_drake.go1_driver.constants import DEFAULT_GO1_LCM_URL, GO1_BUS_NAME
 from pedi_drake.go1_driver.pacing import wait_problem
+from pedi_drake.model_error_config import ModelErrorConfig
 from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.operator.config import OperatorConfig
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.resources import models_dir, scenarios_dir
 from pedi_drake.runtime.realtime_priority import priority_problem
-from pedi_drake.station.model_error import ModelErrorConfig
 from pedi_drake.suf.live_config import LiveSufConfig
 
 SCENE_OBJECT_KINDS = (

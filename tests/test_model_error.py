@@ -13,13 +13,9 @@ from pydrake.systems.analysis import Simulator
 from pedi_drake import robot
 from pedi_drake.exceptions import ScenarioError
 from pedi_drake.go1_command import pack_command
+from pedi_drake.model_error_config import ModelErrorConfig
 from pedi_drake.scenario import Scenario, load_scenario
-from pedi_drake.station.model_error import (
-    FRICTION_VELOCITY_BAND,
-    PAYLOAD_BODY_NAME,
-    ModelErrorConfig,
-    joint_loss_torque,
-)
+from pedi_drake.station.model_error import FRICTION_VELOCITY_BAND, PAYLOAD_BODY_NAME, joint_loss_torque
 from pedi_drake.station.motor_model import Go1MotorModel, motor_torque
 from pedi_drake.station_interface import MakeStation
 

@@ -46,6 +46,7 @@ import math
 import numpy as np
 
 from pedi_drake.control import daqp_kernel
+from pedi_drake.control.lapack_kernel import qr_of_transpose
 from pedi_drake.runtime.jit import kernel
 
 STATUS_OK, STATUS_INFEASIBLE, STATUS_NUMERICAL = 0, 1, 2
@@ -92,40 +93,49 @@ class RowTable:
 # Row space and null space of a level's rows (reference_hqp._row_space_split).
 
 
-# How a level's rows were split: full row rank by a QR of their transpose (A = R^T Y^T), or by an
-# SVD (rank-deficient rows, or more rows than columns).
-SPLIT_FULL_RANK, SPLIT_SVD = 0, 1
+# How a level's rows were split: full row rank by a QR of their transpose (A = R^T Q1^T),
+# rank-deficient by the QR with column pivoting (A^T P = Q R, the rank in R's diagonal), or by an
+# SVD (more rows than columns).
+SPLIT_FULL_RANK, SPLIT_PIVOTED, SPLIT_SVD = 0, 1, 2
 
 
 @kernel
 def _row_space_split(A: np.ndarray, tolerance: float):
-    """(rank r, kind, Y (n, r), N (n, n - r), R, U, sigma) of A (m, n): orthonormal bases of its row
-    space Y and null space N, by LAPACK (numba's np.linalg).
+    """(rank r, kind, Y (n, r), N (n, n - r), R, order, U, sigma) of A (m, n): orthonormal bases of
+    its row space Y and null space N, by LAPACK (`lapack_kernel`, numba's np.linalg).
 
-    A Householder QR of A^T first (dgeqrf, then the whole of Q: the square [A^T 0] has the complete
-    Q, its first m columns span the rows); full rank is taken only when the triangular factor's
-    diagonal stays the square root of the tolerance away from rank deficiency: a QR's diagonal
-    bounds the smallest singular value only from above (a stance's redundant contact rows can leave
-    1e-8 there over a singular value of 1e-17). Anything closer, or more rows than columns, goes
-    to an SVD, which decides the rank (singular values above tolerance * max(1, largest)). R is
-    the triangular factor (m, m) of a full-rank split; U and sigma the SVD's (else empty)."""
+    A QR of A^T first; full rank is taken only when the triangular factor's diagonal stays the
+    square root of the tolerance away from rank deficiency: a QR's diagonal bounds the smallest
+    singular value only from above (a stance's redundant contact rows can leave 1e-8 there over a
+    singular value of 1e-17). Anything closer goes to the QR with column pivoting, whose diagonal
+    reveals the rank (entries above tolerance * max(1, the largest)), as an SVD would (the oracle
+    takes an SVD there: the two agree on the rank when A's singular values are clearly above or
+    below the tolerance, as the stack's are). More rows than columns: an SVD. R (m, m) and order
+    (m,) are the QR's triangular factor and row order; U and sigma the SVD's (else empty)."""
     m, n = A.shape
     empty = np.zeros((0, 0))
+    no_order = np.zeros(0, dtype=np.int64)
     if m == 0:
-        return 0, SPLIT_FULL_RANK, np.zeros((n, 0)), np.eye(n), empty, empty, np.zeros(0)
+        return 0, SPLIT_FULL_RANK, np.zeros((n, 0)), np.eye(n), empty, no_order, empty, np.zeros(0)
     if m <= n:
-        square = np.zeros((n, n))
-        square[:, :m] = A.T
-        Q, R_square = np.linalg.qr(square)
+        rows = np.ascontiguousarray(A)
+        ok, Q, R, order = qr_of_transpose(rows, False)
         largest, smallest = 0.0, np.inf
         for i in range(m):
-            d = abs(R_square[i, i])
+            d = abs(R[i, i])
             largest = max(largest, d)
             smallest = min(smallest, d)
-        if smallest > math.sqrt(tolerance) * max(1.0, largest):
-            Y = np.ascontiguousarray(Q[:, :m])
-            N = np.ascontiguousarray(Q[:, m:])
-            return m, SPLIT_FULL_RANK, Y, N, np.ascontiguousarray(R_square[:m, :m]), empty, np.zeros(0)
+        if ok and smallest > math.sqrt(tolerance) * max(1.0, largest):
+            Y, N = np.ascontiguousarray(Q[:, :m]), np.ascontiguousarray(Q[:, m:])
+            return m, SPLIT_FULL_RANK, Y, N, R, order, empty, np.zeros(0)
+        ok, Q, R, order = qr_of_transpose(rows, True)
+        if ok:
+            top = abs(R[0, 0])
+            rank = 0
+            while rank < m and abs(R[rank, rank]) > tolerance * max(1.0, top):
+                rank += 1
+            Y, N = np.ascontiguousarray(Q[:, :rank]), np.ascontiguousarray(Q[:, rank:])
+            return rank, SPLIT_PIVOTED, Y, N, R, order, empty, np.zeros(0)
     U, sigma, Vt = np.linalg.svd(A)
     top = sigma[0] if len(sigma) else 0.0
     rank = 0
@@ -134,11 +144,11 @@ def _row_space_split(A: np.ndarray, tolerance: float):
             rank += 1
     Y = np.ascontiguousarray(Vt[:rank].T)
     N = np.ascontiguousarray(Vt[rank:].T)
-    return rank, SPLIT_SVD, Y, N, empty, U, sigma
+    return rank, SPLIT_SVD, Y, N, empty, no_order, U, sigma
 
 
 @kernel
-def _min_norm_least_squares(r, rank, kind, Y, R, U, sigma, z) -> None:
+def _min_norm_least_squares(r, rank, kind, Y, R, order, U, sigma, z) -> None:
     """argmin ||z|| among the minimisers of ||A z - r|| (reference_hqp._min_norm_least_squares),
     from the `_row_space_split` of A."""
     if rank == 0:
@@ -155,6 +165,17 @@ def _min_norm_least_squares(r, rank, kind, Y, R, U, sigma, z) -> None:
             for k in range(i):
                 value -= R[k, i] * w[k]
             w[i] = value / R[i, i]
+        z[:] = np.dot(Y, w)
+        return
+    if kind == SPLIT_PIVOTED:
+        # A = P [R1^T 0] Q^T with R1 = R[:rank] (rank, m) in pivoted row order, so the minimiser
+        # of least norm is z = Y w, w the least-squares solution of R1^T w = P^T r: by its normal
+        # equations R1 R1^T w = R1 P^T r (R1's leading block is well conditioned).
+        R1 = np.ascontiguousarray(R[:rank])
+        permuted = np.empty(R.shape[0])
+        for k in range(R.shape[0]):
+            permuted[k] = r[order[k]]
+        w = np.linalg.solve(np.dot(R1, R1.T), np.dot(R1, permuted))
         z[:] = np.dot(Y, w)
         return
     # A = U diag(sigma) V^T: z = V_r diag(1 / sigma_r) U_r^T r.
@@ -310,9 +331,9 @@ def solve_strict(
         z = np.zeros(nz)
         if mh == 0 and ms == 0:
             if m:
-                rank, kind, Y, N, R, U, sigma = _row_space_split(Az, rank_tolerance)
+                rank, kind, Y, N, R, order, U, sigma = _row_space_split(Az, rank_tolerance)
                 have_split = True
-                _min_norm_least_squares(rz, rank, kind, Y, R, U, sigma, z)
+                _min_norm_least_squares(rz, rank, kind, Y, R, order, U, sigma, z)
             solved = True
         else:
             if gz_rows < mh:
@@ -332,9 +353,9 @@ def solve_strict(
             solved = True
             if m and nz:
                 if m <= nz:
-                    rank, kind, Y, N, R, U, sigma = _row_space_split(Az, rank_tolerance)
+                    rank, kind, Y, N, R, order, U, sigma = _row_space_split(Az, rank_tolerance)
                     have_split = True
-                    _min_norm_least_squares(rz, rank, kind, Y, R, U, sigma, z)
+                    _min_norm_least_squares(rz, rank, kind, Y, R, order, U, sigma, z)
                 else:
                     solved = _normal_equations_step(Az, rz, rank_tolerance, z)
             if solved:
@@ -375,7 +396,7 @@ def solve_strict(
                 mh += 1
         if m and nz and level + 1 < num_levels:
             if not have_split:
-                rank, _, _, N, _, _, _ = _row_space_split(Az, rank_tolerance)
+                rank, _, _, N, _, _, _, _ = _row_space_split(Az, rank_tolerance)
             kept = nz - rank
             if identity:
                 Z[:, :kept] = N[:n, :kept]

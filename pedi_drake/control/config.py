@@ -19,7 +19,26 @@ class PdGainsConfig:
 
 
 @dataclasses.dataclass
-class WholeBodyControllerConfig:
+class ContactsConfig:
+    """The contact settings both whole-body controllers share (their fields, at the top level of
+    `whole_body:` and `projected_impedance:`)."""
+
+    # Friction coefficient used when the `friction` input is not connected [-].
+    friction: float = 0.6
+    # Use the friction pyramid inscribed in the cone (mu / sqrt 2), conservative [-].
+    friction_pyramid_inscribed: bool = True
+    # Minimum normal force of a fully active contact [N].
+    min_normal_force: float = 5.0
+    # Maximum normal force of a fully active contact [N].
+    max_normal_force: float = 250.0
+    # Time over which a contact's force bounds ramp in (touch-down) or out (lift-off) [s].
+    contact_ramp_time: float = 0.3
+    # Velocity damping of the held contacts' no-motion (their constraint) [1/s].
+    contact_damping: float = 10.0
+
+
+@dataclasses.dataclass
+class WholeBodyControllerConfig(ContactsConfig):
     """Whole-body QP controller settings."""
 
     # Control period [s] (500 Hz default; 1 kHz must also work).
@@ -33,19 +52,6 @@ class WholeBodyControllerConfig:
     level_weights: list[float] = dataclasses.field(default_factory=list)
     # paper003 only: also keep the capture point in the safety polygon in its first level.
     paper003_balance: bool = True
-
-    # Friction coefficient used when the `friction` input is not connected [-].
-    friction: float = 0.6
-    # Use the friction pyramid inscribed in the cone (mu / sqrt 2), conservative [-].
-    friction_pyramid_inscribed: bool = True
-    # Minimum normal force of a fully active contact [N].
-    min_normal_force: float = 5.0
-    # Maximum normal force of a fully active contact [N].
-    max_normal_force: float = 250.0
-    # Time over which a contact's force bounds ramp in (touch-down) or out (lift-off) [s].
-    contact_ramp_time: float = 0.3
-    # Velocity damping of the contact no-motion rows [1/s].
-    contact_damping: float = 10.0
 
     # Fraction of the effort limits the QP may use; the rest is headroom for the joint PD [-].
     torque_limit_scale: float = 0.9
@@ -95,7 +101,7 @@ FORCE_ESTIMATES = ("impedance", "joint_torque")
 
 
 @dataclasses.dataclass
-class ProjectedImpedanceConfig:
+class ProjectedImpedanceConfig(ContactsConfig):
     """Paper 002's controller: projected inverse dynamics, foot impedance, contact-force QP."""
 
     # Control period [s] (500 Hz default).
@@ -127,18 +133,6 @@ class ProjectedImpedanceConfig:
     # Relative SVD tolerance of the pseudo-inverses (contact Jacobian, inertias) [-].
     rank_tolerance: float = 1e-6
 
-    # Friction coefficient used when the `friction` input is not connected [-].
-    friction: float = 0.6
-    # Use the friction pyramid inscribed in the cone (mu / sqrt 2), conservative [-].
-    friction_pyramid_inscribed: bool = True
-    # Minimum normal force of a fully active contact [N].
-    min_normal_force: float = 5.0
-    # Maximum normal force of a fully active contact [N].
-    max_normal_force: float = 250.0
-    # Time over which a contact's force bounds ramp in (touch-down) or out (lift-off) [s].
-    contact_ramp_time: float = 0.3
-    # Velocity damping of the held contacts' constraint [1/s].
-    contact_damping: float = 10.0
     # Fraction of the effort limits the contact QP may use [-].
     torque_limit_scale: float = 0.9
     # Contact QP weights: squared torques [1/(N m)^2] and squared distance of the forces from an

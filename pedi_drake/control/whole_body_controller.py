@@ -38,10 +38,9 @@ from pedi_drake import robot
 from pedi_drake.control import compiled_stack, references, whole_body_tick
 from pedi_drake.control.compiled_hqp import HqpSettings
 from pedi_drake.control.config import HQP_MODES, STACKS, WholeBodyControllerConfig
+from pedi_drake.control.controller_ports import declare_controller_ports
 from pedi_drake.control.robot_model import ControllerModel
-from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.exceptions import ConfigError
-from pedi_drake.go1_command import initial_command
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.runtime.jit import new_record
@@ -107,22 +106,7 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         self._default_friction = np.array([config.friction])
         self._no_trunk_wrench = np.zeros(6)
 
-        self.base_state_port = self.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
-        self.position_port = self.DeclareVectorInputPort("position_measured", 12)
-        self.velocity_port = self.DeclareVectorInputPort("velocity_measured", 12)
-        self.body_reference_port = self.DeclareVectorInputPort("body_reference", references.BODY_REFERENCE_SIZE)
-        self.leg_reference_port = self.DeclareVectorInputPort("leg_reference", references.LEG_REFERENCE_SIZE)
-        self.contact_set_port = self.DeclareVectorInputPort("contact_set", nc)
-        self.safety_polygon_port = self.DeclareVectorInputPort("safety_polygon", references.SAFETY_POLYGON_SIZE)
-        self.friction_port = self.DeclareVectorInputPort("friction", 1)
-        # An external wrench on the trunk the model lacks, [torque; force] at the trunk origin,
-        # world [N m, N] (a carried load: pedi_drake.control.trunk_load_compensation); zero unconnected.
-        self.trunk_wrench_port = self.DeclareVectorInputPort("trunk_external_wrench", 6)
-
-        self.command_state = self.DeclareDiscreteState(initial_command(config.failure_kd))
-        self.reference_state = self.DeclareDiscreteState(24)  # q_ref (12), qd_ref (12)
-        self.ramp_state = self.DeclareDiscreteState(nc)
-        self.hold_state = self.DeclareDiscreteState(8)  # initialised flag, p_WB (3), quat (4)
+        declare_controller_ports(self, nc, config.failure_kd)
         self.diagnostics_state = self.DeclareDiscreteState(self.diag["contact_ramp"].stop)
         # The discrete states in the compiled tick's argument order.
         self._state_indices = (

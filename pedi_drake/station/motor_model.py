@@ -29,8 +29,9 @@ from pedi_drake import robot
 from pedi_drake.exceptions import PediError
 from pedi_drake.go1_command import COMMAND_SIZE, pd_torque
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
+from pedi_drake.model_error_config import ModelErrorConfig
 from pedi_drake.runtime.jit import kernel
-from pedi_drake.station.model_error import FRICTION_VELOCITY_BAND, ModelErrorConfig
+from pedi_drake.station.model_error import FRICTION_VELOCITY_BAND
 
 # Command entries are clipped to this magnitude before the motor law, so that no product or sum of
 # them can overflow to inf (or inf - inf to NaN) [rad, rad/s, N m/rad, N m s/rad, N m].
