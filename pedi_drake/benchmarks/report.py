@@ -102,6 +102,21 @@ def _dynamics(d: dict) -> str:
     )
 
 
+def _edit_run_loop(d: dict) -> str:
+    rows = {row["edited"]: row for row in d["rows"][1:]}
+    cold, warm = d["rows"][0], d["rows"][1]
+
+    def after(edited: str) -> str:
+        row = rows[edited]
+        return f"{row['seconds']:.0f} s ({'kernels compiled' if row['compiled'] else 'nothing compiled'})"
+
+    return (
+        f"fresh cache {cold['seconds']:.0f} s, warm {warm['seconds']:.0f} s; after editing a phase "
+        f"{after('mission/phases.py')}, a plot {after('viz/plots.py')}, a kernel module "
+        f"{after('control/compiled_stack.py')}"
+    )
+
+
 def _missions(d: dict) -> str:
     summary = d["summary"]
     runs = sum(row["runs"] for row in summary.values())
@@ -278,6 +293,13 @@ ROWS: tuple[Row, ...] = (
         "dynamics.json",
         _dynamics,
         "python -m pedi_drake.benchmarks.dynamics",
+    ),
+    Row(
+        "The README's main job, a run after an edit (wall time, kernel cache)",
+        "edit_run_loop.json",
+        _edit_run_loop,
+        "python -m pedi_drake.benchmarks.edit_run_loop",
+        summary=True,
     ),
     Row(
         "Simulation real-time factor (stand controller, no visualisation)",
