@@ -16,9 +16,9 @@ import daqp
 import numpy as np
 from scipy.linalg import lapack
 
-from pedi_drake.control import daqp_kernel
 from pedi_drake.control.compiled_hqp import HqpSettings, RowTable
 from pedi_drake.exceptions import QpInfeasible
+from pedi_drake.numerics import daqp_kernel
 
 # DAQP treats bounds beyond this magnitude as infinite.
 _INFINITY = 1e30

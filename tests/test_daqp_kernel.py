@@ -1,11 +1,11 @@
-"""DAQP called from compiled code (pedi_drake.control.daqp_kernel) against DAQP's Python module on
+"""DAQP called from compiled code (pedi_drake.numerics.daqp_kernel) against DAQP's Python module on
 the same problems: the same solver, so the same solution to rounding."""
 
 import daqp
 import numpy as np
 import pytest
 
-from pedi_drake.control import daqp_kernel
+from pedi_drake.numerics import daqp_kernel
 
 
 def random_qp(rng: np.random.Generator, n: int, m: int, rank: int):

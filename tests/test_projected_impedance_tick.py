@@ -452,14 +452,16 @@ def test_tick_kernel_equals_its_python_source(standing):
             controller._tick_params,
             controller.model.dynamics.model_record,
             controller.model.dynamics.new_output(),
-            *inputs,
+            tuple(inputs[:10]),
+            *inputs[10:],
             *outputs,
         )
         python_status = projected_impedance_tick.projected_impedance_tick.py_func(
             jit.python_records(controller._tick_params),
             jit.python_records(controller.model.dynamics.model_record),
             jit.python_records(controller.model.dynamics.new_output()),
-            *inputs,
+            tuple(inputs[:10]),
+            *inputs[10:],
             *python_outputs,
         )
         assert status == python_status

@@ -45,8 +45,8 @@ import math
 
 import numpy as np
 
-from pedi_drake.control import daqp_kernel
-from pedi_drake.control.lapack_kernel import qr_of_transpose
+from pedi_drake.numerics import daqp_kernel
+from pedi_drake.numerics.lapack_kernel import qr_of_transpose
 from pedi_drake.runtime.jit import kernel
 
 STATUS_OK, STATUS_INFEASIBLE, STATUS_NUMERICAL = 0, 1, 2
@@ -87,6 +87,10 @@ class RowTable:
     @property
     def num_levels(self) -> int:
         return len(self.eq_start) - 1
+
+    def arrays(self) -> tuple:
+        """The table's arrays in the order `solve_strict` and `solve_weighted` take them."""
+        return tuple(getattr(self, field.name) for field in dataclasses.fields(self)[1:])
 
 
 # ------------------------------------------------------------------------------------------------
@@ -268,26 +272,10 @@ def _row_dot(M: np.ndarray, i: int, x: np.ndarray) -> float:
 
 
 @kernel
-def solve_strict(
-    n,
-    eq_A,
-    eq_b,
-    eq_start,
-    hard_G,
-    hard_h,
-    hard_start,
-    soft_G,
-    soft_h,
-    soft_w,
-    soft_start,
-    rank_tolerance,
-    fix_tolerance,
-    eps_prox,
-    x,
-    residuals,
-) -> int:
+def solve_strict(n, rows, rank_tolerance, fix_tolerance, eps_prox, x, residuals) -> int:
     """Solves the levels in strict priority order (reference_hqp.solve_hqp) into x (n,) and the levels'
-    equality residuals (L,); returns a status."""
+    equality residuals (L,); returns a status. `rows`: a RowTable's arrays (`RowTable.arrays`)."""
+    eq_A, eq_b, eq_start, hard_G, hard_h, hard_start, soft_G, soft_h, soft_w, soft_start = rows
     num_levels = len(eq_start) - 1
     for i in range(n):
         x[i] = 0.0
@@ -417,26 +405,11 @@ def solve_strict(
 
 
 @kernel
-def solve_weighted(
-    n,
-    eq_A,
-    eq_b,
-    eq_start,
-    hard_G,
-    hard_h,
-    hard_start,
-    soft_G,
-    soft_h,
-    soft_w,
-    soft_start,
-    level_weights,
-    regularization,
-    eps_prox,
-    x,
-    residuals,
-) -> int:
+def solve_weighted(n, rows, level_weights, regularization, eps_prox, x, residuals) -> int:
     """One QP with level k's equalities and soft rows weighted by level_weights[k], hard rows kept
-    hard (reference_hqp.solve_weighted), into x (n,) and the residuals (L,); returns a status."""
+    hard (reference_hqp.solve_weighted), into x (n,) and the residuals (L,); returns a status.
+    `rows`: a RowTable's arrays (`RowTable.arrays`)."""
+    eq_A, eq_b, eq_start, hard_G, hard_h, hard_start, soft_G, soft_h, soft_w, soft_start = rows
     num_levels = len(eq_start) - 1
     mh = hard_G.shape[0]
     ms = soft_G.shape[0]
@@ -480,24 +453,8 @@ def solve_table_strict(table: RowTable, settings: HqpSettings | None = None) -> 
     """(status, x, residuals) of `solve_strict` on a RowTable (tests, benchmarks)."""
     settings = settings or HqpSettings()
     x, residuals = np.zeros(table.n), np.zeros(table.num_levels)
-    status = solve_strict(
-        table.n,
-        table.eq_A,
-        table.eq_b,
-        table.eq_start,
-        table.hard_G,
-        table.hard_h,
-        table.hard_start,
-        table.soft_G,
-        table.soft_h,
-        table.soft_w,
-        table.soft_start,
-        settings.rank_tolerance,
-        settings.fix_tolerance,
-        settings.proximal_weight,
-        x,
-        residuals,
-    )
+    tolerances = (settings.rank_tolerance, settings.fix_tolerance, settings.proximal_weight)
+    status = solve_strict(table.n, table.arrays(), *tolerances, x, residuals)
     return status, x, residuals
 
 
@@ -507,22 +464,8 @@ def solve_table_weighted(
     """(status, x, residuals) of `solve_weighted` on a RowTable (tests, benchmarks)."""
     settings = settings or HqpSettings()
     x, residuals = np.zeros(table.n), np.zeros(table.num_levels)
+    weights = np.asarray(level_weights, float)
     status = solve_weighted(
-        table.n,
-        table.eq_A,
-        table.eq_b,
-        table.eq_start,
-        table.hard_G,
-        table.hard_h,
-        table.hard_start,
-        table.soft_G,
-        table.soft_h,
-        table.soft_w,
-        table.soft_start,
-        np.asarray(level_weights, float),
-        settings.regularization,
-        settings.proximal_weight,
-        x,
-        residuals,
+        table.n, table.arrays(), weights, settings.regularization, settings.proximal_weight, x, residuals
     )
     return status, x, residuals

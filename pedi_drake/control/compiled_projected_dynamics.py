@@ -89,8 +89,8 @@ import math
 
 import numpy as np
 
-from pedi_drake.control import daqp_kernel
 from pedi_drake.friction import write_pyramid_faces
+from pedi_drake.numerics import daqp_kernel
 from pedi_drake.runtime.jit import kernel
 
 # Status of `contact_forces`.

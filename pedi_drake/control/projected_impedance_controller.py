@@ -162,10 +162,7 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
         states = [last.value(group) for group in self._state_groups]
         outputs = [discrete_state.get_mutable_value(group) for group in self._state_groups]
         solve_start = time.perf_counter()
-        status = projected_impedance_tick.projected_impedance_tick(
-            self._tick_params,
-            self.model.dynamics.model_record,
-            self._snapshot,
+        inputs = (
             self.base_state_port.Eval(context),
             self.position_port.Eval(context),
             self.velocity_port.Eval(context),
@@ -176,8 +173,9 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             ports[2].Eval(context) if ports[2].HasValue(context) else defaults["polygon"],
             ports[3].Eval(context) if ports[3].HasValue(context) else defaults["friction"],
             ports[4].Eval(context) if ports[4].HasValue(context) else defaults["trunk_wrench"],
-            *states,
-            *outputs,
+        )
+        status = projected_impedance_tick.projected_impedance_tick(
+            self._tick_params, self.model.dynamics.model_record, self._snapshot, inputs, *states, *outputs
         )
         diag = outputs[-1]
         now = time.perf_counter()

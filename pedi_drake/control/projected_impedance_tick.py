@@ -328,16 +328,7 @@ def projected_impedance_tick(
     tick_params: np.ndarray,
     dynamics_model: np.ndarray,
     snapshot: np.ndarray,
-    base: np.ndarray,
-    q: np.ndarray,
-    qd: np.ndarray,
-    contact_set_in: np.ndarray,
-    body_in: np.ndarray,
-    has_body: bool,
-    leg_x: np.ndarray,
-    polygon_x: np.ndarray,
-    mu_x: np.ndarray,
-    trunk_wrench: np.ndarray,
+    inputs: tuple,
     last_command: np.ndarray,
     last_reference: np.ndarray,
     last_ramp: np.ndarray,
@@ -358,6 +349,7 @@ def projected_impedance_tick(
     `snapshot` (go1_dynamics.output_dtype: the dynamics terms this tick used). `polygon_x` is
     only checked: paper 002's law has no balance task."""
     tp, s = tick_params[0], snapshot[0]
+    base, q, qd, contact_set_in, body_in, has_body, leg_x, polygon_x, mu_x, trunk_wrench = inputs
     nv, nc = tp.nv, tp.nc
     d = tp.diagnostics
     reference[:] = last_reference
@@ -367,9 +359,8 @@ def projected_impedance_tick(
     contact_set, new_ramp, new_hold = np.empty(nc), np.empty(nc), np.empty(8)
     q_ref, qd_ref, body = np.empty(12), np.empty(12), np.empty(19)
     good = read_inputs(
-        tp, base, q, qd, contact_set_in, body_in, has_body, leg_x, polygon_x, mu_x, trunk_wrench,
-        last_reference, last_ramp, last_hold, contact_set, new_ramp, new_hold, q_ref, qd_ref, body,
-    )  # fmt: skip
+        tp, inputs, last_reference, last_ramp, last_hold, contact_set, new_ramp, new_hold, q_ref, qd_ref, body
+    )
     if not good:
         return fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
 

@@ -37,6 +37,23 @@ DIAGNOSTICS_FIELDS = (
 )
 STATUS, CONSECUTIVE, TOTAL, CAPTURE_POINT, TRUNK_POSITION, TRUNK_ORIENTATION = range(6)
 FOOT_ERRORS, RESIDUALS, FORCES, TAU, RAMP = range(6, 11)
+# A tick's inputs, a tuple in this order: the state estimate (13), the measured joint angles and
+# rates (12 each), the contact set (nc), the body reference (19) and whether it is connected (else
+# the held pose), the leg references (48), the safety polygon, the friction coefficient (1) and
+# the trunk's external wrench (6); the controllers pass their ports' values, or stand-ins for
+# unconnected ones.
+TICK_INPUTS = (
+    "base_state",
+    "position_measured",
+    "velocity_measured",
+    "contact_set",
+    "body_reference",
+    "has_body_reference",
+    "leg_reference",
+    "safety_polygon",
+    "friction",
+    "trunk_external_wrench",
+)
 
 
 @kernel
@@ -67,16 +84,7 @@ def fail(tp, status, last_command, q, last_diag, ramp, record_ramp, command, dia
 @kernel
 def read_inputs(
     tp,
-    base,
-    q,
-    qd,
-    contact_set_in,
-    body_in,
-    has_body: bool,
-    leg_x,
-    polygon_x,
-    mu_x,
-    trunk_wrench,
+    inputs,
     last_reference,
     last_ramp,
     last_hold,
@@ -87,8 +95,8 @@ def read_inputs(
     qd_ref,
     body,
 ) -> bool:
-    """The tick's inputs checked and turned into its references; False for a non-finite input or a
-    friction coefficient that is not positive (the outputs then meaningless).
+    """The tick's inputs (a TICK_INPUTS tuple) checked and turned into its references; False for a
+    non-finite input or a friction coefficient that is not positive (the outputs then meaningless).
 
     Writes the contact set clipped to [0, 1], the contact ramps advanced towards it by at most
     period / contact_ramp_time, the held trunk pose (8: initialised flag, p_WB, quaternion), the
@@ -96,6 +104,7 @@ def read_inputs(
     reference is connected). On the first tick (the held pose not yet initialised) the trunk pose
     is held where it is, the joint reference starts at the measurement and the ramps at the
     contact set: the robot starts on its feet."""
+    base, q, qd, contact_set_in, body_in, has_body, leg_x, polygon_x, mu_x, trunk_wrench = inputs
     for i in range(contact_set.shape[0]):
         contact_set[i] = min(max(contact_set_in[i], 0.0), 1.0)
     if not (all_finite(base) and all_finite(q) and all_finite(qd) and all_finite(contact_set)):

@@ -105,25 +105,10 @@ def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
     eq_A, eq_b = t.eq_A[: eq_start[num_levels]], t.eq_b[: eq_start[num_levels]]
     hard_G, hard_h = t.hard_G[: hard_start[num_levels]], t.hard_h[: hard_start[num_levels]]
     ms = soft_start[num_levels]
-    soft_G, soft_h, soft_w = t.soft_G[:ms], t.soft_h[:ms], t.soft_w[:ms]
+    rows = (eq_A, eq_b, eq_start, hard_G, hard_h, hard_start, t.soft_G[:ms], t.soft_h[:ms], t.soft_w[:ms], soft_start)
     if tp.strict:
         status = compiled_hqp.solve_strict(
-            n,
-            eq_A,
-            eq_b,
-            eq_start,
-            hard_G,
-            hard_h,
-            hard_start,
-            soft_G,
-            soft_h,
-            soft_w,
-            soft_start,
-            tp.rank_tolerance,
-            tp.fix_tolerance,
-            tp.proximal_weight,
-            x,
-            residuals[:num_levels],
+            n, rows, tp.rank_tolerance, tp.fix_tolerance, tp.proximal_weight, x, residuals[:num_levels]
         )
     else:
         weights = np.empty(num_levels)
@@ -140,22 +125,7 @@ def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
             for level in range(num_levels):
                 weights[level] = 100.0 ** (num_levels - 1 - level)
         status = compiled_hqp.solve_weighted(
-            n,
-            eq_A,
-            eq_b,
-            eq_start,
-            hard_G,
-            hard_h,
-            hard_start,
-            soft_G,
-            soft_h,
-            soft_w,
-            soft_start,
-            weights,
-            tp.regularization,
-            tp.proximal_weight,
-            x,
-            residuals[:num_levels],
+            n, rows, weights, tp.regularization, tp.proximal_weight, x, residuals[:num_levels]
         )
     if status == compiled_hqp.STATUS_OK and not all_finite(x):
         status = compiled_hqp.STATUS_INFEASIBLE
@@ -168,16 +138,7 @@ def whole_body_tick(
     stack_params: np.ndarray,
     dynamics_model: np.ndarray,
     snapshot: np.ndarray,
-    base: np.ndarray,
-    q: np.ndarray,
-    qd: np.ndarray,
-    contact_set_in: np.ndarray,
-    body_in: np.ndarray,
-    has_body: bool,
-    leg_x: np.ndarray,
-    polygon_x: np.ndarray,
-    mu_x: np.ndarray,
-    trunk_wrench: np.ndarray,
+    inputs: tuple,
     table_record: np.ndarray,
     command: np.ndarray,
     reference: np.ndarray,
@@ -193,6 +154,7 @@ def whole_body_tick(
     workspaces `snapshot` (go1_dynamics.output_dtype: the dynamics terms this tick used) and
     `table_record` (compiled_stack.table_dtype: the levels' rows)."""
     tp, p, s, table = tick_params[0], stack_params[0], snapshot[0], table_record[0]
+    base, q, qd, contact_set_in, body_in, has_body, leg_x, polygon_x, mu_x, trunk_wrench = inputs
     last_command, last_reference = command.copy(), reference.copy()
     last_ramp, last_hold, last_diag = ramp.copy(), hold.copy(), diag.copy()
     nv, nc = p.nv, p.nc
@@ -200,9 +162,8 @@ def whole_body_tick(
     contact_set, new_ramp, new_hold = np.empty(nc), np.empty(nc), np.empty(8)
     q_ref, qd_ref, body = np.empty(12), np.empty(12), np.empty(19)
     good = read_inputs(
-        tp, base, q, qd, contact_set_in, body_in, has_body, leg_x, polygon_x, mu_x, trunk_wrench,
-        last_reference, last_ramp, last_hold, contact_set, new_ramp, new_hold, q_ref, qd_ref, body,
-    )  # fmt: skip
+        tp, inputs, last_reference, last_ramp, last_hold, contact_set, new_ramp, new_hold, q_ref, qd_ref, body
+    )
     num_vertices = round(polygon_x[0]) if good else 0
     zero_quaternion = base[0] == 0.0 and base[1] == 0.0 and base[2] == 0.0 and base[3] == 0.0
     if not good or zero_quaternion or (num_vertices != 0 and not 3 <= num_vertices <= SAFETY_POLYGON_MAX_VERTICES):

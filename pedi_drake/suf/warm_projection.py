@@ -11,7 +11,7 @@ path where the robot moves a few millimetres per tick:
    scaled to a unit normal) and F = F_0 + N_F z. Row k of G is always the same constraint (a
    motor's torque limit, a contact's pyramid face), whatever N is, so a set of active rows means
    the same vertex from one configuration to the next.
-2. LPs by DAQP called from compiled code (pedi_drake.control.daqp_kernel, H = 0: its
+2. LPs by DAQP called from compiled code (pedi_drake.numerics.daqp_kernel, H = 0: its
    proximal-point iterations end on an exact vertex), each started from an active set: max a . F from the
    active set of the facet's first vertex, which usually is already optimal or one step from it.
 3. Warm start: the directions that produced the previous polytope's vertices, each with its
@@ -43,8 +43,8 @@ import time
 
 import numpy as np
 
-from pedi_drake.control import daqp_kernel
 from pedi_drake.exceptions import SufError
+from pedi_drake.numerics import daqp_kernel
 from pedi_drake.runtime.jit import kernel
 from pedi_drake.suf import hull3d
 from pedi_drake.suf.methods import Polytope, SufResult

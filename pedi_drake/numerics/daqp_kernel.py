@@ -104,7 +104,7 @@ def _check_layout(library: ctypes.CDLL) -> None:
         from importlib.metadata import version
 
         raise PediError(
-            f"daqp {version('daqp')}: its settings struct is not laid out as pedi_drake.control.daqp_kernel "
+            f"daqp {version('daqp')}: its settings struct is not laid out as pedi_drake.numerics.daqp_kernel "
             f"reads it (defaults read {found}); install the series pyproject.toml pins (daqp>=0.11,<0.12)"
         )
 
