@@ -110,15 +110,7 @@ _INFINITY = 1e30
 @kernel
 def _transposed_multiply(A: np.ndarray, B: np.ndarray, out: np.ndarray) -> None:
     """out = A^T B."""
-    k, m = A.shape
-    n = B.shape[1]
-    out[:, :] = 0.0
-    for p in range(k):
-        for i in range(m):
-            a = A[p, i]
-            if a != 0.0:
-                for j in range(n):
-                    out[i, j] += a * B[p, j]
+    out[:, :] = np.dot(np.ascontiguousarray(A.T), B)
 
 
 @kernel

@@ -25,19 +25,6 @@ import numpy as np
 from pedi_drake import robot
 from pedi_drake.control import compiled_projected_dynamics as cpd
 from pedi_drake.control import references, tick_steps
-from pedi_drake.control.tick_steps import (
-    FOOT_ERRORS,
-    FORCES,
-    RESIDUALS,
-    STATUS_BAD_INPUT,
-    STATUS_OK,
-    STATUS_QP_FAILED,
-    all_finite,
-    fail,
-    read_inputs,
-    write_command,
-    write_diagnostics,
-)
 from pedi_drake.dynamics.go1_dynamics import add_trunk_external_wrench, go1_dynamics
 from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
 from pedi_drake.friction import pyramid_slope
@@ -358,11 +345,11 @@ def projected_impedance_tick(
     estimate[:] = last_estimate
     contact_set, new_ramp, new_hold = np.empty(nc), np.empty(nc), np.empty(8)
     q_ref, qd_ref, body = np.empty(12), np.empty(12), np.empty(19)
-    good = read_inputs(
+    good = tick_steps.read_inputs(
         tp, inputs, last_reference, last_ramp, last_hold, contact_set, new_ramp, new_hold, q_ref, qd_ref, body
     )
     if not good:
-        return fail(tp, STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
+        return tick_steps.fail(tp, tick_steps.STATUS_BAD_INPUT, last_command, q, last_diag, ramp, False, command, diag)
 
     # From here a failure keeps the advanced ramps and the held pose.
     ramp[:] = new_ramp
@@ -370,8 +357,12 @@ def projected_impedance_tick(
     go1_dynamics(dynamics_model, base, q, qd, snapshot)
     add_trunk_external_wrench(s.h, s.J_trunk, trunk_wrench)
     s.Jdot_v_com[:] = 0.0  # the controller's model is ControllerModel(com_bias=False)
-    if not (all_finite(s.M.ravel()) and all_finite(s.h) and all_finite(s.J_contacts.ravel())):
-        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+    if not (
+        tick_steps.all_finite(s.M.ravel())
+        and tick_steps.all_finite(s.h)
+        and tick_steps.all_finite(s.J_contacts.ravel())
+    ):
+        return tick_steps.fail(tp, tick_steps.STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
     held = np.empty(nc, dtype=np.bool_)
     num_held = 0
     on_prongs = False
@@ -402,7 +393,7 @@ def projected_impedance_tick(
     vdot_0 = np.empty(nv)
     rank = cpd.constrained_dynamics(s.M, s.h, Jc, Jcdot_v, s.v, tp.contact_damping, tp.rank_tolerance, P, A, vdot_0)
     if rank < 0:
-        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+        return tick_steps.fail(tp, tick_steps.STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
 
     # Eqs. 9 and 10: the lifted legs' impedance, then the trunk and the posture.
     rows_of_leg = np.empty(4, dtype=np.int64)
@@ -453,11 +444,11 @@ def projected_impedance_tick(
         residuals,
     )
     if num_residuals < 0:
-        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+        return tick_steps.fail(tp, tick_steps.STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
     tau_m = np.empty(12)
     vdot = np.empty(nv)
     if not cpd.constraint_free_torque(A, vdot_0, P, u, tp.v_joints, tp.rank_tolerance, tau_m, vdot):
-        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+        return tick_steps.fail(tp, tick_steps.STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
 
     # Eqs. 6 to 8: the contact forces of the planned acceleration.
     held_ramp = np.empty(num_held)
@@ -476,9 +467,9 @@ def projected_impedance_tick(
         for j in range(nv):
             value += s.M[i, j] * vdot[j]
         r[i] = value
-    if not (all_finite(vdot) and all_finite(r)):
+    if not (tick_steps.all_finite(vdot) and tick_steps.all_finite(r)):
         # The QP solver is not given non-finite terms.
-        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+        return tick_steps.fail(tp, tick_steps.STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
     lam = np.empty(3 * num_held)
     tau = np.empty(12)
     equality_residual = np.zeros(1)
@@ -501,13 +492,13 @@ def projected_impedance_tick(
         tau,
         equality_residual,
     )
-    if solved != cpd.CONTACT_FORCES_OK or not all_finite(tau):
-        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+    if solved != cpd.CONTACT_FORCES_OK or not tick_steps.all_finite(tau):
+        return tick_steps.fail(tp, tick_steps.STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
 
     qdd = np.empty(12)
     for k in range(12):
         qdd[k] = vdot[tp.v_joints[k]]
-    write_command(tp, qdd, q, qd, tau, q_ref, qd_ref, command)
+    tick_steps.write_command(tp, qdd, q, qd, tau, q_ref, qd_ref, command)
 
     # Eq. 11 per foot impedance: Lambda eddot + D edot + K e, eddot a filtered difference.
     alpha = tp.period / (tp.period + tp.force_estimate_filter_time)
@@ -549,27 +540,27 @@ def projected_impedance_tick(
         for a in range(num_held):
             ground += s.p_contacts[held_idx[a], 2]
         ground = ground / num_held - robot.FOOT_RADIUS
-    write_diagnostics(tp, s, STATUS_OK, ground, body, tau, new_ramp, last_diag, diag)
+    tick_steps.write_diagnostics(tp, s, tick_steps.STATUS_OK, ground, body, tau, new_ramp, last_diag, diag)
     for i in range(4):
         row = foot_row[i]
-        diag[d[FOOT_ERRORS] + i] = _norm3(error, row) if row >= 0 else 0.0
+        diag[d[tick_steps.FOOT_ERRORS] + i] = _norm3(error, row) if row >= 0 else 0.0
     for k in range(tp.max_residuals):
-        diag[d[RESIDUALS] + k] = 0.0
+        diag[d[tick_steps.RESIDUALS] + k] = 0.0
     for k in range(min(num_residuals, tp.max_residuals)):
-        diag[d[RESIDUALS] + k] = residuals[k]
+        diag[d[tick_steps.RESIDUALS] + k] = residuals[k]
     if num_residuals < tp.max_residuals:
-        diag[d[RESIDUALS] + num_residuals] = equality_residual[0]
+        diag[d[tick_steps.RESIDUALS] + num_residuals] = equality_residual[0]
     for j in range(3 * nc):
-        diag[d[FORCES] + j] = 0.0
+        diag[d[tick_steps.FORCES] + j] = 0.0
     for a in range(num_held):
         for axis in range(3):
-            diag[d[FORCES] + 3 * held_idx[a] + axis] = lam[3 * a + axis]
+            diag[d[tick_steps.FORCES] + 3 * held_idx[a] + axis] = lam[3 * a + axis]
     for j in range(12):
         diag[d[_ESTIMATE] + j] = forces_estimated[j]
     diag[d[_RANK]] = rank
     reference[:12] = q_ref
     reference[12:] = qd_ref
-    return STATUS_OK
+    return tick_steps.STATUS_OK
 
 
 @kernel
