@@ -6,7 +6,7 @@ from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.go1_command import initial_command
 
 
-def declare_controller_ports(system, num_contacts: int, failure_kd: float) -> None:
+def declare_controller_ports(system, num_contacts: int, failure_kd: float) -> tuple:
     """Declares on the LeafSystem `system`, as attributes, the controllers' inputs and the discrete
     states they share:
 
@@ -18,6 +18,7 @@ def declare_controller_ports(system, num_contacts: int, failure_kd: float) -> No
     states  command_state (60, go1.command, damping only until the first tick [N m s/rad]:
             `failure_kd`), reference_state (24: q_ref, qd_ref), ramp_state (num_contacts),
             hold_state (8: initialised flag, p_WB, quaternion).
+    Returns the four states' indices, in that order (the compiled ticks' argument order).
     """
     system.base_state_port = system.DeclareVectorInputPort("base_state", BASE_STATE_SIZE)
     system.position_port = system.DeclareVectorInputPort("position_measured", 12)
@@ -32,3 +33,4 @@ def declare_controller_ports(system, num_contacts: int, failure_kd: float) -> No
     system.reference_state = system.DeclareDiscreteState(24)
     system.ramp_state = system.DeclareDiscreteState(num_contacts)
     system.hold_state = system.DeclareDiscreteState(8)
+    return system.command_state, system.reference_state, system.ramp_state, system.hold_state

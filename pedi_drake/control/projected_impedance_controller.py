@@ -95,18 +95,11 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             "trunk_wrench": np.zeros(6),
         }
 
-        declare_controller_ports(self, nc, config.failure_kd)
+        shared_states = declare_controller_ports(self, nc, config.failure_kd)
         self.estimate_state = self.DeclareDiscreteState(_ESTIMATE_STATE_SIZE)
         self.diagnostics_state = self.DeclareDiscreteState(self.diag["constraint_rank"].stop)
         # The discrete states in the compiled tick's argument order, and their group numbers.
-        self._state_indices = (
-            self.command_state,
-            self.reference_state,
-            self.ramp_state,
-            self.hold_state,
-            self.estimate_state,
-            self.diagnostics_state,
-        )
+        self._state_indices = (*shared_states, self.estimate_state, self.diagnostics_state)
         self._state_groups = tuple(int(index) for index in self._state_indices)
         # The optional inputs in the compiled tick's argument order (the body reference aside).
         self._optional_ports = (

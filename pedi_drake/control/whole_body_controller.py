@@ -106,16 +106,10 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         self._default_friction = np.array([config.friction])
         self._no_trunk_wrench = np.zeros(6)
 
-        declare_controller_ports(self, nc, config.failure_kd)
+        shared_states = declare_controller_ports(self, nc, config.failure_kd)
         self.diagnostics_state = self.DeclareDiscreteState(self.diag["contact_ramp"].stop)
         # The discrete states in the compiled tick's argument order.
-        self._state_indices = (
-            self.command_state,
-            self.reference_state,
-            self.ramp_state,
-            self.hold_state,
-            self.diagnostics_state,
-        )
+        self._state_indices = (*shared_states, self.diagnostics_state)
         self.DeclarePeriodicDiscreteUpdateEvent(config.period, 0.0, self._update)
         # The same tick on demand (CalcForcedDiscreteVariableUpdate): tests and the benchmark.
         self.DeclareForcedDiscreteUpdateEvent(self._update)
