@@ -1,22 +1,7 @@
 """The oracle of the compiled stacks (pedi_drake.control.compiled_stack): the task stacks of the
 two papers, as presets that turn one control instant into reference_hqp levels.
 
-The paper's level 0 is solved as two sub-levels: "physics" (floating-base dynamics and contact
-no-motion, equalities that some x always meets exactly, so solving them first by null-space
-projection loses nothing and halves the size of every QP below) then "feasibility".
-
-paper000 (Sec. III-B, two TSID levels, here strict):
-    level 0 "physics" + "feasibility": floating-base dynamics, contact no-motion; contact force
-        limits and friction pyramid, torque limits, joint limits (hard), capture point in the
-        safety polygon (soft);
-    level 1 "pose": trunk position and attitude, pedipulation foot / leg joint reference (or the
-        optional 5-D foot pose: foot position and the calf's roll and pitch), idle legs;
-    level 2 "regularisation" (added so the optimum is unique): posture, contact forces, torques.
-paper003 (Sec. VI, five levels):
-    0 dynamic feasibility (as above; the capture point optionally, `paper003_balance`),
-    1 torso angular acceleration, 2 torso translational acceleration, 3 swing foot acceleration
-    (and leg joint references, idle legs), 4 torque minimisation (with light posture and force terms).
-Prong contacts sit in the same augmented contact Jacobian as the feet (paper 003).
+The stacks' levels and tasks are described in compiled_stack's docstring.
 """
 
 import dataclasses

@@ -96,7 +96,7 @@ def tick_params(config, settings, diagnostics_layout: dict[str, slice], max_resi
 
 @kernel
 def _solve(tp, p, table, num_levels: int, relaxed: bool, x, residuals) -> int:
-    """The built levels, solved strictly or weighted (WholeBodyController._solve); a compiled_hqp status."""
+    """The built levels, solved strictly or weighted; a compiled_hqp status."""
     n = p.nv + 3 * p.nc
     t = table
     eq_start = t.eq_start[: num_levels + 1]

@@ -8,8 +8,8 @@ controller calls it inside its own kernel; `Go1Dynamics` is the Python owner of 
 
 Why this exists beside Drake's MultibodyPlant, which computes the same terms (the tests hold the
 two equal; `ControllerModel(compiled=False)` is the Drake path): one update by Drake's calls takes
-about fifty times as long as this kernel, and about twice as long as the whole compiled
-whole-body tick that calls it (medians measured in one run by `python -m
+about fifty times as long as this kernel, and longer than the whole compiled whole-body tick
+that calls it (medians measured in one run by `python -m
 pedi_drake.benchmarks.dynamics`), which would take the controller side's tick past its budget.
 
 Parameters come from the plant (`robot.make_go1_plant(robot.design_key(prongs))`) once, in

@@ -2,9 +2,8 @@
 
 numba's `np.linalg` has the QR without pivoting and only its economic Q; the hierarchical QP
 needs the complete Q (the rows' null space) and, when rows come near rank deficiency, the QR with
-column pivoting (dgeqp3), whose diagonal reveals the rank at a fraction of an SVD's cost (an SVD
-of the stack's 24 x 36 contact rows costs several times the QR: `tests/test_compiled_hqp.py`
-holds the two to the same rank). This module calls the routines scipy ships
+column pivoting (dgeqp3), whose diagonal reveals the rank without an SVD
+(`tests/test_compiled_hqp.py` holds the two to the same rank). This module calls the routines scipy ships
 (`scipy.linalg.cython_lapack`: dgeqrf, dgeqp3, dorgqr) by symbol, as `daqp_kernel` calls DAQP, so
 a kernel factors without returning to Python and numba's disk cache keeps the kernels.
 

@@ -27,14 +27,14 @@ only its small scratch (the seen faces and the horizon).
 Why not Qhull (scipy.spatial.ConvexHull, the maintained library): `python -m
 pedi_drake.benchmarks.hull3d` (benchmarks/results/hull3d.json) times both on 32 seeded point sets
 shaped like the projection's (10 to 60 vertices of force polytopes, polygonal facets), in CPU time
-per call, medians over all sets: a hull built from scratch as `project_within` builds it, 19.6 us
-here against 84.1 us for `ConvexHull(points)`; one point added, 1.0 us here against 24.0 us for
-`add_points` on `ConvexHull(..., incremental=True)`. A compiled caller would also pay 1.1 us per
-`objmode` block to reach Qhull (and take the GIL, which the projection's kernel releases). Qhull
+per call, medians over all sets in one run: Qhull builds a hull from scratch (`ConvexHull(points)`
+against `project_within`'s build) about 4x slower, and adds one point (`add_points` on
+`ConvexHull(..., incremental=True)`) about 24x slower; a compiled caller would also cross into
+Python (an `objmode` block) and take the GIL, which the projection's kernel releases. Qhull
 with that crossing is 2.1x (50 to 60 vertices) to 14x (10 to 12) slower to build and 24x to 32x
 slower to add a point, beyond the 1.2x the project allows, so the hull stays here. The benchmark
-checks that both give the same vertices, volume and facet planes; tests/test_hull3d_against_qhull.py
-the same vertices and volume.
+checks that both give the same vertices, volume and facet planes, and
+tests/test_hull3d_against_qhull.py holds the two to the same vertices and volume.
 """
 
 import math
