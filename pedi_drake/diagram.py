@@ -113,15 +113,19 @@ class PedipulationDiagram:
 
 
 def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
-    """The scenario with the mission's scene objects and pushes added, its robot variant and its
-    whole-body task stack applied."""
+    """The scenario with the mission's scene objects and pushes added, its robot variant, its
+    whole-body task stack and its contact ramp time applied."""
     merged = dataclasses.replace(
         scenario, scene=list(scenario.scene) + list(mission.scene), pushes=list(scenario.pushes) + list(mission.pushes)
     )
     if mission.robot is not None:
         merged.robot = dataclasses.replace(scenario.robot, prongs=mission.robot.prongs)
     if mission.stack:
-        merged.whole_body = dataclasses.replace(scenario.whole_body, stack=mission.stack)
+        merged.whole_body = dataclasses.replace(merged.whole_body, stack=mission.stack)
+    if mission.contact_ramp_time:
+        ramp = mission.contact_ramp_time
+        merged.whole_body = dataclasses.replace(merged.whole_body, contact_ramp_time=ramp)
+        merged.projected_impedance = dataclasses.replace(merged.projected_impedance, contact_ramp_time=ramp)
     return merged
 
 
@@ -334,6 +338,9 @@ def MakePedipulationDiagram(
                     friction=scenario.ground_friction,
                     force_estimate=force_estimate,
                     safety_margin=scenario.whole_body.safety_margin,
+                    contact_ramp_time=max(
+                        scenario.whole_body.contact_ramp_time, scenario.projected_impedance.contact_ramp_time
+                    ),
                     wait_for_plans=not hardware,
                 ),
             )

@@ -43,9 +43,11 @@ def test_sigint_at_random_times_always_leaves_a_valid_result_json(tmp_path):
     code, err = _stop_after(_start(tmp_path / "reference", *ARGS), 600.0, signal.SIGINT)
     lifetime = time.monotonic() - start
     assert code == 0, err
-    # From half a second in (the stop handlers are loaded first) to the end of a run: the signal
-    # lands while loading, building, simulating, judging or writing.
-    delays = np.random.default_rng(7).uniform(0.5, lifetime, size=5)
+    # From half a second in (the stop handlers are loaded first) to the end of a run, one random
+    # time in each third of it: the signal lands while loading or building, simulating, and
+    # judging or writing.
+    thirds = (np.arange(3) + np.random.default_rng(7).uniform(size=3)) / 3.0
+    delays = 0.5 + (lifetime - 0.5) * thirds
     interrupted = 0
     for k, delay in enumerate(delays):
         out = tmp_path / f"run{k}"

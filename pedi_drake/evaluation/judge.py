@@ -21,6 +21,7 @@ from pedi_drake.evaluation.off_trunk import judge_off_trunk, off_trunk_trace
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_response
 from pedi_drake.evaluation.result_file import write_result
 from pedi_drake.evaluation.touches import judge_touches
+from pedi_drake.evaluation.walks import WALK_KINDS, judge_walks
 from pedi_drake.fall import fell_during, first_fallen_sample
 from pedi_drake.go1_driver.hardware_station import hardware_link
 from pedi_drake.go1_driver.safety import driver_report
@@ -216,6 +217,19 @@ def judge_run(record) -> dict:
                     plant, mission.object_push, result["phases"], t_state, states
                 )
                 reason = "; ".join(filter(None, [reason, push_problem]))
+            if any(isinstance(phase, WALK_KINDS) for phase in mission.phases) and states.shape[1]:
+                metrics = {r.name: r.metrics for r in progress.records}
+                result["walks"], walk_problem = judge_walks(
+                    mission,
+                    result["phases"],
+                    metrics,
+                    plant,
+                    t_state,
+                    states,
+                    logs["base_state"],
+                    logs["sim.foot_contact_forces"],
+                )
+                reason = "; ".join(filter(None, [reason, walk_problem]))
             if mission.leaves_trunk and states.shape[1]:
                 trace = off_trunk_trace(plant, mission.leaves_trunk, t_state, states)
                 result[mission.leaves_trunk], left_problem = judge_off_trunk(mission.leaves_trunk, trace)

@@ -134,6 +134,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
         safety_margin: float = 0.03,
         period: float = MISSION_PERIOD,
         force_estimate: str = "joint_torque",
+        contact_ramp_time: float = 0.3,
         wait_for_plans: bool = True,
     ):
         """
@@ -143,6 +144,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
             friction: ground friction coefficient sent to the controller [-].
             safety_margin: the stance's support polygon is shrunk by this for the capture point [m].
             period: update period [s].
+            contact_ramp_time: how long the controller takes to ramp a contact's load in or out [s].
             wait_for_plans: a posture answer later than its due time is waited for (lock-step
                 simulation: runs do not depend on the machine's speed) or polled for (real time).
         """
@@ -150,7 +152,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
         self._mission = mission
         # The posture planner's worker starts here, not in an update (pedi_drake.mission.posture_planner).
         planner = shared_planner() if needs_posture_planner(mission) else None
-        self._env = MissionEnvironment(prongs, force_estimate, planner, wait_for_plans)
+        self._env = MissionEnvironment(prongs, force_estimate, planner, wait_for_plans, contact_ramp_time)
         self._prong_tips_B = prong_tips_B(prongs)
         self._friction = friction
         self._safety_margin = float(safety_margin)

@@ -44,6 +44,7 @@ from pedi_drake.mission.progress import (
 from pedi_drake.mission.reference_start import foot_reference_start, joint_reference_start
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_foot import TeleopFootRunner
+from pedi_drake.mission.walk import RUNNERS as WALK_RUNNERS
 from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.suf.posture import Posture, PostureCase
@@ -110,6 +111,7 @@ class MissionEnvironment:
         force_estimate: str = "joint_torque",
         planner: PosturePlanner | None = None,
         wait_for_plans: bool = True,
+        contact_ramp_time: float = 0.3,
     ):
         self.prongs = prongs
         self.num_prongs = 0 if prongs is None else prongs.num_prongs
@@ -119,6 +121,8 @@ class MissionEnvironment:
         self.planner = planner
         # Whether a phase waits for a late answer (lock-step simulation) or keeps polling (real time).
         self.wait_for_plans = wait_for_plans
+        # [s] how long the controller takes to ramp a contact's load in or out.
+        self.contact_ramp_time = contact_ramp_time
 
 
 def _fail(progress: MissionProgress, reason: str) -> str:
@@ -1239,6 +1243,7 @@ RUNNERS: dict[type, PhaseRunner] = {
     spec.TeleopFoot: TeleopFootRunner(),
     spec.Wait: WaitRunner(),
     spec.SwitchController: SwitchControllerRunner(),
+    **WALK_RUNNERS,
 }
 assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a runner"
 

@@ -28,6 +28,7 @@ from pydrake.common.yaml import yaml_load
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import FORCE_ESTIMATES, STACKS
 from pedi_drake.exceptions import MissionFileError
+from pedi_drake.locomotion.gait import GAITS
 from pedi_drake.mission.posture_planner import PLAN_LATENCY, POSTURE_DURATION
 from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.resources import missions_dir
@@ -35,6 +36,8 @@ from pedi_drake.robot import FOOT_RADIUS, LEG_NAMES
 from pedi_drake.scenario import Push, RobotConfig, SceneObject, resolve_model_path, scene_problems
 
 FRAMES = ("world", "trunk")
+# The contact ramp a mission may ask of the controllers [s], and the longest a walking mission may.
+MIN_RAMP_TIME, MAX_RAMP_TIME, WALK_RAMP_LIMIT = 0.02, 1.0, 0.1
 # How leg_to_pedipulation places the trunk before lifting: "fixed" shifts the centre of mass over
 # the centroid of the other supports at the current height and attitude; "optimal" takes the
 # posture of largest SUF at the foot's targets (pedi_drake.suf.posture).
@@ -187,6 +190,34 @@ class LegToSupport(PhaseBase):
 
     leg: str = "FR"
     duration: float = 1.5
+
+
+@dataclasses.dataclass
+class WalkVelocity(PhaseBase):
+    """Walks at a constant twist for `duration`, then stops with the feet back under the hips and
+    the trunk over them (pedi_drake.mission.walk)."""
+
+    # Forward and sideways speed [m/s] and yaw rate [rad/s], in the walking frame (the trunk's
+    # heading); within the gait's limits (pedi_drake.locomotion.gait.GAIT_LIMITS).
+    twist: list[float] = dataclasses.field(default_factory=lambda: [0.1, 0.0, 0.0])
+    duration: float = 5.0  # [s] of walking at the twist (the stop comes after)
+    gait: str = "static_walk"  # a gait of pedi_drake.locomotion.gait.GAITS
+    timeout: float = 120.0
+
+
+@dataclasses.dataclass
+class Walk(PhaseBase):
+    """Walks to a pose in the world and stops there, the feet back under the hips: succeeds when
+    the estimated trunk is within `tolerance` and `yaw_tolerance` of it."""
+
+    # The goal's x, y [m] in the world (the trunk's origin).
+    position: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0])
+    yaw: float = 0.0  # [rad] the goal's heading
+    speed: float = 0.1  # [m/s] the largest walking speed; within the gait's forward limit
+    gait: str = "static_walk"
+    tolerance: float = 0.03  # [m]
+    yaw_tolerance: float = 0.05  # [rad]
+    timeout: float = 120.0
 
 
 @dataclasses.dataclass
@@ -452,6 +483,8 @@ PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "teleop_foot": TeleopFoot,
     "wait": Wait,
     "switch_controller": SwitchController,
+    "walk_velocity": WalkVelocity,
+    "walk": Walk,
 }
 
 
@@ -538,6 +571,8 @@ class MissionSpec:
     force_estimate: str = ""  # "joint_torque" or "impedance"; empty: the scenario's
     # The whole-body controller's task stack ("paper000" or "paper003"); empty: the scenario's.
     stack: str = ""
+    # Both controllers' contact ramp time [s]; 0: the scenario's.
+    contact_ramp_time: float = 0.0
     # Disturbances of the simulated world during the mission (added to the scenario's).
     pushes: list[Push] = dataclasses.field(default_factory=list)
     # The box lift the judge requires (None: the mission lifts nothing).
@@ -584,6 +619,9 @@ class _MissionFile:
     # The task stack the whole-body controller runs the mission on (pedi_drake.control.compiled_stack):
     # "paper000" or "paper003"; empty: the scenario's. Ignored by the other controllers.
     stack: str = ""
+    # The controllers' contact_ramp_time for this mission [s]; 0: the scenario's. A mission that
+    # walks needs at most WALK_RAMP_LIMIT: a gait loads and unloads a foot every step.
+    contact_ramp_time: float = 0.0
     pushes: list[Push] = dataclasses.field(default_factory=list)
     # The box lift the judge requires of the run (pedi_drake.evaluation.box_lift).
     box_lift: BoxLift | None = None
@@ -691,6 +729,11 @@ def load_mission(name_or_path: str) -> MissionSpec:
         )
     if header.stack not in ("", *STACKS):
         raise MissionFileError(f"{where}: stack: must be one of {STACKS} (or absent), got {header.stack!r}")
+    if not (header.contact_ramp_time == 0.0 or MIN_RAMP_TIME <= header.contact_ramp_time <= MAX_RAMP_TIME):
+        raise MissionFileError(
+            f"{where}: contact_ramp_time: must be 0 (the scenario's) or within [{MIN_RAMP_TIME}, {MAX_RAMP_TIME}] s, "
+            f"got {header.contact_ramp_time!r}"
+        )
     for problem in scene_problems(header.scene, path.parent):
         raise MissionFileError(f"{where}: {problem}")
     for obj in header.scene:
@@ -725,6 +768,12 @@ def load_mission(name_or_path: str) -> MissionSpec:
     if duplicates:
         raise MissionFileError(f"{where}: phases: duplicate phase names {duplicates}")
     _attach_posture_goals(phases, where)
+    walks = [phase.name for phase in phases if isinstance(phase, (Walk, WalkVelocity))]
+    if walks and not 0.0 < header.contact_ramp_time <= WALK_RAMP_LIMIT:
+        raise MissionFileError(
+            f"{where}: contact_ramp_time: the walking phases {walks} need it set, at most {WALK_RAMP_LIMIT} s "
+            f"(a foot is unloaded and loaded every step), got {header.contact_ramp_time!r}"
+        )
     if header.teleop is not None:
         _check_phase_values(header.teleop, f"{where}: teleop")
     if header.semi_autonomous is not None:
@@ -751,6 +800,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
         source=where,
         force_estimate=header.force_estimate,
         stack=header.stack,
+        contact_ramp_time=header.contact_ramp_time,
         pushes=header.pushes,
         box_lift=header.box_lift,
         touches=header.touches,
@@ -845,6 +895,23 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
     leg = getattr(phase, "leg", None)
     if leg is not None:
         need(leg in LEG_NAMES, "leg", f"must be one of {LEG_NAMES}, got {leg!r}")
+    if isinstance(phase, (Walk, WalkVelocity)):
+        need(phase.gait in GAITS, "gait", f"unknown gait {phase.gait!r}; gaits: {', '.join(GAITS)}")
+        limits = GAITS[phase.gait]
+    if isinstance(phase, WalkVelocity):
+        need(len(phase.twist) == 3, "twist", f"expected [forward m/s, sideways m/s, yaw rate rad/s], got {phase.twist}")
+        problem = limits.problem(phase.twist)
+        need(problem is None, "twist", f"{problem} ({phase.gait})")
+    if isinstance(phase, Walk):
+        need(len(phase.position) == 2, "position", f"expected [x, y] in metres, got {phase.position}")
+        need(all(math.isfinite(v) for v in [*phase.position, phase.yaw]), "position", "must be finite")
+        need(
+            phase.speed <= limits.forward,
+            "speed",
+            f"{phase.speed} m/s is beyond the gait's limit {limits.forward} m/s ({phase.gait})",
+        )
+        need(phase.yaw_tolerance > 0, "yaw_tolerance", f"must be > 0 rad, got {phase.yaw_tolerance}")
+        need(phase.tolerance > 0, "tolerance", f"must be > 0 m, got {phase.tolerance}")
     if isinstance(phase, Reach):
         need(phase.frame in FRAMES, "frame", f"must be one of {FRAMES}, got {phase.frame!r}")
         need(len(phase.target) == 3, "target", f"expected [x, y, z] in metres, got {phase.target}")

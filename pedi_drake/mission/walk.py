@@ -1,0 +1,343 @@
+"""The walking phases, `walk_velocity` and `walk`: the static walk of pedi_drake.locomotion run
+through the whole-body controller's references.
+
+Each slot of the gait is planned as it starts (pedi_drake.locomotion.static_walk.plan_slot): the
+trunk gets one rest-to-rest quintic to the slot's CoM target on the walking line, at the slot's
+heading, and a swing slot unloads its foot (the contact set), then swings it (a foot position
+task in the world, mode 1 of the leg reference: the HQP's foot task, paper 002's 3-D foot
+impedance with the trunk in its null space) through an apex to its foothold and on into the
+ground, and loads it again when its sensor feels the ground:
+
+* an early touchdown ends the swing at once (the contact set loads the foot where it is);
+* a late one keeps the slot open, the foot's reference going on down at SEARCH_SPEED past its
+  end (PLACE_DEPTH into the planned ground), until the sensor feels the ground or LATE_TOUCHDOWN
+  has passed (then the phase fails: no ground).
+
+The twist is read at the start of every cycle (a `walk` steers its walking line to its goal), and
+the cycle for it chosen then; when the walking is over a last cycle at rest puts every foot back
+under its hip, and the trunk is centred over the four feet.
+"""
+
+import dataclasses
+import math
+
+import numpy as np
+from pydrake.math import RollPitchYaw, RotationMatrix
+
+from pedi_drake import robot
+from pedi_drake.exceptions import PediError, UnreachableTarget
+from pedi_drake.locomotion.footholds import NOMINAL_FEET_B, PlanarPose
+from pedi_drake.locomotion.gait import CYCLE_LENGTH, GAITS, SWING, StaticWalkTiming
+from pedi_drake.locomotion.static_walk import SlotPlan, choose_cycle, replan_slot
+from pedi_drake.mission import spec
+from pedi_drake.mission.progress import FAILED, LEG_MODE_FOOT, RUNNING, SUCCEEDED, LegTrajectory, MissionProgress
+from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment, RampSegment
+
+CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
+PLACE_DEPTH = 0.015  # [m] below the ground that a swing's reference ends (it stops at the touch)
+LATE_TOUCHDOWN = 0.4  # [s] after its swing's end a foot that has felt no ground fails the phase
+SEARCH_SPEED = 0.1  # [m/s] a late foot's reference goes on down at this speed
+# A stopping walk is done when every foot is this close to its place under its hip [m].
+SQUARED_UP = 0.02
+CENTRE_DURATION = 0.6  # [s] the trunk's last move over the four feet
+
+
+@dataclasses.dataclass(frozen=True)
+class WalkState:
+    """Where a walking phase is (a value, shared by the progress's copies)."""
+
+    cycle: tuple  # the cycle's slots (pedi_drake.locomotion.gait)
+    index: int  # the running slot's index in the cycle
+    plan: SlotPlan | None  # the running slot's plan; None: the walk is centring (its last move)
+    feet_xy: np.ndarray  # (4, 2) the feet's planned positions, world [m]
+    height: float  # [m] the trunk's height above the ground
+    com_offset_L: np.ndarray  # (2,) the CoM's offset from the trunk origin in the heading's frame [m]
+    stage: str = "down"  # a swing's stage: "unload", "swing", "load"; "down" for a shift
+    t_apex: float = 0.0  # [s] when the swing foot is at its apex: touchdowns count after it
+    t_swing_end: float = 0.0  # [s] when its reference reaches the ground
+    searching: bool = False  # a late foot's reference goes on down (SEARCH_SPEED)
+    twist: tuple = (0.0, 0.0, 0.0)  # the cycle's twist
+    stopping: bool = False  # the walking is over: the cycle at rest squares the feet up
+    steps: int = 0
+    late_touchdowns: int = 0
+    early_touchdowns: int = 0
+    slowed_cycles: int = 0  # cycles walked at a share of the twist (static_walk.TWIST_SCALES)
+    slowed_slots: int = 0  # slots of a cycle under way replanned slower from where the feet landed
+    distance: float = 0.0  # [m] the walking line's path length
+    until: float = 0.0  # [s] centring: when it ends
+
+    def __deepcopy__(self, memo) -> "WalkState":
+        return self
+
+
+def _timing(env) -> StaticWalkTiming:
+    return StaticWalkTiming(ramp=env.contact_ramp_time)
+
+
+def _line_of(view: RobotView, progress: MissionProgress) -> tuple[PlanarPose, np.ndarray]:
+    """The walking line at the CoM under the trunk's reference, and the CoM's offset from the
+    trunk origin in the heading's frame [m] (the legs move it by millimetres: taken as fixed)."""
+    refs = progress.references
+    p_ref = refs.body_position.sample(view.time).position
+    yaw = float(RollPitchYaw(refs.body_orientation.sample(view.time).rotation).yaw_angle())
+    heading = PlanarPose(0.0, 0.0, yaw)
+    offset_L = heading.rotation().T @ (view.com_W() - view.base.p_WB)[:2]
+    com_xy = p_ref[:2] + heading.rotation() @ offset_L
+    return PlanarPose(float(com_xy[0]), float(com_xy[1]), yaw), offset_L
+
+
+def _trunk_xy(com_xy: np.ndarray, yaw: float, offset_L: np.ndarray) -> np.ndarray:
+    """The trunk origin's x, y [m] that puts the CoM at `com_xy` with the heading `yaw`."""
+    return np.asarray(com_xy, float) - PlanarPose(0.0, 0.0, yaw).rotation() @ offset_L
+
+
+def _heading(yaw: float) -> RotationMatrix:
+    return RotationMatrix(RollPitchYaw(0.0, 0.0, yaw))
+
+
+class WalkRunnerBase:
+    """The static walk, its twist given by `twist` (a subclass's)."""
+
+    def twist(
+        self, phase, state: WalkState, line: PlanarPose, t: float, progress: MissionProgress
+    ) -> np.ndarray | None:
+        """The twist for the next cycle; None: the walking is over."""
+        raise NotImplementedError
+
+    def start(self, phase, progress, view, env):
+        refs = progress.references
+        if refs.legs or np.any(refs.contacts[:4] < 0.5) or np.any(refs.contacts[4:] > 0.5):
+            raise UnreachableTarget(
+                f"{phase.name}: walking needs the robot on its four feet, no leg lifted, no prong loaded"
+            )
+        line, offset = _line_of(view, progress)
+        p_ref = refs.body_position.sample(view.time).position
+        state = WalkState(
+            cycle=(),
+            index=CYCLE_LENGTH - 1,
+            plan=None,
+            feet_xy=view.feet_W_array()[:, :2].copy(),
+            height=float(p_ref[2]),
+            com_offset_L=offset,
+        )
+        progress.memo["line"] = line
+        progress.memo["walk"] = state
+        progress.memo["walk"] = self._next_slot(phase, progress, view, env, state, line, view.time)
+
+    def _next_slot(self, phase, progress, view, env, state: WalkState, line: PlanarPose, t: float) -> WalkState:
+        """Plans and starts the slot after `state`'s (a new cycle after the last)."""
+        timing = _timing(env)
+        com_xy = line.to_world(np.zeros(2)) if state.plan is None else state.plan.com_end_xy
+        index = (state.index + 1) % CYCLE_LENGTH
+        cycle, twist, stopping = state.cycle, np.asarray(state.twist, float), state.stopping
+        slowed = state.slowed_cycles
+        if index == 0:
+            wanted = None if stopping else self.twist(phase, state, line, t, progress)
+            if wanted is None and not stopping:
+                progress.records[-1].metrics["walked_until_s"] = t  # the stop starts
+            stopping = wanted is None
+            twist = np.zeros(3) if stopping else np.asarray(wanted, float)
+            if stopping and _squared_up(state.feet_xy, line):
+                return self._centre(progress, state, line, t)
+            chosen = choose_cycle(line, com_xy, state.feet_xy, twist, timing)
+            if chosen is None:
+                raise UnreachableTarget(
+                    f"{phase.name}: no static walk cycle keeps the CoM inside the support at twist {list(twist)}"
+                )
+            cycle, scale = chosen
+            twist = scale * twist
+            slowed += scale < 1.0
+        try:
+            plan, share = replan_slot(cycle, index, t, line, com_xy, state.feet_xy, twist, timing)
+        except PediError as error:
+            raise UnreachableTarget(f"{phase.name}: {error}") from None
+        slowed_slots = state.slowed_slots + (share < 1.0 and np.any(twist != 0.0))
+        refs = progress.references
+        p_now = refs.body_position.sample(t).position
+        R_now = refs.body_orientation.sample(t).rotation
+        goal = np.array([*_trunk_xy(plan.com_end_xy, plan.line_end.yaw, state.com_offset_L), state.height])
+        refs.body_position = QuinticSegment(p_now, goal, t, plan.duration)
+        refs.body_orientation = QuinticOrientationSegment(R_now, _heading(plan.line_end.yaw), t, plan.duration)
+        stage = "down"
+        if plan.slot.kind == SWING:
+            refs.contacts[robot.LEG_NAMES.index(plan.slot.leg)] = 0.0
+            stage = "unload"
+        travelled = float(np.linalg.norm(plan.line_end.xy - line.xy))
+        progress.memo["line"] = plan.line_end
+        return dataclasses.replace(
+            state,
+            cycle=cycle,
+            index=index,
+            plan=plan,
+            stage=stage,
+            twist=tuple(float(v) for v in twist),
+            stopping=stopping,
+            slowed_cycles=slowed,
+            slowed_slots=slowed_slots,
+            distance=state.distance + travelled,
+        )
+
+    def _centre(self, progress, state: WalkState, line: PlanarPose, t: float) -> WalkState:
+        """The walk's last move: the CoM over the middle of the four feet, at the line's heading."""
+        refs = progress.references
+        p_now = refs.body_position.sample(t).position
+        R_now = refs.body_orientation.sample(t).rotation
+        centre = state.feet_xy.mean(axis=0)
+        goal = np.array([*_trunk_xy(centre, line.yaw, state.com_offset_L), state.height])
+        refs.body_position = QuinticSegment(p_now, goal, t, CENTRE_DURATION)
+        refs.body_orientation = QuinticOrientationSegment(R_now, _heading(line.yaw), t, CENTRE_DURATION)
+        return dataclasses.replace(state, plan=None, until=t + CENTRE_DURATION)
+
+    def step(self, phase, progress, view, env):
+        state: WalkState = progress.memo["walk"]
+        t = view.time
+        if state.plan is None:  # centring
+            if t < state.until:
+                return RUNNING
+            self._record(progress, state, view)
+            return self.finished(phase, progress, view, state)
+        plan = state.plan
+        timing = _timing(env)
+        if plan.slot.kind == SWING:
+            state = self._swing(phase, progress, view, state, timing)
+            if state is None:
+                return FAILED
+            progress.memo["walk"] = state
+            if state.stage != "load":
+                return RUNNING
+        if t < plan.t_end:
+            return RUNNING
+        if plan.slot.kind == SWING:
+            state = dataclasses.replace(state, steps=state.steps + 1)
+        progress.memo["walk"] = self._next_slot(phase, progress, view, env, state, progress.memo["line"], t)
+        self._record(progress, progress.memo["walk"], view)
+        return RUNNING
+
+    def _swing(self, phase, progress, view, state: WalkState, timing: StaticWalkTiming) -> WalkState | None:
+        """Advances the swing of the running slot; None if the foot found no ground."""
+        plan, t, refs = state.plan, view.time, progress.references
+        leg = plan.slot.leg
+        k = robot.LEG_NAMES.index(leg)
+        if state.stage == "unload":
+            if t < plan.t0 + timing.ramp:
+                return state
+            start = view.foot_W(leg)
+            end = np.array([*plan.foothold_xy, robot.FOOT_RADIUS - PLACE_DEPTH])
+            apex = 0.5 * (start + end)
+            apex[2] = max(start[2], robot.FOOT_RADIUS) + timing.step_height
+            half = 0.5 * timing.swing
+            path = PiecewiseQuintic.through(np.array([start, apex, end]), t, [half, half])
+            refs.legs[leg] = LegTrajectory(LEG_MODE_FOOT, path)
+            return dataclasses.replace(state, stage="swing", t_apex=t + half, t_swing_end=t + timing.swing)
+        if state.stage == "swing":
+            touched = t >= state.t_apex and view.foot_force[k] > CONTACT_FORCE_THRESHOLD
+            if not touched:
+                if t > state.t_swing_end + LATE_TOUCHDOWN:
+                    progress.reason = f"{phase.name}: {leg} felt no ground {LATE_TOUCHDOWN} s after its swing's end"
+                    return None
+                if t >= state.t_swing_end and not state.searching:
+                    # Late: the ground is lower than planned (or the foot rests on it too lightly
+                    # to be felt); its reference goes on down until the sensor feels the ground.
+                    end = refs.legs[leg].trajectory.sample(t).position
+                    search = RampSegment(end, np.array([0.0, 0.0, -SEARCH_SPEED]), t, LATE_TOUCHDOWN)
+                    refs.legs[leg] = LegTrajectory(LEG_MODE_FOOT, search)
+                    return dataclasses.replace(state, searching=True)
+                return state
+            refs.legs.pop(leg, None)
+            refs.contacts[k] = 1.0
+            feet = state.feet_xy.copy()
+            feet[k] = view.foot_W(leg)[:2]
+            early = t < state.t_swing_end - 0.05 * timing.swing
+            late = t > state.t_swing_end
+            metrics = progress.records[-1].metrics
+            errors = metrics.setdefault("foothold_errors_m", [])
+            errors.append(float(np.linalg.norm(feet[k] - plan.foothold_xy)))
+            return dataclasses.replace(
+                state,
+                stage="load",
+                searching=False,
+                feet_xy=feet,
+                early_touchdowns=state.early_touchdowns + early,
+                late_touchdowns=state.late_touchdowns + late,
+            )
+        return state
+
+    @staticmethod
+    def _record(progress: MissionProgress, state: WalkState, view: RobotView) -> None:
+        metrics = progress.records[-1].metrics
+        metrics.update(
+            steps=state.steps,
+            early_touchdowns=state.early_touchdowns,
+            late_touchdowns=state.late_touchdowns,
+            slowed_cycles=state.slowed_cycles,
+            slowed_slots=state.slowed_slots,
+            planned_distance_m=state.distance,
+            estimated_pose=[*view.base.p_WB[:2].tolist(), float(RollPitchYaw(view.X_WB.rotation()).yaw_angle())],
+        )
+
+    def finished(self, phase, progress, view, state: WalkState) -> str:
+        return SUCCEEDED
+
+
+def _squared_up(feet_xy: np.ndarray, line: PlanarPose) -> bool:
+    """Whether every foot is within SQUARED_UP of its place under its hip on the walking line."""
+    nominal = np.array([line.to_world(p) for p in NOMINAL_FEET_B])
+    return bool(np.all(np.linalg.norm(feet_xy - nominal, axis=1) < SQUARED_UP))
+
+
+class WalkVelocityRunner(WalkRunnerBase):
+    """walk_velocity: the phase's twist for its duration."""
+
+    def twist(self, phase, state, line, t, progress):
+        return np.asarray(phase.twist, float) if t < progress.phase_start + phase.duration else None
+
+
+class WalkToRunner(WalkRunnerBase):
+    """walk: steers the walking line to the goal, then stops; judged by the trunk's estimate."""
+
+    def twist(self, phase, state, line, t, progress):
+        goal = self._goal_line(phase, state)
+        error_L = line.rotation().T @ (goal.xy - line.xy)
+        yaw_error = _wrap(goal.yaw - line.yaw)
+        if np.linalg.norm(error_L) < 0.25 * phase.tolerance and abs(yaw_error) < 0.25 * phase.yaw_tolerance:
+            return None
+        limits = GAITS[phase.gait]
+        cycle = StaticWalkTiming().cycle
+        yaw_rate = float(np.clip(yaw_error / cycle, -limits.yaw_rate, limits.yaw_rate))
+        # The speed whose arc at that yaw rate ends the cycle on the goal (PlanarPose.moved inverted),
+        # scaled down as a whole (its direction kept) to the phase's and the gait's limits.
+        angle = yaw_rate * cycle
+        if abs(angle) < 1e-9:
+            velocity = error_L / cycle
+        else:
+            s, c = math.sin(angle), math.cos(angle)
+            arc = np.array([[s, -(1.0 - c)], [1.0 - c, s]]) / yaw_rate
+            velocity = np.linalg.solve(arc, error_L)
+        bounds = np.array([min(phase.speed, limits.forward), min(phase.speed, limits.sideways)])
+        velocity *= min(1.0, *(bounds / np.maximum(np.abs(velocity), 1e-12)))
+        return np.array([velocity[0], velocity[1], yaw_rate])
+
+    @staticmethod
+    def _goal_line(phase, state: WalkState) -> PlanarPose:
+        """The goal as a walking line: the CoM's place with the trunk origin at the goal."""
+        goal = PlanarPose(phase.position[0], phase.position[1], phase.yaw)
+        x, y = goal.to_world(state.com_offset_L)
+        return PlanarPose(float(x), float(y), phase.yaw)
+
+    def finished(self, phase, progress, view, state):
+        error = float(np.linalg.norm(view.base.p_WB[:2] - np.asarray(phase.position, float)))
+        yaw = float(RollPitchYaw(view.X_WB.rotation()).yaw_angle())
+        yaw_error = abs(_wrap(phase.yaw - yaw))
+        progress.records[-1].metrics.update(goal_error_m=error, goal_yaw_error_rad=yaw_error)
+        if error <= phase.tolerance and yaw_error <= phase.yaw_tolerance:
+            return SUCCEEDED
+        progress.reason = f"{phase.name}: stopped {error:.3f} m and {yaw_error:.3f} rad from the goal"
+        return FAILED
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+RUNNERS = {spec.WalkVelocity: WalkVelocityRunner(), spec.Walk: WalkToRunner()}
