@@ -1,10 +1,10 @@
 """Judging the walking phases by ground truth: result.json's `walks` rows.
 
-Per `walk` or `walk_velocity` phase: the trunk's true start and end pose, the distance it walked
-and its mean speed over the commanded window, how far any stance foot slipped, the estimate's
-drift against the true trunk path, the steps and touchdowns the phase counted, and for `walk` the
-true distance and heading error from its goal (a `walk` whose trunk stopped outside its
-tolerances fails, whatever the estimate says).
+Per `walk`, `walk_velocity` or `walk_teleop` phase: the trunk's true start and end pose, the
+distance it walked and its mean speed (while walking, and over a walk_velocity's commanded
+window), how far any stance foot slipped, the estimate's drift against the true trunk path, the
+steps and touchdowns the phase counted, and for `walk` the true distance and heading error from
+its goal (a `walk` whose trunk stopped outside its tolerances fails, whatever the estimate says).
 """
 
 import math
@@ -22,7 +22,7 @@ STANCE_FORCE = 20.0
 # from the touchdown (the sphere rolls onto its contact as the load comes on).
 STANCE_SETTLE = 0.05
 SLIP_SAMPLE_PERIOD = 0.01  # [s] feet are sampled this often for the slip
-WALK_KINDS = (spec.Walk, spec.WalkVelocity)
+WALK_KINDS = (spec.Walk, spec.WalkVelocity, spec.WalkTeleop)
 
 
 def _yaw(quaternion_wxyz: np.ndarray) -> float:

@@ -221,6 +221,17 @@ class Walk(PhaseBase):
 
 
 @dataclasses.dataclass
+class WalkTeleop(PhaseBase):
+    """Walks at the operator's twist (a KIND_TWIST command: the remote's sticks with `sticks:
+    walk`, or a foot_command_lcmt of that kind) for `duration`, then stops with the feet back under
+    the hips. With no fresh twist (none yet, or older than OPERATOR_TWIST_STALE) it steps in place."""
+
+    duration: float = 30.0  # [s] of walking at the operator's twist (the stop comes after)
+    gait: str = "static_walk"
+    timeout: float = 120.0
+
+
+@dataclasses.dataclass
 class CompanionReach:
     """A further leg that a reach phase moves at the same time as its main leg."""
 
@@ -485,6 +496,7 @@ PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "switch_controller": SwitchController,
     "walk_velocity": WalkVelocity,
     "walk": Walk,
+    "walk_teleop": WalkTeleop,
 }
 
 
@@ -591,9 +603,9 @@ class MissionSpec:
     object_push: ObjectPush | None = None
 
     def takes_an_operator(self) -> bool:
-        """Whether an operator has a part in the mission: a teleop_foot phase, or a `teleop:` or
-        `semi_autonomous:` block."""
-        teleop_phase = any(isinstance(phase, TeleopFoot) for phase in self.phases)
+        """Whether an operator has a part in the mission: a teleop_foot or walk_teleop phase, or a
+        `teleop:` or `semi_autonomous:` block."""
+        teleop_phase = any(isinstance(phase, (TeleopFoot, WalkTeleop)) for phase in self.phases)
         return teleop_phase or self.teleop is not None or self.semi_autonomous is not None
 
     def planned_duration(self) -> float:
@@ -768,7 +780,7 @@ def load_mission(name_or_path: str) -> MissionSpec:
     if duplicates:
         raise MissionFileError(f"{where}: phases: duplicate phase names {duplicates}")
     _attach_posture_goals(phases, where)
-    walks = [phase.name for phase in phases if isinstance(phase, (Walk, WalkVelocity))]
+    walks = [phase.name for phase in phases if isinstance(phase, (Walk, WalkVelocity, WalkTeleop))]
     if walks and not 0.0 < header.contact_ramp_time <= WALK_RAMP_LIMIT:
         raise MissionFileError(
             f"{where}: contact_ramp_time: the walking phases {walks} need it set, at most {WALK_RAMP_LIMIT} s "
@@ -895,7 +907,7 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
     leg = getattr(phase, "leg", None)
     if leg is not None:
         need(leg in LEG_NAMES, "leg", f"must be one of {LEG_NAMES}, got {leg!r}")
-    if isinstance(phase, (Walk, WalkVelocity)):
+    if isinstance(phase, (Walk, WalkVelocity, WalkTeleop)):
         need(phase.gait in GAITS, "gait", f"unknown gait {phase.gait!r}; gaits: {', '.join(GAITS)}")
         limits = GAITS[phase.gait]
     if isinstance(phase, WalkVelocity):

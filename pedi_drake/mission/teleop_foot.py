@@ -57,7 +57,7 @@ from pedi_drake.mission.teleop_bounds import (
     step_into_workspace,
     workspace_margin,
 )
-from pedi_drake.operator.command import FRAME_TRUNK, KIND_POSITION, MODE_AUTONOMOUS
+from pedi_drake.operator.command import FRAME_TRUNK, KIND_POSITION, KIND_TWIST, MODE_AUTONOMOUS
 from pedi_drake.trajectory import RampSegment
 
 BOUNDS = ("workspace", "speed", "force", "balance", "silence_hold")
@@ -69,6 +69,8 @@ def _desired_velocity_W(view: RobotView, p_ref_W: np.ndarray, dt: float) -> np.n
     """The operator's command as a world-frame foot velocity [m/s]; a command so large that it
     overflows gives an infinite one (which the speed bound turns into no motion), silently."""
     command = view.operator
+    if command.kind == KIND_TWIST:  # a walking command: not for a lifted foot, which holds still
+        return np.zeros(3)
     R_WB = view.X_WB.rotation().matrix()
     with np.errstate(over="ignore", invalid="ignore"):
         if command.kind == KIND_POSITION:

@@ -27,11 +27,12 @@ from pydrake.math import RollPitchYaw, RotationMatrix
 from pedi_drake import robot
 from pedi_drake.exceptions import PediError, UnreachableTarget
 from pedi_drake.locomotion.footholds import NOMINAL_FEET_B, PlanarPose
-from pedi_drake.locomotion.gait import CYCLE_LENGTH, GAITS, SWING, StaticWalkTiming
+from pedi_drake.locomotion.gait import CYCLE_LENGTH, GAITS, SWING, GaitLimits, StaticWalkTiming
 from pedi_drake.locomotion.static_walk import SlotPlan, choose_cycle, replan_slot
 from pedi_drake.mission import spec
 from pedi_drake.mission.progress import FAILED, LEG_MODE_FOOT, RUNNING, SUCCEEDED, LegTrajectory, MissionProgress
 from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.operator.command import KIND_TWIST, OperatorCommand
 from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment, RampSegment
 
 CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
@@ -41,6 +42,9 @@ SEARCH_SPEED = 0.1  # [m/s] a late foot's reference goes on down at this speed
 # A stopping walk is done when every foot is this close to its place under its hip [m].
 SQUARED_UP = 0.02
 CENTRE_DURATION = 0.6  # [s] the trunk's last move over the four feet
+# [s] an operator twist older than this is taken for none (the walk steps in place): the remote
+# and the LCM operator send at 10 Hz or more.
+OPERATOR_TWIST_STALE = 0.5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -340,4 +344,34 @@ def _wrap(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
-RUNNERS = {spec.WalkVelocity: WalkVelocityRunner(), spec.Walk: WalkToRunner()}
+class WalkTeleopRunner(WalkRunnerBase):
+    """walk_teleop: the operator's twist, held to the gait's limits, for the phase's duration."""
+
+    def start(self, phase, progress, view, env):
+        if view.operator is None:
+            raise UnreachableTarget(f"{phase.name}: no operator input (set the scenario's operator.source)")
+        super().start(phase, progress, view, env)
+
+    def twist(self, phase, state, line, t, progress):
+        if t >= progress.phase_start + phase.duration:
+            return None
+        return operator_twist(progress.memo.get("operator"), GAITS[phase.gait])
+
+    def step(self, phase, progress, view, env):
+        progress.memo["operator"] = view.operator  # read at the next cycle's start
+        return super().step(phase, progress, view, env)
+
+
+def operator_twist(command: OperatorCommand | None, limits: GaitLimits) -> np.ndarray:
+    """The operator's twist held to `limits` (each component saturated: a stick at full deflection
+    asks for the most there is); zero without a fresh KIND_TWIST command."""
+    if command is None or command.kind != KIND_TWIST or not command.age < OPERATOR_TWIST_STALE:
+        return np.zeros(3)
+    value = np.asarray(command.value, float)
+    if not np.all(np.isfinite(value)):
+        return np.zeros(3)
+    bounds = np.array([limits.forward, limits.sideways, limits.yaw_rate])
+    return np.clip(value, -bounds, bounds)
+
+
+RUNNERS = {spec.WalkVelocity: WalkVelocityRunner(), spec.Walk: WalkToRunner(), spec.WalkTeleop: WalkTeleopRunner()}

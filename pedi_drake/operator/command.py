@@ -7,7 +7,9 @@ mode_request  the last mode the operator asked for: MODE_NONE (nothing asked yet
               MODE_AUTONOMOUS (the mission's phases), MODE_TELEOP (the teleoperated foot) or
               MODE_SEMI_AUTONOMOUS (value is a foot target the mission serves on its own)
 frame         FRAME_TRUNK or FRAME_WORLD: the frame of `value`
-kind          KIND_VELOCITY (value is a foot velocity [m/s]) or KIND_POSITION (a foot centre [m])
+kind          KIND_VELOCITY (value is a foot velocity [m/s]), KIND_POSITION (a foot centre [m]) or
+              KIND_TWIST (value is a base twist for a walk_teleop phase: forward and sideways
+              speed [m/s] and yaw rate [rad/s] in the trunk's heading frame; `frame` is ignored)
 estop         1 once any message asked for an E-stop (latched for the rest of the run)
 age           time since the last valid message [s] (inf before any): the operator's heartbeat
 received, dropped   valid messages taken in, and messages rejected (malformed, non-finite, ...)
@@ -24,7 +26,8 @@ import numpy as np
 MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP, MODE_SEMI_AUTONOMOUS = 0, 1, 2, 3
 MODES = (MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP, MODE_SEMI_AUTONOMOUS)
 FRAME_TRUNK, FRAME_WORLD = 0, 1
-KIND_VELOCITY, KIND_POSITION = 0, 1
+KIND_VELOCITY, KIND_POSITION, KIND_TWIST = 0, 1, 2
+KINDS = (KIND_VELOCITY, KIND_POSITION, KIND_TWIST)
 CONTROLLER_NONE, CONTROLLER_WHOLE_BODY, CONTROLLER_PROJECTED_IMPEDANCE = 0, 1, 2
 # The scenario's name of each controller a request can name.
 CONTROLLER_NAMES = {CONTROLLER_WHOLE_BODY: "whole_body", CONTROLLER_PROJECTED_IMPEDANCE: "projected_impedance"}

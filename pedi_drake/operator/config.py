@@ -10,6 +10,7 @@ OPERATOR_SOURCES = ("none", "lcm", "remote", "meshcat")
 # Sources read from an LCM bus (the Meshcat panel is read from the Meshcat server).
 LCM_SOURCES = ("lcm", "remote")
 REMOTE_FRAMES = ("trunk", "world")
+REMOTE_STICKS = ("foot", "walk")
 # The remote's switches (rc_command_lcmt fields, int16 on the wire: non-zero while pressed).
 REMOTE_BUTTONS = tuple(name for name in rc_command_lcmt.__slots__ if name.endswith("_switch"))
 # The project's foot command channel (type foot_command_lcmt) and its feedback channel
@@ -24,7 +25,16 @@ class RemoteMapping:
 
     Sticks are in [-1, 1]: left stick up (left_stick[1]) moves the foot forward (+x), left stick
     right (left_stick[0]) moves it right (-y), right stick up (right_stick[1]) moves it up (+z).
+    With `sticks: walk` they drive a walk_teleop phase instead: left stick up walks forward, left
+    stick right walks to the right, right stick right (right_stick[0]) turns right, each at
+    `walk_speeds` at full deflection.
     """
+
+    # What the sticks command: "foot" (a lifted foot's velocity) or "walk" (the trunk's twist).
+    sticks: str = "foot"
+    # The twist at full deflection: forward [m/s], sideways [m/s], yaw rate [rad/s]; the static
+    # walk's limits (pedi_drake.locomotion.gait.GAITS), which a walk_teleop phase holds it to.
+    walk_speeds: list[float] = dataclasses.field(default_factory=lambda: [0.2, 0.1, 0.3])
 
     # Foot speed at full stick deflection [m/s].
     max_speed: float = 0.1
@@ -103,6 +113,11 @@ class OperatorConfig:
             found.append(("remote.deadband", f"must be in [0, 1), got {remote.deadband}"))
         if remote.frame not in REMOTE_FRAMES:
             found.append(("remote.frame", f"must be one of {REMOTE_FRAMES}, got {remote.frame!r}"))
+        if remote.sticks not in REMOTE_STICKS:
+            found.append(("remote.sticks", f"must be one of {REMOTE_STICKS}, got {remote.sticks!r}"))
+        speeds = remote.walk_speeds
+        if len(speeds) != 3 or not all(math.isfinite(v) and v > 0 for v in speeds):
+            found.append(("remote.walk_speeds", f"expected 3 finite numbers > 0 [m/s, m/s, rad/s], got {speeds}"))
         buttons = {"remote.teleop_button": remote.teleop_button, "remote.autonomous_button": remote.autonomous_button}
         buttons.update({f"remote.estop_buttons[{i}]": b for i, b in enumerate(remote.estop_buttons)})
         for field, button in buttons.items():

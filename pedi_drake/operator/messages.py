@@ -5,9 +5,10 @@ controller_request] (the `operator_command` layout's entries of those names,
 pedi_drake.operator.command), so the input system treats both sources alike:
 
   foot_command_lcmt (the project's own type): copied; codes outside their sets are out of range.
-  rc_command_lcmt (the Go1 remote, walk-these-ways layout): sticks -> a foot velocity, buttons ->
-    a mode request and the E-stop (RemoteMapping), no controller request; a ninth number, the
-    largest stick deflection, lets `remote_in_range` reject sticks outside [-1, 1].
+  rc_command_lcmt (the Go1 remote, walk-these-ways layout): sticks -> a foot velocity, or a base
+    twist with `sticks: walk`, buttons -> a mode request and the E-stop (RemoteMapping), no
+    controller request; a ninth number, the largest stick deflection, lets `remote_in_range`
+    reject sticks outside [-1, 1].
 """
 
 from collections.abc import Callable
@@ -19,8 +20,9 @@ from pedi_drake.operator.command import (
     CONTROLLER_REQUESTS,
     FRAME_TRUNK,
     FRAME_WORLD,
-    KIND_POSITION,
+    KIND_TWIST,
     KIND_VELOCITY,
+    KINDS,
     MODE_AUTONOMOUS,
     MODE_NONE,
     MODE_TELEOP,
@@ -51,7 +53,7 @@ def foot_command_in_range(values: np.ndarray) -> bool:
     return bool(
         values[0] in MODES
         and values[1] in (FRAME_TRUNK, FRAME_WORLD)
-        and values[2] in (KIND_VELOCITY, KIND_POSITION)
+        and values[2] in KINDS
         and values[7] in CONTROLLER_REQUESTS
     )
 
@@ -79,11 +81,17 @@ def remote_command_vector(mapping: RemoteMapping) -> Callable[[object], np.ndarr
         sticks = np.abs(np.array([*message.left_stick, *message.right_stick], float))
         forward = _deadband(message.left_stick[1], mapping.deadband)
         right = _deadband(message.left_stick[0], mapping.deadband)
-        up = _deadband(message.right_stick[1], mapping.deadband)
-        velocity = mapping.max_speed * np.array([forward, -right, up])
-        speed = float(np.linalg.norm(velocity))
-        if speed > mapping.max_speed:  # both sticks at full: still the mapping's top speed
-            velocity *= mapping.max_speed / speed
+        if mapping.sticks == "walk":
+            # Walk-these-ways: the left stick drives the trunk forward and sideways, the right
+            # stick's x turns it (right is a negative yaw rate).
+            turn_right = _deadband(message.right_stick[0], mapping.deadband)
+            value, kind = np.asarray(mapping.walk_speeds, float) * [forward, -right, -turn_right], KIND_TWIST
+        else:
+            up = _deadband(message.right_stick[1], mapping.deadband)
+            value, kind = mapping.max_speed * np.array([forward, -right, up]), KIND_VELOCITY
+            speed = float(np.linalg.norm(value))
+            if speed > mapping.max_speed:  # both sticks at full: still the mapping's top speed
+                value *= mapping.max_speed / speed
         if getattr(message, mapping.teleop_button) != 0:
             mode = MODE_TELEOP
         elif getattr(message, mapping.autonomous_button) != 0:
@@ -91,9 +99,7 @@ def remote_command_vector(mapping: RemoteMapping) -> Callable[[object], np.ndarr
         else:
             mode = MODE_NONE
         estop = any(getattr(message, button) != 0 for button in mapping.estop_buttons)
-        return np.array(
-            [mode, frame, KIND_VELOCITY, *velocity, 1.0 if estop else 0.0, CONTROLLER_NONE, sticks.max()], float
-        )
+        return np.array([mode, frame, kind, *value, 1.0 if estop else 0.0, CONTROLLER_NONE, sticks.max()], float)
 
     return to_vector
 
