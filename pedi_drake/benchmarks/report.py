@@ -136,6 +136,23 @@ def _missions(d: dict) -> str:
     return text
 
 
+def _walking(d: dict) -> str:
+    parts = []
+    for key, row in d["summary"].items():
+        mission = key.split()[0].removeprefix("walking/")
+        text = f"{mission} {row['succeeded']}/{row['runs']}"
+        if row.get("goal_error_max_m") is not None:
+            text += f", goal within {100 * row['goal_error_max_m']:.1f} cm and {row['goal_yaw_error_max_deg']:.1f} deg"
+        if row.get("walking_speed_min_m_s") is not None:
+            text += f", {row['walking_speed_min_m_s']:.3f} m/s or more"
+        drift = 100 * row["estimate_drift_share_max"]
+        text += f", stance slip {1e3 * row['stance_slip_max_m']:.1f} mm, estimate drift {drift:.1f} %"
+        if row.get("door_opened_deg_min") is not None:
+            text += f", door opened {row['door_opened_deg_min']:.0f} deg or more"
+        parts.append(text)
+    return "; ".join(parts) + " (largest errors, slowest speed over the runs)"
+
+
 def _estop_button(d: dict) -> str:
     parts = [
         f"{setup}: {row['succeeded']} of {row['runs']} pressed under the bound, largest true force "
@@ -331,6 +348,13 @@ ROWS: tuple[Row, ...] = (
         "missions.json",
         _missions,
         "python -m pedi_drake.benchmarks.missions",
+        summary=True,
+    ),
+    Row(
+        "Static walks on the HQP, seed 0 and 5 noisy seeds, by ground truth",
+        "walking.json",
+        _walking,
+        "python -m pedi_drake.benchmarks.walking --controllers whole_body",
         summary=True,
     ),
     Row(

@@ -3,11 +3,14 @@ noise, on the Kalman estimate, judged by ground truth (pedi_drake.evaluation.wal
 
     python -m pedi_drake.benchmarks.walking [--missions walking/walk_forward,...]
         [--controllers whole_body,projected_impedance] [--noise-seeds 1,2,3,4,5]
-        [--engine ray|serial] [--out benchmarks/results/walking.json]
+        [--trot-speeds 0.5,0.6,0.7,0.8] [--engine ray|serial] [--out benchmarks/results/walking.json]
 
-A batch study (mission x controller x noise) on Ray (every core) or serially. Prints one row per
+A batch study (mission x controller x noise) on Ray (every core) or serially. `--trot-speeds`
+adds a trot of 3 m forward at each commanded speed (missions written for the run), for the
+highest speed that holds on every seed. Prints one row per
 mission and controller: successes, the largest distance and heading error from the goal at the
-end, the slowest walking speed (start to stop, over the trunk's true path), the largest stance
+end, the slowest walking speed (start to stop, over the trunk's true path) and a walk_velocity's
+slowest forward speed over its commanded window, the largest stance
 foot slip, the estimate's largest drift against the distance walked and its largest height
 error, the slowest real-time factor of the simulation beside the bare plant's
 (pedi_drake.benchmarks.station measures that one), and the steps; writes every run's `walks`
@@ -17,6 +20,7 @@ rows to the JSON file.
 import argparse
 import json
 import math
+import shutil
 import statistics
 import tempfile
 from pathlib import Path
@@ -35,7 +39,17 @@ WALKING_MISSIONS = [
     "walking/walk_square",
     "walking/walk_then_hit_target",
     "walking/walk_then_open_door",
+    "walking/trot_forward",
+    "walking/trot_turn",
+    "walking/trot_push",
 ]
+TROT_DISTANCE = 3.0  # [m] of each --trot-speeds trot
+TROT_AT_SPEED = """description: Trot {distance} m forward at {speed} m/s, then stop on four feet.
+contact_ramp_time: 0.02
+phases:
+  - {{kind: stand_up}}
+  - {{kind: walk_velocity, twist: [{speed}, 0.0, 0.0], duration: {duration}, gait: trot}}
+"""
 # The walk-then-pedipulate missions are judged as their standing versions are: the touch by the
 # true contact force (the judge), the door by how far it opened (tests/test_missions.py's floor).
 DOOR_OPENED_DEG = 20.0
@@ -71,6 +85,8 @@ def summarise(runs: list[dict]) -> dict:
         return max(values) if values else None
 
     speeds = [walk["walking_speed_m_s"] for walk in walks if walk.get("walking_speed_m_s") is not None]
+    # walk_velocity: the forward speed over the commanded window, against the command.
+    commanded = [walk["mean_velocity_m_s"][0] for walk in walks if walk.get("mean_velocity_m_s")]
     return {
         "runs": len(runs),
         "succeeded": sum(run["success"] for run in runs),
@@ -80,6 +96,8 @@ def summarise(runs: list[dict]) -> dict:
         if largest("goal_yaw_error_rad") is None
         else math.degrees(largest("goal_yaw_error_rad")),
         "walking_speed_min_m_s": min(speeds) if speeds else None,
+        "commanded_window_speed_min_m_s": min(commanded) if commanded else None,
+        "commanded_window_speed_max_m_s": max(commanded) if commanded else None,
         "stance_slip_max_m": max((max(walk["max_stance_slip_m"].values()) for walk in walks), default=None),
         "estimate_drift_share_max": largest("estimate_drift_share"),
         "estimate_height_error_max_m": largest("estimate_height_error_max_m"),
@@ -96,10 +114,16 @@ def main() -> None:
     parser.add_argument("--missions", default=",".join(WALKING_MISSIONS))
     parser.add_argument("--controllers", default=",".join(CONTROLLERS))
     parser.add_argument("--noise-seeds", default="1,2,3,4,5", help="seeds run with sensor noise ('' for none)")
+    parser.add_argument("--trot-speeds", default="", help="commanded speeds of extra 3 m trots [m/s]")
     parser.add_argument("--engine", choices=ENGINES, default="ray", help="ray (every core) or serial")
     parser.add_argument("--out", default="benchmarks/results/walking.json")
     args = parser.parse_args()
     missions = [m for m in args.missions.split(",") if m]
+    written = Path(tempfile.mkdtemp(prefix="walking_benchmark_"))
+    for speed in [float(v) for v in args.trot_speeds.split(",") if v]:
+        path = written / f"trot_at_{speed:.2f}.yaml"
+        path.write_text(TROT_AT_SPEED.format(distance=TROT_DISTANCE, speed=speed, duration=TROT_DISTANCE / speed))
+        missions.append(str(path))
     for mission in missions:
         load_mission(mission)
     controllers = [c for c in args.controllers.split(",") if c]
@@ -107,12 +131,14 @@ def main() -> None:
     study = walking_study(missions, controllers, seeds)
     with tempfile.TemporaryDirectory() as folder:
         rows = run_study(study, Path(folder), make_engine(args.engine)).rows
+    shutil.rmtree(written)
     results: dict[str, list[dict]] = {}
     for row in sorted(rows, key=lambda r: r["index"]):
         result = result_of(row)
         noise = row["factor.noise"]
         result["seed"], result["noise"] = noise["random_seed"], noise["sensor_noise.enabled"]
-        results.setdefault(f"{row['factor.mission']} {row['factor.controller']}", []).append(result)
+        mission = Path(row["factor.mission"]).stem if row["factor.mission"].endswith(".yaml") else row["factor.mission"]
+        results.setdefault(f"{mission} {row['factor.controller']}", []).append(result)
     summary = {key: summarise(runs) for key, runs in results.items()}
 
     def cm(value):
@@ -122,7 +148,8 @@ def main() -> None:
         return f"{value:7.{digits}f}" if value is not None else "      -"
 
     print(
-        f"\n{'mission controller':<46} {'ok':>5} {'goal cm':>7} {'yaw deg':>7} {'v m/s':>7} {'slip cm':>7} "
+        f"\n{'mission controller':<46} {'ok':>5} {'goal cm':>7} {'yaw deg':>7} {'v m/s':>7} {'v cmd':>7} "
+        f"{'slip cm':>7} "
         f"{'drift %':>7} {'z cm':>7} {'RTF min':>7} {'steps':>6}"
     )
     for key, row in summary.items():
@@ -130,6 +157,7 @@ def main() -> None:
         print(
             f"{key:<46} {row['succeeded']:>2}/{row['runs']:<2} {cm(row['goal_error_max_m'])} "
             f"{number(row['goal_yaw_error_max_deg'])} {number(row['walking_speed_min_m_s'], 3)} "
+            f"{number(row['commanded_window_speed_min_m_s'], 3)} "
             f"{cm(row['stance_slip_max_m'])} {number(drift)} {cm(row['estimate_height_error_max_m'])} "
             f"{number(row['real_time_factor_min'])} {row['steps_median']:>6.0f}"
         )

@@ -254,7 +254,12 @@ def judge_run(record) -> dict:
                     f"(ground_friction {scenario.ground_friction}); " + reason
                 )
         if simulated.pushes:
-            result["pushes"], slid = judge_pushes(plant, logs, simulated.pushes)
+            walking = [
+                (row["t_start"], sim_time if row["t_end"] is None else row["t_end"])
+                for row in result.get("phases", [])
+                if row["kind"] in ("walk", "walk_velocity", "walk_teleop") and row["status"] != "skipped"
+            ]
+            result["pushes"], slid = judge_pushes(plant, logs, simulated.pushes, walking)
             reason = "; ".join(filter(None, [reason, slid]))
     elif fell and not reason:
         reason = "the trunk fell (state estimate)"
@@ -290,14 +295,17 @@ def scene_graph_inspector(record):
     return record.built.diagram.GetSubsystemByName("station").GetSubsystemByName("scene_graph").model_inspector()
 
 
-def judge_pushes(plant, logs, pushes) -> tuple[list[dict], str]:
+def judge_pushes(plant, logs, pushes, walking: list[tuple[float, float]] = ()) -> tuple[list[dict], str]:
     """result.json's `pushes` rows (None for a push the run ended before) and why a stance foot
-    failed to hold (empty when every one slid at most STANCE_FOOT_SLIDE_LIMIT)."""
+    failed to hold (empty when every one slid at most STANCE_FOOT_SLIDE_LIMIT). A push that
+    starts within one of the `walking` (start, end) windows [s] is not judged by its feet's motion
+    (they step on purpose): the walk's own stance slip judges them (pedi_drake.evaluation.walks)."""
     rows, problems = [], []
     for i, push in enumerate(pushes):
         response = push_response(plant, logs, push)
         rows.append(None if response is None else response.row())
-        if response is not None and response.foot_slide:
+        stepping = any(start <= push.start <= end for start, end in walking)
+        if response is not None and response.foot_slide and not stepping:
             leg, slide = response.max_foot_slide()
             if slide > STANCE_FOOT_SLIDE_LIMIT:
                 problems.append(

@@ -44,6 +44,7 @@ from pedi_drake.mission.progress import (
 from pedi_drake.mission.reference_start import foot_reference_start, joint_reference_start
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_foot import TeleopFootRunner
+from pedi_drake.mission.touchdown import CONTACT_FORCE_THRESHOLD, PLACE_DEPTH
 from pedi_drake.mission.walk import RUNNERS as WALK_RUNNERS
 from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.prongs import ProngDesign
@@ -59,8 +60,6 @@ from pedi_drake.trajectory import (
 from pedi_drake.vector3 import orientation_error_W
 
 LYING_HEIGHT = 0.13  # [m] trunk height when lying down under control (legs folded, off the limits)
-CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
-PLACE_DEPTH = 0.015  # [m] below the floor that leg_to_support aims the foot (it stops at the touch)
 SHIFT_DURATION = 1.0  # [s] trunk shift before lifting a leg
 CONTACT_RAMP_WAIT = 0.3  # [s] wait for the controller to ramp a contact's force away
 # A stand-up that starts with the trunk lower than this [m] settles it on the ground first: ...

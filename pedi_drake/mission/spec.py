@@ -29,6 +29,7 @@ from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import FORCE_ESTIMATES, STACKS
 from pedi_drake.exceptions import MissionFileError
 from pedi_drake.locomotion.gait import GAITS
+from pedi_drake.locomotion.trot import TrotTiming
 from pedi_drake.mission.posture_planner import PLAN_LATENCY, POSTURE_DURATION
 from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.resources import missions_dir
@@ -38,6 +39,8 @@ from pedi_drake.scenario import Push, RobotConfig, SceneObject, resolve_model_pa
 FRAMES = ("world", "trunk")
 # The contact ramp a mission may ask of the controllers [s], and the longest a walking mission may.
 MIN_RAMP_TIME, MAX_RAMP_TIME, WALK_RAMP_LIMIT = 0.02, 1.0, 0.1
+# ... and a trotting one: a longer unloading eats into the swing (the trot falls at 0.06 s).
+TROT_RAMP_LIMIT = 0.03
 # How leg_to_pedipulation places the trunk before lifting: "fixed" shifts the centre of mass over
 # the centroid of the other supports at the current height and attitude; "optimal" takes the
 # posture of largest SUF at the foot's targets (pedi_drake.suf.posture).
@@ -214,6 +217,8 @@ class Walk(PhaseBase):
     position: list[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0])
     yaw: float = 0.0  # [rad] the goal's heading
     speed: float = 0.1  # [m/s] the largest walking speed; within the gait's forward limit
+    # [rad/s] the largest yaw rate; 0: the gait's limit
+    yaw_rate: float = 0.0
     gait: str = "static_walk"
     tolerance: float = 0.03  # [m]
     yaw_tolerance: float = 0.05  # [rad]
@@ -786,6 +791,12 @@ def load_mission(name_or_path: str) -> MissionSpec:
             f"{where}: contact_ramp_time: the walking phases {walks} need it set, at most {WALK_RAMP_LIMIT} s "
             f"(a foot is unloaded and loaded every step), got {header.contact_ramp_time!r}"
         )
+    trots = [phase.name for phase in phases if getattr(phase, "gait", "") == "trot"]
+    if trots and header.contact_ramp_time > TROT_RAMP_LIMIT:
+        raise MissionFileError(
+            f"{where}: contact_ramp_time: the trotting phases {trots} need at most {TROT_RAMP_LIMIT} s "
+            f"(a pair of feet lands and the other lifts every {TrotTiming().half} s), got {header.contact_ramp_time!r}"
+        )
     if header.teleop is not None:
         _check_phase_values(header.teleop, f"{where}: teleop")
     if header.semi_autonomous is not None:
@@ -923,6 +934,11 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
             f"{phase.speed} m/s is beyond the gait's limit {limits.forward} m/s ({phase.gait})",
         )
         need(phase.yaw_tolerance > 0, "yaw_tolerance", f"must be > 0 rad, got {phase.yaw_tolerance}")
+        need(
+            0.0 <= phase.yaw_rate <= limits.yaw_rate,
+            "yaw_rate",
+            f"{phase.yaw_rate} rad/s: must be in [0, {limits.yaw_rate}] rad/s, the gait's limit ({phase.gait})",
+        )
         need(phase.tolerance > 0, "tolerance", f"must be > 0 m, got {phase.tolerance}")
     if isinstance(phase, Reach):
         need(phase.frame in FRAMES, "frame", f"must be one of {FRAMES}, got {phase.frame!r}")

@@ -1,5 +1,6 @@
-"""The walking phases, `walk_velocity` and `walk`: the static walk of pedi_drake.locomotion run
-through the whole-body controller's references.
+"""The walking phases, `walk`, `walk_velocity` and `walk_teleop`: the static walk of
+pedi_drake.locomotion run through the whole-body controller's references (`gait: trot` runs
+pedi_drake.mission.trot_steps instead).
 
 Each slot of the gait is planned as it starts (pedi_drake.locomotion.static_walk.plan_slot): the
 trunk gets one rest-to-rest quintic to the slot's CoM target on the walking line, at the slot's
@@ -29,14 +30,13 @@ from pedi_drake.exceptions import PediError, UnreachableTarget
 from pedi_drake.locomotion.footholds import NOMINAL_FEET_B, PlanarPose
 from pedi_drake.locomotion.gait import CYCLE_LENGTH, GAITS, SWING, GaitLimits, StaticWalkTiming
 from pedi_drake.locomotion.static_walk import SlotPlan, choose_cycle, replan_slot
-from pedi_drake.mission import spec
+from pedi_drake.mission import spec, trot_steps
 from pedi_drake.mission.progress import FAILED, LEG_MODE_FOOT, RUNNING, SUCCEEDED, LegTrajectory, MissionProgress
 from pedi_drake.mission.robot_view import RobotView
+from pedi_drake.mission.touchdown import CONTACT_FORCE_THRESHOLD, PLACE_DEPTH
 from pedi_drake.operator.command import KIND_TWIST, OperatorCommand
 from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment, RampSegment
 
-CONTACT_FORCE_THRESHOLD = 8.0  # [N] foot sensor reading that counts as touch-down
-PLACE_DEPTH = 0.015  # [m] below the ground that a swing's reference ends (it stops at the touch)
 LATE_TOUCHDOWN = 0.4  # [s] after its swing's end a foot that has felt no ground fails the phase
 SEARCH_SPEED = 0.1  # [m/s] a late foot's reference goes on down at this speed
 # A stopping walk is done when every foot is this close to its place under its hip [m].
@@ -45,6 +45,7 @@ CENTRE_DURATION = 0.6  # [s] the trunk's last move over the four feet
 # [s] an operator twist older than this is taken for none (the walk steps in place): the remote
 # and the LCM operator send at 10 Hz or more.
 OPERATOR_TWIST_STALE = 0.5
+TROT_STEER_TIME = 1.0  # [s] a trotting `walk` closes its error to the goal over this
 
 
 @dataclasses.dataclass(frozen=True)
@@ -110,6 +111,9 @@ class WalkRunnerBase:
         raise NotImplementedError
 
     def start(self, phase, progress, view, env):
+        if phase.gait == "trot":
+            trot_steps.start(self, phase, progress, view, env)
+            return
         refs = progress.references
         if refs.legs or np.any(refs.contacts[:4] < 0.5) or np.any(refs.contacts[4:] > 0.5):
             raise UnreachableTarget(
@@ -194,6 +198,8 @@ class WalkRunnerBase:
         return dataclasses.replace(state, plan=None, until=t + CENTRE_DURATION)
 
     def step(self, phase, progress, view, env):
+        if phase.gait == "trot":
+            return trot_steps.step(self, phase, progress, view, env)
         state: WalkState = progress.memo["walk"]
         t = view.time
         if state.plan is None:  # centring
@@ -307,8 +313,11 @@ class WalkToRunner(WalkRunnerBase):
         if np.linalg.norm(error_L) < 0.25 * phase.tolerance and abs(yaw_error) < 0.25 * phase.yaw_tolerance:
             return None
         limits = GAITS[phase.gait]
-        cycle = StaticWalkTiming().cycle
-        yaw_rate = float(np.clip(yaw_error / cycle, -limits.yaw_rate, limits.yaw_rate))
+        # The horizon over which the error is asked of the twist: a static walk's cycle (its twist
+        # holds for one), a trot's steering time (its twist changes every half period).
+        cycle = TROT_STEER_TIME if phase.gait == "trot" else StaticWalkTiming().cycle
+        top_yaw_rate = phase.yaw_rate or limits.yaw_rate
+        yaw_rate = float(np.clip(yaw_error / cycle, -top_yaw_rate, top_yaw_rate))
         # The speed whose arc at that yaw rate ends the cycle on the goal (PlanarPose.moved inverted),
         # scaled down as a whole (its direction kept) to the phase's and the gait's limits.
         angle = yaw_rate * cycle
