@@ -19,6 +19,7 @@ from pedi_drake.operator.command import (
     CONTROLLER_PROJECTED_IMPEDANCE,
     CONTROLLER_WHOLE_BODY,
     FRAME_WORLD,
+    KIND_TWIST,
     KIND_VELOCITY,
     MODE_AUTONOMOUS,
     MODE_TELEOP,
@@ -33,6 +34,7 @@ from pedi_drake.operator.meshcat_panel import (
     SLIDERS,
     STOP_BUTTON,
     TELEOP_BUTTON,
+    WALK_SLIDERS,
     WHOLE_BODY_BUTTON,
     MeshcatOperatorPanel,
 )
@@ -84,6 +86,23 @@ def test_sliders_and_buttons_become_the_operator_command(meshcat):
         assert command.mode_request == MODE_TELEOP  # a mode request stands
     # The page is gone: the command ages from the last update that saw it.
     assert _tick(panel, simulator, 0.5).age == pytest.approx(0.3, abs=PERIOD + 1e-9)
+
+
+def test_walking_sliders_give_a_twist_each_within_its_own_bound(meshcat):
+    panel, simulator = _make(meshcat, sliders="walk", walk_speeds=[0.2, 0.1, 0.3])
+    forward, sideways, yaw_rate = (label for label, _, _ in WALK_SLIDERS)
+    with pytest.raises(RuntimeError):
+        meshcat.GetSliderValue(X)  # the foot's sliders are not there
+    with MeshcatPage(meshcat) as page:
+        page.set_slider(forward, 0.15)
+        page.set_slider(yaw_rate, -0.25)
+        command = _tick(panel, simulator, 0.1)
+        assert command.kind == KIND_TWIST
+        np.testing.assert_allclose(command.value, [0.15, 0.0, -0.25])
+        page.set_slider(sideways, 0.2)  # beyond its 0.1 m/s: dropped, the slider put back
+        command = _tick(panel, simulator, 0.2)
+        np.testing.assert_allclose(command.value, [0.15, 0.0, -0.25])
+        assert command.dropped == 1 and meshcat.GetSliderValue(sideways) == 0.0
 
 
 def test_both_mode_buttons_in_one_period_ask_for_the_autonomous_mission(meshcat):

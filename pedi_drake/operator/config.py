@@ -65,6 +65,11 @@ class MeshcatPanelConfig:
     step: float = 0.005
     # Frame of the foot velocity: "trunk" or "world".
     frame: str = "trunk"
+    # What the sliders command: "foot" (a lifted foot's velocity) or "walk" (the trunk's twist
+    # for a walk_teleop phase, each slider within +-walk_speeds).
+    sliders: str = "foot"
+    # The twist's bounds: forward [m/s], sideways [m/s], yaw rate [rad/s] (the static walk's limits).
+    walk_speeds: list[float] = dataclasses.field(default_factory=lambda: [0.2, 0.1, 0.3])
 
 
 @dataclasses.dataclass
@@ -106,6 +111,14 @@ class OperatorConfig:
             found.append(("meshcat.step", f"must be in (0, max_speed] m/s, got {panel.step}"))
         if panel.frame not in REMOTE_FRAMES:
             found.append(("meshcat.frame", f"must be one of {REMOTE_FRAMES}, got {panel.frame!r}"))
+        if panel.sliders not in REMOTE_STICKS:
+            found.append(("meshcat.sliders", f"must be one of {REMOTE_STICKS}, got {panel.sliders!r}"))
+        for field, speeds in (
+            ("meshcat.walk_speeds", panel.walk_speeds),
+            ("remote.walk_speeds", self.remote.walk_speeds),
+        ):
+            if len(speeds) != 3 or not all(math.isfinite(v) and v > 0 for v in speeds):
+                found.append((field, f"expected 3 finite numbers > 0 [m/s, m/s, rad/s], got {speeds}"))
         remote = self.remote
         if not (math.isfinite(remote.max_speed) and remote.max_speed > 0):
             found.append(("remote.max_speed", f"must be a finite number > 0 m/s, got {remote.max_speed}"))
@@ -115,9 +128,6 @@ class OperatorConfig:
             found.append(("remote.frame", f"must be one of {REMOTE_FRAMES}, got {remote.frame!r}"))
         if remote.sticks not in REMOTE_STICKS:
             found.append(("remote.sticks", f"must be one of {REMOTE_STICKS}, got {remote.sticks!r}"))
-        speeds = remote.walk_speeds
-        if len(speeds) != 3 or not all(math.isfinite(v) and v > 0 for v in speeds):
-            found.append(("remote.walk_speeds", f"expected 3 finite numbers > 0 [m/s, m/s, rad/s], got {speeds}"))
         buttons = {"remote.teleop_button": remote.teleop_button, "remote.autonomous_button": remote.autonomous_button}
         buttons.update({f"remote.estop_buttons[{i}]": b for i, b in enumerate(remote.estop_buttons)})
         for field, button in buttons.items():

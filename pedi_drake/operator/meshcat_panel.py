@@ -3,7 +3,10 @@
 The panel adds to the Meshcat's control pane (`run_sim.py --meshcat --teleop` opens it):
 
   sliders  the foot velocity along x, y, z [m/s] (the scenario's `operator.meshcat.frame`), each
-           in [-max_speed, max_speed]; keys w/s, a/d, r/f step them (as pedi_drake.apps.teleop_lcm)
+           in [-max_speed, max_speed]; keys w/s, a/d, r/f step them (as pedi_drake.apps.teleop_lcm);
+           with `operator.meshcat.sliders: walk` the trunk's twist for a walk_teleop phase
+           instead (forward, sideways [m/s], yaw rate [rad/s], each within +-walk_speeds), the
+           keys w/s, a/d, q/z
   buttons  "Teleop (t)" and "Autonomous (g)" ask for a mode, "Stop foot (space)" sets the sliders
            to zero, "E-stop (e)" latches the E-stop; with `controller_buttons` (a scenario with
            controller_switch, pedi_drake.control.controller_switch) "HQP controller (1)" and
@@ -38,6 +41,7 @@ from pedi_drake.operator.command import (
     CONTROLLER_WHOLE_BODY,
     FRAME_TRUNK,
     FRAME_WORLD,
+    KIND_TWIST,
     KIND_VELOCITY,
     MODE_AUTONOMOUS,
     MODE_TELEOP,
@@ -51,6 +55,11 @@ SLIDERS = (
     ("foot x velocity [m/s] (s/w)", "KeyS", "KeyW"),
     ("foot y velocity [m/s] (d/a)", "KeyD", "KeyA"),
     ("foot z velocity [m/s] (f/r)", "KeyF", "KeyR"),
+)
+WALK_SLIDERS = (
+    ("walk forward [m/s] (s/w)", "KeyS", "KeyW"),
+    ("walk sideways [m/s] (d/a)", "KeyD", "KeyA"),
+    ("walk yaw rate [rad/s] (z/q)", "KeyZ", "KeyQ"),
 )
 TELEOP_BUTTON = "Teleop (t)"
 AUTONOMOUS_BUTTON = "Autonomous (g)"
@@ -82,18 +91,24 @@ class MeshcatOperatorPanel(LeafSystemWithoutWitnesses):
         whole-body controllers, and the panel the buttons that switch them."""
         super().__init__()
         self._meshcat = meshcat
-        self._max_speed = config.max_speed
-        for label, decrement, increment in SLIDERS:
+        walking = config.sliders == "walk"
+        self._sliders = WALK_SLIDERS if walking else SLIDERS
+        # Each slider's bound: the foot speed, or the twist's components.
+        self._bounds = np.asarray(config.walk_speeds if walking else [config.max_speed] * 3, float)
+        for label, _, _ in SLIDERS + WALK_SLIDERS:
             # A Meshcat keeps its controls: a panel made again on it (another run) starts afresh.
             meshcat.DeleteSlider(label, strict=False)
-            meshcat.AddSlider(label, -config.max_speed, config.max_speed, config.step, 0.0, decrement, increment)
+        for (label, decrement, increment), bound in zip(self._sliders, self._bounds, strict=True):
+            step = min(config.step, bound / 10.0)
+            meshcat.AddSlider(label, -bound, bound, step, 0.0, decrement, increment)
         self._buttons = BUTTONS if controller_buttons else BUTTONS[:4]
         for label, _ in BUTTONS:
             meshcat.DeleteButton(label, strict=False)
         for label, key in self._buttons:
             meshcat.AddButton(label, key)
         initial = np.zeros(OPERATOR_COMMAND_SIZE)
-        initial[1], initial[2] = (FRAME_TRUNK if config.frame == "trunk" else FRAME_WORLD), KIND_VELOCITY
+        initial[1] = FRAME_TRUNK if config.frame == "trunk" else FRAME_WORLD
+        initial[2] = KIND_TWIST if walking else KIND_VELOCITY
         initial[_T_LAST] = -math.inf
         self._state = self.DeclareDiscreteState(initial)
         # Clicks of each button taken in so far, and drops by reason (PANEL_REJECT_REASONS).
@@ -140,21 +155,21 @@ class MeshcatOperatorPanel(LeafSystemWithoutWitnesses):
         elif projected_impedance:
             x[_CONTROLLER] = CONTROLLER_PROJECTED_IMPEDANCE
         if stop:
-            for label, _, _ in SLIDERS:
+            for label, _, _ in self._sliders:
                 meshcat.SetSliderValue(label, 0.0)
             x[_VALUE] = 0.0
         else:
-            values = np.array([meshcat.GetSliderValue(label) for label, _, _ in SLIDERS])
+            values = np.array([meshcat.GetSliderValue(label) for label, _, _ in self._sliders])
             if not np.isfinite(values).all():
                 reason = 0
-            elif np.max(np.abs(values)) > self._max_speed + _RANGE_TOLERANCE:
+            elif np.any(np.abs(values) > self._bounds + _RANGE_TOLERANCE):
                 reason = 1
             else:
                 reason = None
             if reason is not None:
                 rejected[reason] += 1
                 x[_DROPPED] += 1
-                for (label, _, _), value in zip(SLIDERS, x[_VALUE], strict=True):
+                for (label, _, _), value in zip(self._sliders, x[_VALUE], strict=True):
                     meshcat.SetSliderValue(label, value)
             elif not np.array_equal(values, x[_VALUE]):
                 x[_RECEIVED] += 1
