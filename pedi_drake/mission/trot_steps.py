@@ -20,12 +20,13 @@ from pedi_drake.locomotion.footholds import PlanarPose
 from pedi_drake.locomotion.trot import TrotTiming, next_twist, pair_of, trot_foothold_W
 from pedi_drake.mission.progress import LEG_MODE_FOOT, RUNNING, LegTrajectory, MissionProgress
 from pedi_drake.mission.robot_view import RobotView
-from pedi_drake.mission.touchdown import CONTACT_FORCE_THRESHOLD
+from pedi_drake.mission.touchdown import swing_foot_down
 from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment, RampSegment
 
-# [m] below the ground that a trot's swing ends: a trot lands on its schedule, so it aims only
-# just into the ground (a deeper aim would stamp).
-TROT_PLACE_DEPTH = 0.01
+# [m] below the ground that a trot's swing ends: on it. A trot lands on its schedule, so its foot
+# need not search; aimed 1 cm into the ground it came down at half a metre per second and stamped
+# (700 N), which tipped the trunk over the other diagonal.
+TROT_PLACE_DEPTH = 0.0
 STILL_STEPS = 2  # half periods at rest that end a stopping trot, every foot placed once
 
 
@@ -87,7 +88,7 @@ def step(runner, phase, progress: MissionProgress, view: RobotView, env) -> str:
     t, refs = view.time, progress.references
     early = 0
     for leg in list(refs.legs):
-        if t >= state.t_apex and view.foot_force[robot.LEG_NAMES.index(leg)] > CONTACT_FORCE_THRESHOLD:
+        if t >= state.t_apex and swing_foot_down(view, leg, 0.0):
             _land(progress, view, leg)
             early += 1
     if early:

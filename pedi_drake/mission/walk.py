@@ -33,7 +33,7 @@ from pedi_drake.locomotion.static_walk import SlotPlan, choose_cycle, replan_slo
 from pedi_drake.mission import spec, trot_steps
 from pedi_drake.mission.progress import FAILED, LEG_MODE_FOOT, RUNNING, SUCCEEDED, LegTrajectory, MissionProgress
 from pedi_drake.mission.robot_view import RobotView
-from pedi_drake.mission.touchdown import CONTACT_FORCE_THRESHOLD, PLACE_DEPTH
+from pedi_drake.mission.touchdown import PLACE_DEPTH, swing_foot_down
 from pedi_drake.operator.command import KIND_TWIST, OperatorCommand
 from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment, RampSegment
 
@@ -241,7 +241,7 @@ class WalkRunnerBase:
             refs.legs[leg] = LegTrajectory(LEG_MODE_FOOT, path)
             return dataclasses.replace(state, stage="swing", t_apex=t + half, t_swing_end=t + timing.swing)
         if state.stage == "swing":
-            touched = t >= state.t_apex and view.foot_force[k] > CONTACT_FORCE_THRESHOLD
+            touched = t >= state.t_apex and swing_foot_down(view, leg, 0.0)
             if not touched:
                 if t > state.t_swing_end + LATE_TOUCHDOWN:
                     progress.reason = f"{phase.name}: {leg} felt no ground {LATE_TOUCHDOWN} s after its swing's end"
