@@ -145,8 +145,9 @@ def _walking(d: dict) -> str:
             text += f", goal within {100 * row['goal_error_max_m']:.1f} cm and {row['goal_yaw_error_max_deg']:.1f} deg"
         if row.get("walking_speed_min_m_s") is not None:
             text += f", {row['walking_speed_min_m_s']:.3f} m/s or more"
-        drift = 100 * row["estimate_drift_share_max"]
-        text += f", stance slip {1e3 * row['stance_slip_max_m']:.1f} mm, estimate drift {drift:.1f} %"
+        text += f", stance slip {1e3 * row['stance_slip_max_m']:.1f} mm"
+        if row.get("estimate_drift_share_max") is not None:
+            text += f", estimate drift {100 * row['estimate_drift_share_max']:.1f} %"
         if row.get("door_opened_deg_min") is not None:
             text += f", door opened {row['door_opened_deg_min']:.0f} deg or more"
         parts.append(text)

@@ -23,6 +23,7 @@ STANCE_FORCE = 20.0
 STANCE_SETTLE = 0.05
 SLIP_SAMPLE_PERIOD = 0.01  # [s] feet are sampled this often for the slip
 WALK_KINDS = (spec.Walk, spec.WalkVelocity, spec.WalkTeleop)
+DRIFT_DISTANCE = 0.2  # [m] the least displacement the estimate's drift is given as a share of
 
 
 def _yaw(quaternion_wxyz: np.ndarray) -> float:
@@ -162,8 +163,9 @@ def judge_walks(
         height_errors = base_log.data[6, estimate_window] - positions[2, samples]
         walk.update(
             estimate_drift_m=drift,
-            # Against the distance walked: the trunk's displacement (its sway's path left out).
-            estimate_drift_share=drift / max(walk["displacement_m"], 1e-9),
+            # Against the distance walked: the trunk's displacement (its sway's path left out); none
+            # for a walk that turns on the spot.
+            estimate_drift_share=drift / walk["displacement_m"] if walk["displacement_m"] >= DRIFT_DISTANCE else None,
             estimate_height_error_max_m=float(np.max(np.abs(height_errors))),
         )
         rows.append(walk)
