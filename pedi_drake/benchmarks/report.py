@@ -73,6 +73,25 @@ def _controller_side(d: dict) -> str:
     )
 
 
+def _trot_side(d: dict) -> str:
+    simulation, bare = d["simulation"], d["bare_plant"]
+    return (
+        _controller_side(d) + f"; the simulation's real-time factor {simulation['real_time_factor']:.2f}, "
+        f"the bare plant's {bare['real_time_factor']:.2f}"
+    )
+
+
+def _sil_walk(d: dict) -> str:
+    runs = d["runs"]
+    worst_misses = max(run["deadline_misses_per_1000"] for run in runs)
+    longest = max(run["longest_miss_ms"] for run in runs)
+    return (
+        f"successful runs: {sum(run['success'] for run in runs)} of {len(runs)}, damping latched in "
+        f"{sum(run['latched'] is not None for run in runs)}; deadline misses at most {worst_misses:.1f} per 1000 "
+        f"ticks, the longest {longest:.1f} ms"
+    )
+
+
 def _station(d: dict) -> str:
     cases = d["cases"]
     return (
@@ -352,11 +371,24 @@ ROWS: tuple[Row, ...] = (
         summary=True,
     ),
     Row(
-        "Static walks on the HQP, seed 0 and 5 noisy seeds, by ground truth",
+        "Static walks and trots on the HQP, seed 0 and 5 noisy seeds, by ground truth",
         "walking.json",
         _walking,
-        "python -m pedi_drake.benchmarks.walking --controllers whole_body",
+        "python -m pedi_drake.benchmarks.walking --controllers whole_body --trot-speeds 0.6,0.7,0.8",
         summary=True,
+    ),
+    Row(
+        "Controller side of a hardware run while trotting, replayed unpaced (walking/trot_forward)",
+        "controller_latency_trot.json",
+        _trot_side,
+        "python -m pedi_drake.benchmarks.controller_latency --mission walking/trot_forward",
+    ),
+    Row(
+        "A 1 m square of static walk at real time against the simulator bridge (apps.sil)",
+        "sil_walk_square.json",
+        _sil_walk,
+        "python -m pedi_drake.benchmarks.sil_floors --missions walking/walk_square --runs 3 "
+        "--scenario_text '{simulation_duration: 100.0}'",
     ),
     Row(
         "Hardware path at real time against the simulator bridge (apps.sil, three missions)",
