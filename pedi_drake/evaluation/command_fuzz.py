@@ -42,6 +42,9 @@ from pedi_drake.operator.command import (
     MODE_SEMI_AUTONOMOUS,
     MODE_TELEOP,
 )
+from pedi_drake.operator.command import (
+    KINDS as COMMAND_KINDS,
+)
 from pedi_drake.operator.message_stream import TimedMessage
 
 MISSION = "operator/teleop_foot_wall"
@@ -174,7 +177,7 @@ def _some(rng: np.random.Generator) -> np.ndarray:
 def _wrong_code(rng: np.random.Generator, command: _Command) -> _Command:
     field = rng.integers(3)
     codes = [command.mode_request, command.frame, command.kind]
-    known = ({MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP, MODE_SEMI_AUTONOMOUS}, {0, 1}, {0, 1})[field]
+    known = ({MODE_NONE, MODE_AUTONOMOUS, MODE_TELEOP, MODE_SEMI_AUTONOMOUS}, {0, 1}, set(COMMAND_KINDS))[field]
     while codes[field] in known:
         codes[field] = int(rng.integers(-128, 128))  # int8 on the wire
     return _Command(codes[0], codes[1], codes[2], command.value)
