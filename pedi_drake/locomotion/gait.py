@@ -116,6 +116,6 @@ class GaitLimits:
 # The trot's were measured in simulation on the HQP (pedi_drake.benchmarks.walking, each component
 # alone): it holds 0.8 m/s forward and falls at 1.0 m/s with the default timing.
 GAITS = {
-    "static_walk": GaitLimits(forward=0.2, sideways=0.1, yaw_rate=0.3),
+    "static_walk": GaitLimits(forward=0.2, sideways=0.11, yaw_rate=0.3),
     "trot": GaitLimits(forward=0.8, sideways=0.2, yaw_rate=0.5),
 }

@@ -34,7 +34,7 @@ class RemoteMapping:
     sticks: str = "foot"
     # The twist at full deflection: forward [m/s], sideways [m/s], yaw rate [rad/s]; the static
     # walk's limits (pedi_drake.locomotion.gait.GAITS), which a walk_teleop phase holds it to.
-    walk_speeds: list[float] = dataclasses.field(default_factory=lambda: [0.2, 0.1, 0.3])
+    walk_speeds: list[float] = dataclasses.field(default_factory=lambda: [0.2, 0.11, 0.3])
 
     # Foot speed at full stick deflection [m/s].
     max_speed: float = 0.1
@@ -69,7 +69,7 @@ class MeshcatPanelConfig:
     # for a walk_teleop phase, each slider within +-walk_speeds).
     sliders: str = "foot"
     # The twist's bounds: forward [m/s], sideways [m/s], yaw rate [rad/s] (the static walk's limits).
-    walk_speeds: list[float] = dataclasses.field(default_factory=lambda: [0.2, 0.1, 0.3])
+    walk_speeds: list[float] = dataclasses.field(default_factory=lambda: [0.2, 0.11, 0.3])
 
 
 @dataclasses.dataclass
