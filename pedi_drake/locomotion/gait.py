@@ -113,8 +113,9 @@ class GaitLimits:
 # (pedi_drake.locomotion.static_walk.support_margins): every twist within them keeps the CoM
 # SUPPORT_MARGIN inside the support (some combinations a cycle slower), and the stride (0.48 m at the
 # forward limit) within the legs' reach.
-# The trot's were measured in simulation on the HQP (pedi_drake.benchmarks.walking, each component
-# alone): it holds 0.8 m/s forward and falls at 1.0 m/s with the default timing.
+# The trot's forward limit is the fastest trot the walking benchmark holds on every seed on the
+# HQP (pedi_drake.benchmarks.walking --trot-speeds); its sideways and yaw limits are not yet
+# measured by a benchmark.
 GAITS = {
     "static_walk": GaitLimits(forward=0.2, sideways=0.11, yaw_rate=0.3),
     "trot": GaitLimits(forward=0.8, sideways=0.2, yaw_rate=0.5),

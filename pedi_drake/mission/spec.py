@@ -39,7 +39,7 @@ from pedi_drake.scenario import Push, RobotConfig, SceneObject, resolve_model_pa
 FRAMES = ("world", "trunk")
 # The contact ramp a mission may ask of the controllers [s], and the longest a walking mission may.
 MIN_RAMP_TIME, MAX_RAMP_TIME, WALK_RAMP_LIMIT = 0.02, 1.0, 0.1
-# ... and a trotting one: a longer unloading eats into the swing (the trot falls at 0.06 s).
+# ... and a trotting one: a longer unloading eats into the 0.23 s swing.
 TROT_RAMP_LIMIT = 0.03
 # How leg_to_pedipulation places the trunk before lifting: "fixed" shifts the centre of mass over
 # the centroid of the other supports at the current height and attitude; "optimal" takes the

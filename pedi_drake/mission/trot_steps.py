@@ -24,8 +24,7 @@ from pedi_drake.mission.touchdown import swing_foot_down
 from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment, RampSegment
 
 # [m] below the ground that a trot's swing ends: on it. A trot lands on its schedule, so its foot
-# need not search; aimed 1 cm into the ground it came down at half a metre per second and stamped
-# (700 N), which tipped the trunk over the other diagonal.
+# need not search, and a foot aimed into the ground reaches it still moving down and stamps.
 TROT_PLACE_DEPTH = 0.0
 STILL_STEPS = 2  # half periods at rest that end a stopping trot, every foot placed once
 
@@ -113,7 +112,7 @@ def step(runner, phase, progress: MissionProgress, view: RobotView, env) -> str:
 def _half_period(runner, phase, progress: MissionProgress, view: RobotView, env, state: TrotState) -> TrotState:
     """Starts the next half period: the twist, the trunk's reference, the swinging pair."""
     timing, t, refs = _timing(env), view.time, progress.references
-    wanted = None if state.stopping else runner.twist(phase, state, state.line, t, progress)
+    wanted = None if state.stopping else runner.twist(phase, state, state.line, t, progress, view)
     stopping = wanted is None
     if stopping and not state.stopping:
         progress.records[-1].metrics["walked_until_s"] = t

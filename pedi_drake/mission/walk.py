@@ -105,9 +105,9 @@ class WalkRunnerBase:
     """The static walk, its twist given by `twist` (a subclass's)."""
 
     def twist(
-        self, phase, state: WalkState, line: PlanarPose, t: float, progress: MissionProgress
+        self, phase, state: WalkState, line: PlanarPose, t: float, progress: MissionProgress, view: RobotView
     ) -> np.ndarray | None:
-        """The twist for the next cycle; None: the walking is over."""
+        """The twist for the next cycle (read at time `t` [s] from `view`); None: the walking is over."""
         raise NotImplementedError
 
     def start(self, phase, progress, view, env):
@@ -141,7 +141,7 @@ class WalkRunnerBase:
         cycle, twist, stopping = state.cycle, np.asarray(state.twist, float), state.stopping
         slowed = state.slowed_cycles
         if index == 0:
-            wanted = None if stopping else self.twist(phase, state, line, t, progress)
+            wanted = None if stopping else self.twist(phase, state, line, t, progress, view)
             if wanted is None and not stopping:
                 progress.records[-1].metrics["walked_until_s"] = t  # the stop starts
             stopping = wanted is None
@@ -299,14 +299,14 @@ def _squared_up(feet_xy: np.ndarray, line: PlanarPose) -> bool:
 class WalkVelocityRunner(WalkRunnerBase):
     """walk_velocity: the phase's twist for its duration."""
 
-    def twist(self, phase, state, line, t, progress):
+    def twist(self, phase, state, line, t, progress, view):
         return np.asarray(phase.twist, float) if t < progress.phase_start + phase.duration else None
 
 
 class WalkToRunner(WalkRunnerBase):
     """walk: steers the walking line to the goal, then stops; judged by the trunk's estimate."""
 
-    def twist(self, phase, state, line, t, progress):
+    def twist(self, phase, state, line, t, progress, view):
         goal = self._goal_line(phase, state)
         error_L = line.rotation().T @ (goal.xy - line.xy)
         yaw_error = _wrap(goal.yaw - line.yaw)
@@ -361,14 +361,10 @@ class WalkTeleopRunner(WalkRunnerBase):
             raise UnreachableTarget(f"{phase.name}: no operator input (set the scenario's operator.source)")
         super().start(phase, progress, view, env)
 
-    def twist(self, phase, state, line, t, progress):
+    def twist(self, phase, state, line, t, progress, view):
         if t >= progress.phase_start + phase.duration:
             return None
-        return operator_twist(progress.memo.get("operator"), GAITS[phase.gait])
-
-    def step(self, phase, progress, view, env):
-        progress.memo["operator"] = view.operator  # read at the next cycle's start
-        return super().step(phase, progress, view, env)
+        return operator_twist(view.operator, GAITS[phase.gait])
 
 
 def operator_twist(command: OperatorCommand | None, limits: GaitLimits) -> np.ndarray:
