@@ -6,7 +6,9 @@ mapping merged on top (for command-line overrides). Every value is checked on lo
 error names the file and the field.
 """
 
+import copy
 import dataclasses
+import functools
 import math
 import re
 from pathlib import Path
@@ -448,6 +450,22 @@ def load_scenario(
     filename = Path(filename) if filename is not None else default_scenario_file()
     if not filename.exists():
         raise ScenarioError(f"{filename}: scenario file not found")
+    stat = filename.stat()
+    scenario = copy.deepcopy(
+        _load_scenario_file(filename, filename.resolve(), scenario_name, stat.st_mtime_ns, stat.st_size)
+    )
+    scenario = apply_scenario_text(scenario, scenario_text)
+    _make_model_paths_absolute(scenario, filename.parent)
+    return scenario
+
+
+# A study validates one scenario per task from the same file: parsed once per version of the file
+# (Drake's YAML reader is pure Python), keyed by its modification time and size.
+@functools.lru_cache(maxsize=32)
+def _load_scenario_file(filename: Path, resolved: Path, scenario_name: str, mtime_ns: int, size: int) -> Scenario:
+    """`scenario_name` of `filename` (named so in errors; `resolved`, its modification time and
+    size key the cache), checked and validated (`load_scenario`); shared, not to be changed:
+    `load_scenario` hands out copies."""
     try:
         raw = yaml_load(filename=str(filename))
     except Exception as error:  # Drake's YAML parser raises RuntimeError with the line.
@@ -462,8 +480,6 @@ def load_scenario(
     except Exception as error:
         raise ScenarioError(f"{where}: {error}") from None
     scenario.validate(where=where, base_dir=filename.parent)
-    scenario = apply_scenario_text(scenario, scenario_text)
-    _make_model_paths_absolute(scenario, filename.parent)
     return scenario
 
 

@@ -2,23 +2,69 @@
 missions' floors: success, reach errors, trunk drift, no fall, and each mission's own check.
 
 The mission benchmark (python -m pedi_drake.benchmarks.missions) runs the same with sensor noise
-over more seeds.
+over more seeds, every mission in full. Here the longest run their short versions (`SHORT_VERSIONS`)
+or are left to the test that already runs their short version (`SHORT_VERSION_TESTED_IN`).
 """
+
+from pathlib import Path
 
 import pytest
 
+from pedi_drake.batch.study import study_from_dict
 from pedi_drake.batch.tasks import run_task
 from pedi_drake.benchmarks.missions import EXPECTED_OBSTACLES, mission_study, obstacle_calls, result_of
 from pedi_drake.mission.spec import shipped_missions
+from pedi_drake.resources import missions_dir
 
 MAX_FOOT_ERROR = 0.010  # [m] every reach phase
 MAX_DRIFT = 0.010  # [m] trunk drift while pedipulating
 
 
-@pytest.fixture(scope="module", params=shipped_missions())
+# Missions whose short version (missions/quick/, from standing, the same phases once) runs here.
+SHORT_VERSIONS = {
+    "prong_pivot_rotations": "quick/pivot_rotations_once.yaml",
+    "torso_circle_foot_hold": "quick/torso_circle_one_lap.yaml",
+}
+# Missions whose short version another test runs and judges.
+SHORT_VERSION_TESTED_IN = {
+    "box_lift_side_legs": "tests/test_box_lift.py",
+    "push_recovery_prongs": "tests/test_push_recovery.py",
+    "push_recovery_no_prongs": "tests/test_push_recovery.py",
+}
+
+
+def short_version_task(name: str):
+    """The study task of `name`'s short version: from standing, seed 0, no noise."""
+    study = study_from_dict(
+        {
+            "name": "missions_short",
+            "kind": "mission",
+            "base": {"scenario_text": "{simulation_duration: 60.0, robot: {initial_pose: standing}}"},
+            "factors": [
+                {"name": "mission", "values": [str(missions_dir() / SHORT_VERSIONS[name])]},
+                {"name": "noise", "values": [{"random_seed": 0, "sensor_noise.enabled": False}]},
+            ],
+        },
+        __name__,
+    )
+    (task,) = study.tasks
+    return task
+
+
+@pytest.fixture(scope="module", params=[m for m in shipped_missions() if m not in SHORT_VERSION_TESTED_IN])
 def mission_result(request):
-    (task,) = mission_study([request.param], noise_seeds=[]).tasks
+    if request.param in SHORT_VERSIONS:
+        task = short_version_task(request.param)
+    else:
+        (task,) = mission_study([request.param], noise_seeds=[]).tasks
     return request.param, result_of(run_task(task))
+
+
+def test_the_missions_left_out_are_shipped_and_their_short_versions_tested():
+    shipped = set(shipped_missions())
+    assert set(SHORT_VERSIONS) <= shipped and set(SHORT_VERSION_TESTED_IN) <= shipped
+    for name, test_file in SHORT_VERSION_TESTED_IN.items():
+        assert (Path(__file__).parent.parent / test_file).exists(), name
 
 
 def test_mission_succeeds_without_falling(mission_result):

@@ -19,7 +19,9 @@ Every phase has `name` (defaults to "<index>_<kind>") and `timeout` [s]. Loading
 field and raises MissionFileError naming the file, the phase index and the field.
 """
 
+import copy
 import dataclasses
+import functools
 import math
 from pathlib import Path
 
@@ -731,6 +733,16 @@ def _build(raw, schema):
 def load_mission(name_or_path: str) -> MissionSpec:
     """Loads and validates a mission by shipped name or YAML path; raises MissionFileError."""
     path = resolve_mission(name_or_path)
+    stat = path.stat()
+    return copy.deepcopy(_load_mission_file(path, path.resolve(), stat.st_mtime_ns, stat.st_size))
+
+
+# A study loads each task's mission: parsed once per version of the file (Drake's YAML reader is
+# pure Python), keyed by its modification time and size.
+@functools.lru_cache(maxsize=64)
+def _load_mission_file(path: Path, resolved: Path, mtime_ns: int, size: int) -> MissionSpec:
+    """The mission in `path` (named so in errors; `resolved`, its modification time and size key
+    the cache), validated; shared, not to be changed: `load_mission` hands out copies."""
     where = str(path)
     try:
         raw = yaml_load(filename=str(path))
