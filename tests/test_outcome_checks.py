@@ -187,12 +187,6 @@ def test_a_touch_that_ends_short_of_the_panel_fails_although_the_foot_passed_its
     assert "did not touch target_panel" in result["reason"]
 
 
-def test_the_shipped_front_reach_presses_on_the_panel(tmp_path):
-    result = _run_until_touched(tmp_path, missions_dir() / "hit_target_front.yaml")
-    assert result["touches"][0]["touched"] is True, result["touches"]
-    assert "did not touch" not in result["reason"]
-
-
 @pytest.fixture(scope="module")
 def push_plant():
     """The plant of push_light_box's scene, and its default positions (the robot lying, the box placed)."""

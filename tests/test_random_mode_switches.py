@@ -1,5 +1,5 @@
 """Mode switching, the short version of its floor: a seeded operator on an in-process LCM bus
-(lock step) makes 8 mode switches at random times during an autonomous mission (teleoperated foot
+(lock step) makes 6 mode switches at random times during an autonomous mission (teleoperated foot
 and semi-autonomous targets, and back); every switch is made, the robot does not fall, and no
 reference or command steps beyond the rate limits between two controller ticks
 (pedi_drake.evaluation.reference_steps: the trunk and a lifted foot 1 mm, a foot where its leg
@@ -16,9 +16,9 @@ from pedi_drake.evaluation import random_switches
 from pedi_drake.evaluation.teleop_floors import floor_figures
 from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
 
-# Both kinds of round trip (the stream has SEMI_ROUND_TRIPS semi-autonomous ones) and the teleop
-# ones between them: 8 switches.
-ROUND_TRIPS = 4
+# Both kinds of round trip (the stream has SEMI_ROUND_TRIPS semi-autonomous ones, then teleop
+# ones): 6 switches.
+ROUND_TRIPS = 3
 
 
 @pytest.fixture(scope="module")

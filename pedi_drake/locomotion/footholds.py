@@ -66,6 +66,21 @@ class PlanarPose:
         return PlanarPose(float(x), float(y), self.yaw + angle)
 
 
+def stance_pose(feet_xy: np.ndarray, legs: list[int]) -> PlanarPose:
+    """The planar pose that puts the feet `legs` (indices in Unitree order; at least two) nearest,
+    in least squares, to their places under the hips (`NOMINAL_FEET_B`), given their world
+    positions `feet_xy` (len(legs), 2) [m]: the trunk's frame of a robot standing square on them,
+    whatever the trunk does above them (2-D Kabsch)."""
+    nominal = NOMINAL_FEET_B[legs]
+    feet = np.asarray(feet_xy, float)
+    nominal_mean, feet_mean = nominal.mean(axis=0), feet.mean(axis=0)
+    a, b = nominal - nominal_mean, feet - feet_mean
+    yaw = math.atan2(float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])), float(np.sum(a * b)))
+    c, s = math.cos(yaw), math.sin(yaw)
+    origin = feet_mean - np.array([[c, -s], [s, c]]) @ nominal_mean
+    return PlanarPose(float(origin[0]), float(origin[1]), yaw)
+
+
 def foothold_W(leg: str, line: PlanarPose, twist: np.ndarray, time_to_mid_stance: float) -> np.ndarray:
     """The neutral foothold (x, y) [m] in the world of `leg`: its nominal stance position in the
     walking line `time_to_mid_stance` [s] ahead at `twist`."""

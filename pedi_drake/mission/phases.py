@@ -19,6 +19,8 @@ from pedi_drake.estimation.kalman_estimator import STILL_RATE
 from pedi_drake.exceptions import MissionFileError, UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
 from pedi_drake.leg_kinematics import leg_geometry
+from pedi_drake.locomotion.footholds import stance_pose
+from pedi_drake.locomotion.static_walk import FOOTHOLD_REACH
 from pedi_drake.mission import spec
 from pedi_drake.mission.balance_bound import balance_limit
 from pedi_drake.mission.posture_planner import (
@@ -1014,16 +1016,38 @@ class MoveFeetRunner(PhaseRunner):
         return SUCCEEDED if view.time >= progress.phase_start + phase.duration else RUNNING
 
 
+def footprint_xy_W(phase: spec.LegToSupport, view: RobotView) -> np.ndarray:
+    """Where a leg_to_support phase puts its foot down, world x, y [m]: its `foothold` in the world,
+    or in the stance frame of the other feet (`stance_pose`: the trunk's frame of the robot standing
+    square on them), or under the hip of the trunk as it is."""
+    if phase.foothold and phase.frame == "world":
+        return np.asarray(phase.foothold, dtype=float)
+    k = robot.LEG_NAMES.index(phase.leg)
+    if phase.foothold:
+        others = [i for i in range(4) if i != k]
+        return stance_pose(view.feet_W_array()[others, :2], others).to_world(phase.foothold)
+    geometry = leg_geometry(phase.leg)
+    return (view.X_WB @ (geometry.p_BH + geometry.p_HT))[:2]
+
+
 class LegToSupportRunner(PhaseRunner):
-    """Places the foot on the ground under its hip, restores the contact, re-centres the trunk."""
+    """Places the foot on the ground (under its hip or at the phase's foothold), restores the
+    contact, re-centres the trunk over the four feet."""
 
     def start(self, phase, progress, view, env):
         leg = phase.leg
+        xy = footprint_xy_W(phase, view)
         geometry = leg_geometry(leg)
-        p_WF = view.X_WB @ (geometry.p_BH + geometry.p_HT)
+        under_hip = (view.X_WB @ (geometry.p_BH + geometry.p_HT))[:2]
+        if np.linalg.norm(xy - under_hip) > FOOTHOLD_REACH:
+            raise UnreachableTarget(
+                f"{phase.name}: the foothold {np.round(xy, 3).tolist()} is "
+                f"{np.linalg.norm(xy - under_hip):.3f} m from the point under {leg}'s hip, beyond the leg's "
+                f"reach for a foothold ({FOOTHOLD_REACH} m)"
+            )
         # Aim 1.5 cm into the floor: the estimate's height may be off by millimetres, and the
         # phase switches the foot to a contact as soon as its sensor feels the floor.
-        ground = np.array([p_WF[0], p_WF[1], robot.FOOT_RADIUS - PLACE_DEPTH])
+        ground = np.array([xy[0], xy[1], robot.FOOT_RADIUS - PLACE_DEPTH])
         above = ground + [0.0, 0.0, 0.05]
         X_BW = view.X_WB.inverse()
         _ask_ik(progress, view, view.X_WB, {leg: [X_BW @ above, X_BW @ ground]}, phase.name)

@@ -30,7 +30,9 @@ from pydrake.common.yaml import yaml_load
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import FORCE_ESTIMATES, STACKS
 from pedi_drake.exceptions import MissionFileError
+from pedi_drake.locomotion.footholds import NOMINAL_FEET_B
 from pedi_drake.locomotion.gait import GAITS
+from pedi_drake.locomotion.static_walk import FOOTHOLD_REACH
 from pedi_drake.locomotion.trot import TrotTiming
 from pedi_drake.mission.posture_planner import PLAN_LATENCY, POSTURE_DURATION
 from pedi_drake.operator.command import CONTROLLER_NAMES
@@ -191,10 +193,17 @@ class LegToPedipulation(PhaseBase):
 
 @dataclasses.dataclass
 class LegToSupport(PhaseBase):
-    """Places the foot of `leg` back on the ground under its hip and restores its contact."""
+    """Places the foot of `leg` on the ground, under its hip or at `foothold`, and restores its
+    contact."""
 
     leg: str = "FR"
     duration: float = 1.5
+    # Where the foot goes down, [x, y] in `frame` [m]: in "trunk", the trunk's frame of the robot
+    # standing square on its other three feet (x forward, y left; wherever the trunk has shifted
+    # above them), at most FOOTHOLD_REACH from the point under the hip; in "world", a point on the
+    # ground. Empty: under the hip of the trunk as it is.
+    foothold: list[float] = dataclasses.field(default_factory=list)
+    frame: str = "trunk"
 
 
 @dataclasses.dataclass
@@ -952,6 +961,18 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
             f"{phase.yaw_rate} rad/s: must be in [0, {limits.yaw_rate}] rad/s, the gait's limit ({phase.gait})",
         )
         need(phase.tolerance > 0, "tolerance", f"must be > 0 m, got {phase.tolerance}")
+    if isinstance(phase, LegToSupport):
+        need(phase.frame in FRAMES, "frame", f"must be one of {FRAMES}, got {phase.frame!r}")
+        need(len(phase.foothold) in (0, 2), "foothold", f"expected [] or [x, y] in metres, got {phase.foothold}")
+        need(all(math.isfinite(v) for v in phase.foothold), "foothold", "must be finite")
+        if phase.foothold and phase.frame == "trunk" and phase.leg in LEG_NAMES:
+            offset = math.dist(phase.foothold, NOMINAL_FEET_B[LEG_NAMES.index(phase.leg)])
+            need(
+                offset <= FOOTHOLD_REACH,
+                "foothold",
+                f"{phase.foothold} is {offset:.3f} m from the point under {phase.leg}'s hip, beyond the leg's "
+                f"reach for a foothold ({FOOTHOLD_REACH} m)",
+            )
     if isinstance(phase, Reach):
         need(phase.frame in FRAMES, "frame", f"must be one of {FRAMES}, got {phase.frame!r}")
         need(len(phase.target) == 3, "target", f"expected [x, y, z] in metres, got {phase.target}")

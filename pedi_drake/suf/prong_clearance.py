@@ -31,7 +31,10 @@ from pedi_drake.prongs import ProngDesign
 SWEEP_GRID = (25, 27, 11)
 ROD_SAMPLES = 8  # points along a prong's rod at which its distance to the legs is taken
 SPACING_STEP = 0.005  # [m] resolution of the widest spacing
-DISTANCE_HORIZON = 0.5  # [m] distances beyond this are not computed (the legs are farther)
+# [m] the largest clearance computed: a leg farther than this from a prong reads as this (what
+# matters is whether a leg comes within a margin of a prong, and each geometry within a query's
+# reach costs a result).
+CLEARANCE_CAP = 0.05
 
 
 class _LegSweep:
@@ -96,16 +99,16 @@ def _prong_spheres(design: ProngDesign) -> list[tuple[np.ndarray, float]]:
 
 @functools.lru_cache(maxsize=16)
 def _clearances(key: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """(inward hip angle [rad], clearance to the prongs [m]) of every swept leg configuration
-    of the design `robot.design_key` gives `key` for."""
+    """(inward hip angle [rad], clearance to the prongs [m], at most CLEARANCE_CAP) of every swept
+    leg configuration of the design `robot.design_key` gives `key` for."""
     design = ProngDesign(**dict(key))
     spheres = _prong_spheres(design)
     angles, clearances = [], []
     for leg in robot.LEG_NAMES:
         for angle, query, mine in _sweep().poses(leg):
-            clearance = np.inf
+            clearance = CLEARANCE_CAP
             for centre, radius in spheres:
-                for result in query.ComputeSignedDistanceToPoint(centre, DISTANCE_HORIZON):
+                for result in query.ComputeSignedDistanceToPoint(centre, radius + CLEARANCE_CAP):
                     if result.id_G in mine:
                         clearance = min(clearance, result.distance - radius)
             angles.append(angle)
@@ -115,7 +118,8 @@ def _clearances(key: tuple) -> tuple[np.ndarray, np.ndarray]:
 
 def leg_prong_clearance(design: ProngDesign, hip_inward_limit: float = np.inf) -> float:
     """The smallest distance [m] between any leg and any prong of `design` over the legs' joint
-    limits, each hip turned inwards by at most `hip_inward_limit` [rad] (< 0: they collide)."""
+    limits, each hip turned inwards by at most `hip_inward_limit` [rad] (< 0: they collide), at
+    most CLEARANCE_CAP."""
     design.validate()
     angles, clearances = _clearances(robot.design_key(design))
     return float(np.min(clearances[angles <= hip_inward_limit + 1e-9], initial=np.inf))
