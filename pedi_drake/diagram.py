@@ -129,7 +129,7 @@ def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
     return merged
 
 
-def _whole_body_controller(scenario: Scenario, name: str):
+def whole_body_controller(scenario: Scenario, name: str):
     """The whole-body controller `name` ("whole_body" or "projected_impedance") of `scenario`."""
     if name == "projected_impedance":
         return ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs)
@@ -310,13 +310,13 @@ def MakePedipulationDiagram(
         controller = builder.AddNamedSystem("controller", StandController(scenario.stand))
         builder.Connect(station.GetOutputPort("go1.position_measured"), controller.GetInputPort("position_measured"))
     else:
-        system = _whole_body_controller(scenario, scenario.controller)
+        system = whole_body_controller(scenario, scenario.controller)
         controller = builder.AddNamedSystem("controller", system)
         # With controller_switch, the other controller ticks beside it on the same inputs.
         controllers = [controller]
         if scenario.controller_switch.enabled:
             other = next(name for name in SWITCHABLE_CONTROLLERS if name != scenario.controller)
-            controllers.append(builder.AddNamedSystem(f"controller.{other}", _whole_body_controller(scenario, other)))
+            controllers.append(builder.AddNamedSystem(f"controller.{other}", whole_body_controller(scenario, other)))
             extra_logs[f"controller.{other}.diagnostics"] = controllers[1].diagnostics_port
         for each in controllers:
             builder.Connect(base_state, each.base_state_port)

@@ -5,15 +5,23 @@ import pytest
 from pedi_drake.apps.compile_kernels import CONTROLLERS, compile_kernels, main, schedule, uses_prongs, variants
 
 
-def test_the_workers_start_on_one_variant_of_each_controller_and_contact_count():
+def test_the_workers_start_on_each_controller_tick_and_the_shared_kernels_apart():
     built = variants()
     order = schedule(built)
-    assert sorted(order) == sorted(built)
+    assert sorted((job.mission, job.controller, job.hardware) for job in order if not job.controller_only) == sorted(
+        built
+    )
     leading = order[: 2 * len(CONTROLLERS)]
-    keys = [(controller, uses_prongs(mission)) for mission, controller, hardware in leading]
-    assert not any(hardware for _, _, hardware in leading)
-    # The whole-body ticks (the largest compiles) first, one without prongs and one with.
-    assert keys == [(controller, prongs) for controller in CONTROLLERS for prongs in (False, True)]
+    keys = [(job.controller, uses_prongs(job.mission), job.controller_only) for job in leading]
+    # The plain Go1's whole-body tick alone beside a whole diagram of paper 002's controller (the
+    # kernels every diagram shares, then its tick), then the ticks with prongs alone.
+    assert keys == [
+        ("whole_body", False, True),
+        ("projected_impedance", False, False),
+        ("whole_body", True, True),
+        ("projected_impedance", True, True),
+    ]
+    assert not any(job.hardware for job in leading)
 
 
 def test_prong_missions_are_told_apart_from_the_plain_go1():

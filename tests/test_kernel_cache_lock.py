@@ -41,3 +41,39 @@ def test_without_the_lock_the_same_race_loses_an_entry(tmp_path, monkeypatch):
     # What the lock is for: numba's own save, raced the same way, gives both entries one file.
     loaded = _race(caching.IndexDataCacheFile.save.unlocked, tmp_path, monkeypatch)
     assert loaded != {"sig_a": "code of sig_a", "sig_b": "code of sig_b"}
+
+
+# A kernel slow enough to compile (a second or so) that two processes started together both ask
+# for it before either has saved it.
+_SLOW_KERNEL = "\n".join(
+    ["from pedi_drake.runtime.jit import kernel", "", "@kernel", "def slow(x):", "    y = x"]
+    + [f"    y = y * 1.0001 + {k}.0 / (1.0 + y * y)" for k in range(400)]
+    + ["    return y", ""]
+)
+_COMPILE_AND_COUNT = """
+import sys
+sys.path.insert(0, sys.argv[1])
+from numba.core import event
+import slow_kernel
+with event.install_recorder("numba:compile") as recorder:
+    slow_kernel.slow(1.0)
+print(sum(1 for _, ev in recorder.buffer if ev.is_start))
+"""
+
+
+@pytest.mark.skipif(not jit.COMPILES_SERIALISED, reason="compiles are not serialised here")
+def test_two_processes_needing_one_signature_compile_it_once(tmp_path):
+    import os
+    import subprocess
+    import sys
+
+    (tmp_path / "slow_kernel.py").write_text(_SLOW_KERNEL)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    processes = [
+        subprocess.Popen([sys.executable, "-c", _COMPILE_AND_COUNT, str(tmp_path)], env=env, stdout=subprocess.PIPE)
+        for _ in range(2)
+    ]
+    compiled = [int(process.communicate(timeout=120)[0].split()[-1]) for process in processes]
+    assert all(process.returncode == 0 for process in processes)
+    # One compiled it; the other waited for the signature's lock and loaded it from the cache.
+    assert sorted(compiled) == [0, 1], compiled

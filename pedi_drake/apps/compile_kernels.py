@@ -11,13 +11,13 @@ Run it before starting several processes on an empty cache: test workers, or the
 batch study (`pedi_drake.batch` does it before the first task). Otherwise every one of them
 compiles the same kernels at the same time, each paying the minutes.
 
-It builds the diagrams in two worker processes (`--jobs`; by default one per core, at most two), which
-write one cache (`jit` locks its writes). Each kernel's signature is compiled once per worker
-that needs it before the other has saved it, so the work divides only where the variants need
-different kernels: a robot with prongs has six contact points where the plain Go1 has four,
-which gives every controller's tick a second signature, and the two whole-body ticks are the
-largest compiles of all. The workers start on those (`schedule`), then take the next variant as
-each finishes.
+It builds the diagrams in two worker processes (`--jobs`; by default one per core, at most two),
+which write one cache (`jit` locks its writes, and a kernel signature one worker is compiling the
+other waits for and loads). The work divides where the variants need different kernels: a robot
+with prongs has six contact points where the plain Go1 has four, which gives every controller's
+tick a second signature, and the whole-body ticks are the largest compiles of all. The workers
+start on those, and on the kernels every diagram shares, apart (`schedule`), then take the next
+job as each finishes.
 
     python -m pedi_drake.apps.compile_kernels --profile
 
@@ -69,17 +69,55 @@ def uses_prongs(mission: str) -> bool:
     return robot is not None and robot.prongs is not None
 
 
-def schedule(built: list[tuple[str, str, bool]]) -> list[tuple[str, str, bool]]:
-    """`built` (`variants`) in the order the workers take them: first one simulated variant of each
-    controller and robot (each compiles that controller's tick for its contact count), the
-    whole-body controller's first as its ticks take longest to compile; then the rest as listed."""
+@dataclasses.dataclass(frozen=True)
+class Job:
+    """One job of a compile worker: build the diagram of a `variants` entry, or only its whole-body
+    controller (`controller_only`), which compiles that controller's tick and nothing else."""
+
+    mission: str
+    controller: str
+    hardware: bool = False
+    controller_only: bool = False
+
+
+def schedule(built: list[tuple[str, str, bool]]) -> list[Job]:
+    """The jobs that build `built` (`variants`), in the order the workers take them.
+
+    A controller's tick has one signature per contact count (a robot with prongs has more), and
+    the ticks are the largest compiles; every diagram also needs the same set of smaller kernels
+    (the estimator's, the station's, the live SUF's), about as long to compile as a whole-body
+    tick. Two workers that both started on diagrams would need those at the same moment, and one
+    would wait for the other's (`jit` lets one process compile a signature and the others load
+    it). So one worker starts on the whole-body tick of the plain Go1 alone while the other builds
+    the first diagram of paper 002's controller (the shared kernels, then that tick); the other
+    ticks follow alone, then every diagram, which then loads what it needs."""
     firsts: dict[tuple[int, bool], tuple[str, str, bool]] = {}
     for variant in built:
         mission, controller, hardware = variant
         if not hardware:
             firsts.setdefault((CONTROLLERS.index(controller), uses_prongs(mission)), variant)
-    leading = [firsts[key] for key in sorted(firsts)]
-    return leading + [variant for variant in built if variant not in leading]
+    (whole_body, whole_body_prongs), (impedance, impedance_prongs) = (
+        [firsts[(k, prongs)] for prongs in (False, True)] for k in range(len(CONTROLLERS))
+    )
+    leading = [
+        Job(*whole_body, controller_only=True),
+        Job(*impedance),
+        Job(*whole_body_prongs, controller_only=True),
+        Job(*impedance_prongs, controller_only=True),
+    ]
+    return leading + [Job(*variant) for variant in built if variant != impedance]
+
+
+def run_job(job: Job) -> float:
+    """Runs one `schedule` job, compiling what the cache lacks; returns the wall time [s]."""
+    if not job.controller_only:
+        return build_variant(job.mission, job.controller, job.hardware)
+    from pedi_drake.diagram import apply_mission, whole_body_controller
+    from pedi_drake.mission.spec import load_mission
+
+    start = time.perf_counter()
+    whole_body_controller(apply_mission(load_scenario(), load_mission(job.mission)), job.controller)
+    return time.perf_counter() - start
 
 
 def build_variant(mission: str, controller: str, hardware: bool) -> float:
@@ -119,7 +157,7 @@ def compile_kernels(jobs: int = 1) -> float:
     with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
         # One variant at a time (futures are taken in the order submitted), so a worker that
         # finishes early takes the next instead of waiting behind a share fixed in advance.
-        futures = [pool.submit(build_variant, *variant) for variant in schedule(variants())]
+        futures = [pool.submit(run_job, job) for job in schedule(variants())]
         for future in futures:
             future.result()
     return time.perf_counter() - start

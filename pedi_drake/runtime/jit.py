@@ -170,6 +170,52 @@ def _lock_cache_writes() -> bool:
 CACHE_WRITES_LOCKED = ENABLED and _lock_cache_writes()
 
 
+def _serialise_compiles() -> bool:
+    """Makes a process that needs a kernel signature another process is compiling wait for it and
+    load it from the cache, instead of compiling it too: returns whether this is in place.
+
+    Processes started together on an empty cache (`compile_kernels`' workers) need many of the
+    same kernels (the estimator's, the station's, those both controllers call), and each would
+    compile every one of them. An exclusive lock on a file named by the kernel's cache index and
+    the signature, held around numba's load-or-compile-and-save of that signature, lets the first
+    compile it and the others load it. The locks are taken down the call graph (a kernel's callees
+    compile inside its compile), which has no cycles, so no two processes wait for each other; a
+    process already holding a signature's lock takes it again without waiting."""
+    try:
+        import fcntl
+
+        from numba.core.dispatcher import Dispatcher
+    except ImportError:  # pragma: no cover - not POSIX
+        return False
+    compile_ = Dispatcher.compile
+    if getattr(compile_, "pedi_drake_serialised", False):
+        return True
+    held: set[str] = set()
+
+    def serialised_compile(self, sig):
+        index = getattr(getattr(getattr(self, "_cache", None), "_cache_file", None), "_index_path", None)
+        if index is None:  # not cached on disk: nothing to share
+            return compile_(self, sig)
+        path = f"{index}.{hashlib.sha1(str(sig).encode()).hexdigest()[:16]}.compiling"
+        if path in held:
+            return compile_(self, sig)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        with open(path, "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            held.add(path)
+            try:
+                return compile_(self, sig)
+            finally:
+                held.discard(path)
+
+    serialised_compile.pedi_drake_serialised = True
+    Dispatcher.compile = serialised_compile
+    return True
+
+
+COMPILES_SERIALISED = CACHE_WRITES_LOCKED and _serialise_compiles()
+
+
 # One dtype object per distinct structured dtype of the records (see `new_record`).
 _RECORD_DTYPES: dict[np.dtype, np.dtype] = {}
 
