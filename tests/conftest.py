@@ -82,3 +82,30 @@ def phase_tables_restored():
     spec.PHASE_KINDS.update(kinds)
     phases.RUNNERS.clear()
     phases.RUNNERS.update(runners)
+
+
+@pytest.fixture(scope="session")
+def made_once(tmp_path_factory):
+    """`made_once(name, make)`: the folder `make(folder)` filled, made once per test run however
+    many test workers ask for it (a worker that asks while another makes it waits, then reads it).
+
+    For a long simulation whose results several tests of a module read: test workers that share a
+    module between them would otherwise each run it."""
+    import fcntl
+
+    # The test run's folder: under pytest-xdist each worker's own is a subfolder of it.
+    base = tmp_path_factory.getbasetemp()
+    shared = base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+    def get(name: str, make):
+        folder = shared / name
+        with open(shared / f"{name}.lock", "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            done = folder / ".made"
+            if not done.exists():
+                folder.mkdir(exist_ok=True)
+                make(folder)
+                done.touch()
+        return folder
+
+    return get

@@ -27,9 +27,9 @@ SHORT_VERSIONS = {
 }
 # Missions whose short version another test runs and judges.
 SHORT_VERSION_TESTED_IN = {
-    "box_lift_side_legs": "tests/test_box_lift.py",
-    "push_recovery_prongs": "tests/test_push_recovery.py",
-    "push_recovery_no_prongs": "tests/test_push_recovery.py",
+    "box_lift_side_legs": "tests/test_paper003_evaluations.py",
+    "push_recovery_prongs": "tests/test_paper003_evaluations.py",
+    "push_recovery_no_prongs": "tests/test_paper003_evaluations.py",
 }
 
 

@@ -17,11 +17,13 @@ ROTATION_FLOOR_DEG = 5.0
 FRONT_FEET_FLOOR_M = 0.005
 
 
-@pytest.fixture(scope="module")
-def quick_report(tmp_path_factory):
-    out = tmp_path_factory.mktemp("reproduce")
+def _reproduce(out):
     assert main(["002", "--quick", "--out", str(out)]) == 0
-    folder = out / "002"
+
+
+@pytest.fixture(scope="module")
+def quick_report(made_once):
+    folder = made_once("reproduce_002_quick", _reproduce) / "002"
     rows = {row["case"]: row for row in json.loads((folder / "rows.json").read_text())}
     return rows, folder
 
