@@ -414,6 +414,7 @@ def MakePedipulationDiagram(
             extra_logs["mission.leg_reference"] = leg_reference
             extra_logs["mission.contact_set"] = manager.GetOutputPort("contact_set")
             extra_logs["mission.safety_polygon"] = manager.GetOutputPort("safety_polygon")
+            extra_logs["mission.friction"] = manager.GetOutputPort("friction")
     command = controller.GetOutputPort("command")
     if scenario.controller != "stand_pd" and scenario.controller_switch.enabled:
         switch = _add_controller_switch(builder, scenario, controllers, manager, operator)

@@ -17,6 +17,10 @@ import numpy as np
 
 from pedi_drake.runtime.jit import kernel
 
+# [-] the friction coefficients a controller may be given at run time, and a terrain patch may
+# have: from wet ice to rubber on rough concrete.
+FRICTION_RANGE = (0.05, 1.5)
+
 
 @kernel
 def pyramid_slope(mu: float, inscribed: bool = True) -> float:

@@ -20,6 +20,7 @@ from pedi_drake.exceptions import ScenarioError
 from pedi_drake.scenario import Scenario, scene_problems
 from pedi_drake.station.initial_state import initial_trunk_pose, set_default_go1_state
 from pedi_drake.station.scene import add_scene_object
+from pedi_drake.terrain import is_terrain
 
 # Penetration deeper than this between two start-pose geometries is an overlap [m]; shallower is
 # resting contact (the door leaf on its frame, an object set on the floor or on the trunk).
@@ -64,7 +65,9 @@ def check_scene_geometry(scenario: Scenario, where: str = "scene") -> None:
     objects = {}
     for i, obj in enumerate(scenario.scene):
         try:
-            objects[add_scene_object(plant, obj, X_WB0)] = f"{where}[{i}] ({obj.instance_name})"
+            objects[add_scene_object(plant, obj, X_WB0, scenario.ground_friction)] = (
+                f"{where}[{i}] ({obj.instance_name})"
+            )
         except RuntimeError as error:  # Drake's parser: a model that is not valid SDF/URDF
             raise ScenarioError(f"{where}[{i}].model: cannot be loaded: {error}") from None
     plant.Finalize()
@@ -87,9 +90,11 @@ def check_scene_geometry(scenario: Scenario, where: str = "scene") -> None:
             return "the robot at its start pose"
         return objects.get(body.model_instance())
 
+    # Terrain may join terrain (a ramp's box runs under the platform it leads onto).
+    terrain = {f"{where}[{i}] ({obj.instance_name})" for i, obj in enumerate(scenario.scene) if is_terrain(obj)}
     for pair in query.ComputePointPairPenetration():
         a, b = owner(pair.id_A), owner(pair.id_B)
-        if a is None or b is None or a == b or pair.depth < OVERLAP_DEPTH:
+        if a is None or b is None or a == b or pair.depth < OVERLAP_DEPTH or {a, b} <= terrain:
             continue
         first, second = (a, b) if a.startswith(where) else (b, a)
         raise ScenarioError(

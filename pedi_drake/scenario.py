@@ -40,6 +40,7 @@ from pedi_drake.prongs import ProngDesign
 from pedi_drake.resources import models_dir, scenarios_dir
 from pedi_drake.runtime.realtime_priority import priority_problem
 from pedi_drake.suf.live_config import LiveSufConfig
+from pedi_drake.terrain import TERRAIN_KINDS, terrain_problems
 
 SCENE_OBJECT_KINDS = (
     "door",
@@ -52,6 +53,7 @@ SCENE_OBJECT_KINDS = (
     "mobile_soft_obstacle",
     "hand",
     "estop_button",
+    *TERRAIN_KINDS,
 )
 INITIAL_POSES = ("lying", "standing")
 ESTIMATORS = ("ground_truth", "kalman")
@@ -119,8 +121,13 @@ class SceneObject:
     initial_angle: float = 0.0
     # Optional model file replacing the kind's shipped model: a `package://pedi_drake/...` URL or a
     # path (relative paths are taken from the scenario file's folder). It must have the bodies and
-    # joints the kind expects (see pedi_drake/station/scene.py).
+    # joints the kind expects (see pedi_drake/station/scene.py). Terrain takes none.
     model: str = ""
+    # Terrain only (slope, platform, friction_patch; pedi_drake.terrain): its extents [m], a
+    # slope's angle [deg], and its friction coefficient [-] (0: the ground's).
+    size: list[float] = dataclasses.field(default_factory=list)
+    angle: float = 0.0
+    friction: float = 0.0
 
     @property
     def instance_name(self) -> str:
@@ -414,7 +421,8 @@ def scene_problems(scene: list[SceneObject], base_dir: Path | None, field: str =
             problems.append(f"{where}.position: expected [x, y, z] in metres, got {obj.position}")
         if not all(math.isfinite(v) for v in [*obj.position, obj.yaw, obj.initial_angle]):
             problems.append(f"{where}: position, yaw and initial_angle must be finite")
-        if obj.model and not resolve_model_path(obj.model, base_dir).is_file():
+        problems.extend(terrain_problems(obj, where))
+        if obj.model and obj.kind not in TERRAIN_KINDS and not resolve_model_path(obj.model, base_dir).is_file():
             searched = "models/" if obj.model.startswith("package://") else (base_dir or Path.cwd())
             problems.append(f"{where}.model: model file not found: {obj.model!r} (looked in {searched})")
         name = obj.instance_name

@@ -291,8 +291,9 @@ def test_a_progress_copy_owns_every_container_the_runners_change():
     changed.recovery.clear()
     changed.switches.append(None)
     changed.target_requests.append(None)
+    changed.friction_changes.append((1.0, 0.2, "mission"))
     changed.pre_posture["FR"] = (np.zeros(3), None)
-    assert progress.target_requests == [] and progress.pre_posture == {}
+    assert progress.target_requests == [] and progress.pre_posture == {} and progress.friction_changes == []
     assert "FR" in progress.references.legs and progress.references.contacts[0] == 1.0
     assert progress.references.press["frozen_at"] is None
     assert progress.memo["counts"]["speed"] == 0 and progress.memo["goal"][0] == 0.0
@@ -322,6 +323,9 @@ def test_every_progress_field_is_either_shared_or_duplicated_by_copy():
         "operator_mode",
         "teleop_pending",
         "controller_request",
+        "friction",
+        "friction_changes",
+        "operator_friction",
         "switches",
         "target_requests",
         "last_target",

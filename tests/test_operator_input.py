@@ -75,6 +75,9 @@ def _with(**fields) -> bytes:
         (_with(mode_request=7), "out_of_range"),
         (_with(frame=2), "out_of_range"),
         (_with(kind=-1), "out_of_range"),
+        (_with(friction_request=0.01), "out_of_range"),
+        (_with(friction_request=1.6), "out_of_range"),
+        (_with(friction_request=float("nan")), "nonfinite"),
     ],
 )
 def test_a_malformed_foot_command_is_dropped_and_counted_by_reason(data, reason):
@@ -155,6 +158,16 @@ def test_the_estop_latches_and_a_mode_request_stands():
     lcm.Publish(CHANNEL, foot_command_message(ScriptStep(0.0), 0.1, 2).encode())  # no request, no E-stop
     command = _tick(system, context, 0.2)
     assert command.estop and command.mode_request == MODE_AUTONOMOUS
+
+
+def test_a_friction_request_stands_until_another():
+    lcm, system, context = _make("lcm")
+    lcm.Publish(CHANNEL, foot_command_message(ScriptStep(0.0, friction_request=0.3), 0, 1).encode())
+    assert _tick(system, context, 0.1).friction_request == 0.3
+    lcm.Publish(CHANNEL, foot_command_message(ScriptStep(0.0), 0.1, 2).encode())  # no request
+    assert _tick(system, context, 0.2).friction_request == 0.3
+    lcm.Publish(CHANNEL, foot_command_message(ScriptStep(0.0, friction_request=1.1), 0.2, 3).encode())
+    assert _tick(system, context, 0.3).friction_request == 1.1
 
 
 def _remote(**fields) -> bytes:

@@ -29,6 +29,12 @@ def test_a_script_becomes_its_steps():
     assert steps[1].value == (0.05, 0.0, 0.0) and [s.estop for s in steps] == [False, False, False, True]
 
 
+def test_a_friction_line_keeps_the_command_and_adds_the_request():
+    steps = parse_script(SCRIPT.replace("0.2 autonomous", "0.15 friction 0.2\n0.2 autonomous"))
+    assert steps[2].start == 0.15 and steps[2].friction_request == 0.2
+    assert (steps[2].mode_request, steps[2].value) == (steps[1].mode_request, steps[1].value)
+
+
 @pytest.mark.parametrize(
     ("text", "problem"),
     [
@@ -38,6 +44,8 @@ def test_a_script_becomes_its_steps():
         ("0 teleop x 0 0", "numbers"),
         ("1 teleop 0 0 0\n0.5 none 0 0 0", "increasing"),
         ("# nothing", "no steps"),
+        ("0 teleop 0 0 0\n1 friction 2.0", r"friction coefficient must be in \[0.05, 1.5\]"),
+        ("0 teleop 0 0 0\n1 friction wet", "numbers"),
     ],
 )
 def test_a_bad_script_line_is_named(text, problem):
@@ -56,7 +64,7 @@ def test_the_script_is_published_as_valid_foot_commands():
     vectors = np.array([foot_command_vector(m) for m in received])
     assert all(foot_command_in_range(v) for v in vectors)
     assert [m.sequence for m in received] == list(range(1, 17))
-    assert np.allclose(vectors[5], [MODE_NONE, FRAME_TRUNK, 0, 0.05, 0.0, 0.0, 0.0, 0.0])  # t = 0.1 s
+    assert np.allclose(vectors[5], [MODE_NONE, FRAME_TRUNK, 0, 0.05, 0.0, 0.0, 0.0, 0.0, 0.0])  # t = 0.1 s
     assert vectors[0][0] == MODE_TELEOP and vectors[10][0] == MODE_AUTONOMOUS and vectors[-1][6] == 1.0
 
 

@@ -110,7 +110,7 @@ def world_mjcf(scenario: Scenario, foot_radius: float | None = None) -> tuple[st
     if scenario.robot.prongs is not None:
         _add_prongs(worldbody.find("body[@name='trunk']"), scenario.robot.prongs)
     X_WB0 = mujoco_initial_trunk_pose(scenario, foot_radius if foot_radius is not None else mujoco_foot_radius())
-    scene = add_scene(root, scenario.scene, X_WB0)
+    scene = add_scene(root, scenario.scene, X_WB0, scenario.ground_friction)
     return ET.tostring(root, encoding="unicode"), scene
 
 

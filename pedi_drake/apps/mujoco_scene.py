@@ -23,7 +23,9 @@ Drake station can build, MuJoCo can too, from the same data:
   a MuJoCo joint stiffness with spring reference 0, plus the SDF's joint damping, not a soft
   contact), the E-stop button's preloaded plunger spring (stiffness ESTOP_BUTTON_STIFFNESS,
   reference -ESTOP_BUTTON_PRELOAD), the door's initial angle (an initial joint position), and the
-  back object's placement on the trunk's top face.
+  back object's placement on the trunk's top face;
+- terrain (pedi_drake.terrain: slopes, platforms, friction patches) -> one static box geom each,
+  the box and friction the Drake station builds.
 """
 
 import dataclasses
@@ -45,6 +47,7 @@ from pedi_drake.station.scene import (
     SPRUNG_PLATE_KINDS,
     TRUNK_TOP_Z,
 )
+from pedi_drake.terrain import is_terrain, terrain_box, terrain_colour
 
 # Geom settings of scene objects: collide with the robot (contype 1 / conaffinity 2) and with the
 # world (floor, other objects); priority 2: the object's friction and softness govern its contacts.
@@ -198,8 +201,24 @@ def object_placement(obj: SceneObject, X_WB_initial: RigidTransform) -> RigidTra
     return RigidTransform(RollPitchYaw(0, 0, obj.yaw), obj.position)
 
 
-def add_scene_object(worldbody: ET.Element, obj: SceneObject, X_WB_initial: RigidTransform) -> SceneBodies:
-    """Adds `obj` to the MJCF `worldbody` as bodies converted from its SDF; returns their names."""
+def add_terrain(worldbody: ET.Element, obj: SceneObject, ground_friction: float) -> SceneBodies:
+    """Adds terrain object `obj` (pedi_drake.terrain) to the MJCF `worldbody` as one static box
+    geom of the box Drake's plant gets, with its friction (`ground_friction` [-] if none)."""
+    box = terrain_box(obj, ground_friction)
+    geom = ET.SubElement(worldbody, "geom", name=obj.instance_name, type="box", size=_f(0.5 * box.size), **OBJECT_GEOM)
+    _set_pose(geom, box.X_WC)
+    geom.set("friction", f"{box.friction:.12g} 0.005 0.0001")
+    geom.set("rgba", _f(terrain_colour(obj, ground_friction)))
+    return SceneBodies(obj.instance_name, [], {}, [])
+
+
+def add_scene_object(
+    worldbody: ET.Element, obj: SceneObject, X_WB_initial: RigidTransform, ground_friction: float = 0.8
+) -> SceneBodies:
+    """Adds `obj` to the MJCF `worldbody` as bodies converted from its SDF (terrain: a static geom,
+    of `ground_friction` [-] unless it has its own); returns their names."""
+    if is_terrain(obj):
+        return add_terrain(worldbody, obj, ground_friction)
     path = scene_model_path(obj)
     where = f"scene object {obj.instance_name!r} ({path.name})"
     model = ET.parse(path).getroot().find("model")
@@ -244,10 +263,13 @@ def add_scene_object(worldbody: ET.Element, obj: SceneObject, X_WB_initial: Rigi
     return SceneBodies(obj.instance_name, bodies, initial, pairs)
 
 
-def add_scene(root: ET.Element, scene: list[SceneObject], X_WB_initial: RigidTransform) -> list[SceneBodies]:
+def add_scene(
+    root: ET.Element, scene: list[SceneObject], X_WB_initial: RigidTransform, ground_friction: float = 0.8
+) -> list[SceneBodies]:
     """Adds every object of `scene`, in order, to the MJCF `root`'s worldbody, with a contact
-    exclude for every pair of bodies a joint connects; returns what each object became."""
-    added = [add_scene_object(root.find("worldbody"), obj, X_WB_initial) for obj in scene]
+    exclude for every pair of bodies a joint connects; returns what each object became (terrain
+    without a friction of its own has `ground_friction` [-])."""
+    added = [add_scene_object(root.find("worldbody"), obj, X_WB_initial, ground_friction) for obj in scene]
     pairs = [pair for bodies in added for pair in bodies.jointed_pairs]
     if pairs:
         contact = root.find("contact")

@@ -20,7 +20,8 @@ driven foot, the balance bound's limit along it and the margin left, and the liv
 With `--script FILE`, or when stdin is not a terminal, the commands come from a script instead:
 one step per line, `t_s mode vx vy vz` (time from the start [s], increasing; mode `none`,
 `teleop`, `autonomous` or `estop`, or `hqp` / `paper002` to ask for a controller; the foot
-velocity [m/s]), `#` starts a comment. Each step
+velocity [m/s]) or `t_s friction mu` (the ground friction coefficient the controllers are to use,
+in [0.05, 1.5], sent with the previous step's command), `#` starts a comment. Each step
 holds until the next one's time; the app ends at the last step's time. A malformed script exits
 with status 2 and names the file and line.
 
@@ -53,6 +54,7 @@ import numpy as np
 from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 
 from pedi_drake.exceptions import PediError
+from pedi_drake.friction import FRICTION_RANGE
 from pedi_drake.go1_driver.lcmtypes import foot_feedback_lcmt
 from pedi_drake.operator.command import (
     CONTROLLER_NONE,
@@ -98,6 +100,21 @@ class ScriptError(PediError):
     """A script line that is not `t_s mode vx vy vz`."""
 
 
+def _friction_step(words: list[str], steps: list[ScriptStep], where: str, line: str) -> ScriptStep:
+    """The step of a `t_s friction mu` line: the previous step's command with the friction request."""
+    try:
+        t, mu = float(words[0]), float(words[2])
+    except ValueError:
+        raise ScriptError(f"{where}: time and friction coefficient must be numbers, got {line.strip()!r}") from None
+    low, high = FRICTION_RANGE
+    if not (math.isfinite(mu) and low <= mu <= high):
+        raise ScriptError(f"{where}: the friction coefficient must be in [{low}, {high}], got {words[2]!r}")
+    if not math.isfinite(t) or t < 0 or (steps and t <= steps[-1].start):
+        raise ScriptError(f"{where}: times must be >= 0 s and increasing, got {t} after the previous step")
+    previous = steps[-1] if steps else ScriptStep(t)
+    return dataclasses.replace(previous, start=t, estop=False, friction_request=mu)
+
+
 def parse_script(text: str, source: str = "<script>", frame: int = FRAME_TRUNK) -> list[ScriptStep]:
     """The steps of a script (see the module docstring); raises ScriptError naming `source` and the line."""
     steps: list[ScriptStep] = []
@@ -106,8 +123,11 @@ def parse_script(text: str, source: str = "<script>", frame: int = FRAME_TRUNK) 
         if not words:
             continue
         where = f"{source}:{number}"
+        if len(words) == 3 and words[1] == "friction":
+            steps.append(_friction_step(words, steps, where, line))
+            continue
         if len(words) != 5:
-            raise ScriptError(f"{where}: expected 't_s mode vx vy vz', got {line.strip()!r}")
+            raise ScriptError(f"{where}: expected 't_s mode vx vy vz' or 't_s friction mu', got {line.strip()!r}")
         try:
             t, vx, vy, vz = (float(words[k]) for k in (0, 2, 3, 4))
         except ValueError:

@@ -78,6 +78,7 @@ def judge_run(record) -> dict:
         "interrupt_reason": record.interrupted or "",
         "phases": [],
         "mode_switches": [],
+        "friction_changes": [],
         "postures": [],
         "operator_targets": {"requests": [], "refused": 0},
         "teleop": [],
@@ -141,6 +142,7 @@ def judge_run(record) -> dict:
     else:
         result["phases"] = mission_results.phase_table(progress)
         result["mode_switches"] = mission_results.mode_switch_table(progress)
+        result["friction_changes"] = mission_results.friction_table(progress)
         result["postures"] = mission_results.posture_table(progress)
         result["operator_targets"] = mission_results.target_table(progress)
         result["teleop"] = mission_results.teleop_table(progress)

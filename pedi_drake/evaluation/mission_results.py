@@ -49,6 +49,12 @@ def mode_switch_table(progress: MissionProgress) -> list[dict]:
     ]
 
 
+def friction_table(progress: MissionProgress) -> list[dict]:
+    """The `friction_changes` list of result.json: {time [s], friction [-], by} per change of the
+    controllers' friction coefficient (a set_friction phase: "mission"; the operator: "operator")."""
+    return [{"time": t, "friction": mu, "by": source} for t, mu, source in progress.friction_changes]
+
+
 def posture_table(progress: MissionProgress) -> list[dict]:
     """The `postures` list of result.json: every lift with posture: optimal, its fixed and optimal
     postures and their SUFs at its targets (pedi_drake.suf.posture; the estimate's stance)."""

@@ -29,7 +29,9 @@ the one a teleop_foot or press phase drives, else the first lifted leg; and the 
 that phase's push) and read back on `suf`, for the balance bound of those phases; the haptic
 feedback of the driven foot leaves on `operator_feedback` (pedi_drake.operator.feedback). The
 whole-body controller a switch_controller phase asked for leaves on `controller_request`
-(pedi_drake.control.controller_switch).
+(pedi_drake.control.controller_switch). The controllers' ground friction coefficient leaves on
+`friction`: the constructor's, until a set_friction phase or the operator (a friction request on
+`operator_command`) changes it (`MissionProgress.friction_changes`).
 
 A failed phase (IK unreachable, timeout, fall) fails the mission with a reason; the manager then
 places any lifted leg back on the ground ("recovering") and holds the robot standing.
@@ -73,6 +75,7 @@ from pedi_drake.mission.progress import (
     ModeSwitch,
     PhaseRecord,
     References,
+    set_friction,
 )
 from pedi_drake.mission.reference_table import (
     REFERENCES_SIZE,
@@ -200,6 +203,9 @@ class MissionManager(LeafSystemWithoutWitnesses):
         self._suf_request = self.DeclareDiscreteState(suf_request_vector(-1, None))
         self._feedback = self.DeclareDiscreteState(feedback_vector(-1, None, np.nan, np.nan, 0, False))
         self._controller_request = self.DeclareDiscreteState(1)
+        # The controllers' friction coefficient: the constructor's until a set_friction phase or
+        # the operator changes it (MissionProgress.friction).
+        self._friction_state = self.DeclareDiscreteState([self._friction])
         self.DeclareInitializationUnrestrictedUpdateEvent(self._initialize)
         self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._update)
         # Trajectory samples change with time: computed when evaluated, from the packed references.
@@ -219,9 +225,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
             self.DeclareStateOutputPort(f"ik_foot_target_W.{leg}", self._ik_targets[leg])
         self.DeclareStateOutputPort("ik_X_WB", self._ik_pose)
         self.DeclareStateOutputPort("ik_q_seed", self._ik_seed)
-        self.DeclareVectorOutputPort(
-            "friction", 1, lambda c, o: o.SetFromVector([self._friction]), prerequisites_of_calc={self.nothing_ticket()}
-        )
+        self.DeclareStateOutputPort("friction", self._friction_state)
         self.DeclareStateOutputPort("mission_status", self._status)
         self.DeclareStateOutputPort("suf_request", self._suf_request)
         self.DeclareStateOutputPort("operator_feedback", self._feedback)
@@ -294,6 +298,8 @@ class MissionManager(LeafSystemWithoutWitnesses):
         state.get_mutable_discrete_state(self._status).SetFromVector(self._status_vector(progress))
         state.get_mutable_discrete_state(self._suf_request).SetFromVector(self._suf_request_vector(progress))
         state.get_mutable_discrete_state(self._controller_request).SetFromVector([progress.controller_request])
+        friction = self._friction if progress.friction is None else progress.friction
+        state.get_mutable_discrete_state(self._friction_state).SetFromVector([friction])
         plan = progress.ik
         if previous is not None and plan is previous.ik:
             return
@@ -358,6 +364,8 @@ class MissionManager(LeafSystemWithoutWitnesses):
             self._store(state, progress, previous)
             self._set_polygon(state, view, progress)
             return
+        if view.operator is not None:
+            self._follow_friction_request(progress, view)
         if view.operator is not None and self._mission.teleop is not None:
             self._follow_mode_request(progress, view)
         if view.operator is not None and self._mission.semi_autonomous is not None:
@@ -607,6 +615,15 @@ class MissionManager(LeafSystemWithoutWitnesses):
             return np.full(3, np.nan)
         pose = BaseState(plan.X_WB[0:4], plan.X_WB[4:7], np.zeros(3), np.zeros(3)).pose()
         return pose @ p_B
+
+    @staticmethod
+    def _follow_friction_request(progress: MissionProgress, view: RobotView) -> None:
+        """A new friction coefficient from the operator (its input checked the range) is given
+        to the controllers at once, in any mode: it is a fact about the ground, not a motion."""
+        request = view.operator.friction_request
+        if request != 0.0 and request != progress.operator_friction:
+            set_friction(progress, request, view.time, "operator")
+        progress.operator_friction = request
 
     def _status_vector(self, progress: MissionProgress) -> list[float]:
         """The `mission_status` vector of `progress`."""

@@ -42,6 +42,7 @@ from pedi_drake.mission.progress import (
     IkPlan,
     LegTrajectory,
     MissionProgress,
+    set_friction,
 )
 from pedi_drake.mission.reference_start import foot_reference_start, joint_reference_start
 from pedi_drake.mission.robot_view import RobotView
@@ -1249,6 +1250,16 @@ class SwitchControllerRunner(PhaseRunner):
         return SUCCEEDED if view.time >= progress.phase_start + phase.duration else RUNNING
 
 
+class SetFrictionRunner(PhaseRunner):
+    """Sets the controllers' friction coefficient (MissionProgress.friction), then holds."""
+
+    def start(self, phase, progress, view, env):
+        set_friction(progress, phase.mu, view.time, "mission")
+
+    def step(self, phase, progress, view, env):
+        return SUCCEEDED if view.time >= progress.phase_start + phase.duration else RUNNING
+
+
 RUNNERS: dict[type, PhaseRunner] = {
     spec.StandUp: StandUpRunner(),
     spec.LieDown: LieDownRunner(),
@@ -1266,6 +1277,7 @@ RUNNERS: dict[type, PhaseRunner] = {
     spec.TeleopFoot: TeleopFootRunner(),
     spec.Wait: WaitRunner(),
     spec.SwitchController: SwitchControllerRunner(),
+    spec.SetFriction: SetFrictionRunner(),
     **WALK_RUNNERS,
 }
 assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a runner"

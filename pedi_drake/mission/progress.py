@@ -231,6 +231,12 @@ class MissionProgress:
     # The whole-body controller the mission last asked for (pedi_drake.operator.command
     # CONTROLLER_*; 0: none asked), the `controller_request` output.
     controller_request: int = 0
+    # The friction coefficient the controllers are given [-] (the `friction` output; None: the
+    # scenario's), every change of it as (time [s], coefficient, "mission" or "operator"), and
+    # the operator's last friction request seen (0: none).
+    friction: float | None = None
+    friction_changes: list = dataclasses.field(default_factory=list)
+    operator_friction: float = 0.0
     switches: list[ModeSwitch] = dataclasses.field(default_factory=list)
     # The semi-autonomous mode (pedi_drake.mission.semi_autonomous): every target the operator
     # sent (SemiAutonomous TargetRequest values), the last value seen [m], the accepted target
@@ -274,6 +280,7 @@ class MissionProgress:
         clone.pre_posture = dict(self.pre_posture)
         clone.target_anchors = dict(self.target_anchors)
         clone.target_requests = list(self.target_requests)
+        clone.friction_changes = list(self.friction_changes)  # of tuples, never changed
         return clone
 
     def __deepcopy__(self, memo) -> "MissionProgress":
@@ -282,3 +289,10 @@ class MissionProgress:
         # for every unrestricted update, among them the plant's at each step (its sampled
         # output ports): a deep copy would be paid twice a control tick.
         return self
+
+
+def set_friction(progress: MissionProgress, mu: float, time: float, source: str) -> None:
+    """Gives the controllers friction coefficient `mu` [-] from time `time` [s] on, recording the
+    change and who made it (`source`: "mission" or "operator")."""
+    progress.friction = float(mu)
+    progress.friction_changes.append((float(time), float(mu), source))

@@ -30,6 +30,7 @@ from pydrake.common.yaml import yaml_load
 from pedi_drake.config_validation import check_against_schema
 from pedi_drake.control.config import FORCE_ESTIMATES, STACKS
 from pedi_drake.exceptions import MissionFileError
+from pedi_drake.friction import FRICTION_RANGE
 from pedi_drake.locomotion.footholds import NOMINAL_FEET_B
 from pedi_drake.locomotion.gait import GAITS
 from pedi_drake.locomotion.static_walk import FOOTHOLD_REACH
@@ -493,6 +494,16 @@ class SwitchController(PhaseBase):
     duration: float = 0.3
 
 
+@dataclasses.dataclass
+class SetFriction(PhaseBase):
+    """Gives the controllers the friction coefficient `mu` [-] (in FRICTION_RANGE) from now on,
+    as an operator does before stepping onto ground of another friction (paper 002, IV-C: no
+    algorithm estimates it online), and holds the current references for `duration` [s]."""
+
+    mu: float = 0.8
+    duration: float = 0.1
+
+
 PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "stand_up": StandUp,
     "lie_down": LieDown,
@@ -510,6 +521,7 @@ PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "teleop_foot": TeleopFoot,
     "wait": Wait,
     "switch_controller": SwitchController,
+    "set_friction": SetFriction,
     "walk_velocity": WalkVelocity,
     "walk": Walk,
     "walk_teleop": WalkTeleop,
@@ -1056,6 +1068,10 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
     if isinstance(phase, SwitchController):
         need(phase.to in SWITCHABLE_CONTROLLERS, "to", f"must be one of {SWITCHABLE_CONTROLLERS}, got {phase.to!r}")
         need(math.isfinite(phase.duration) and phase.duration >= 0, "duration", f"must be >= 0 s, got {phase.duration}")
+        need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
+    if isinstance(phase, SetFriction):
+        low, high = FRICTION_RANGE
+        need(math.isfinite(phase.mu) and low <= phase.mu <= high, "mu", f"must be in [{low}, {high}], got {phase.mu}")
         need(phase.timeout >= phase.duration, "timeout", "must be at least the phase duration")
     if isinstance(phase, TeleopFoot):
         for field in ("max_speed", "max_force", "hold_after", "return_after", "joint_margin", "min_height"):

@@ -1,7 +1,7 @@
 """The operator's command as one vector: the `operator_command` port of OperatorInput.
 
-  operator_command (11) = [mode_request, frame, kind, value (3), estop, age, received, dropped,
-                           controller_request]
+  operator_command (12) = [mode_request, frame, kind, value (3), estop, age, received, dropped,
+                           controller_request, friction_request]
 
 mode_request  the last mode the operator asked for: MODE_NONE (nothing asked yet),
               MODE_AUTONOMOUS (the mission's phases), MODE_TELEOP (the teleoperated foot) or
@@ -16,6 +16,8 @@ received, dropped   valid messages taken in, and messages rejected (malformed, n
 controller_request  the last whole-body controller the operator asked for: CONTROLLER_NONE
               (nothing asked yet), CONTROLLER_WHOLE_BODY or CONTROLLER_PROJECTED_IMPEDANCE (taken
               by a scenario that runs both, pedi_drake.control.controller_switch)
+friction_request  the last ground friction coefficient the operator gave the controllers [-]
+              (0: none yet; the mission manager passes a new one on at once)
 """
 
 import dataclasses
@@ -32,7 +34,7 @@ CONTROLLER_NONE, CONTROLLER_WHOLE_BODY, CONTROLLER_PROJECTED_IMPEDANCE = 0, 1, 2
 # The scenario's name of each controller a request can name.
 CONTROLLER_NAMES = {CONTROLLER_WHOLE_BODY: "whole_body", CONTROLLER_PROJECTED_IMPEDANCE: "projected_impedance"}
 CONTROLLER_REQUESTS = (CONTROLLER_NONE, *CONTROLLER_NAMES)
-OPERATOR_COMMAND_SIZE = 11
+OPERATOR_COMMAND_SIZE = 12
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,6 +50,7 @@ class OperatorCommand:
     received: int = 0
     dropped: int = 0
     controller_request: int = CONTROLLER_NONE
+    friction_request: float = 0.0  # [-]
 
     @staticmethod
     def from_vector(x: np.ndarray) -> "OperatorCommand":
@@ -62,6 +65,7 @@ class OperatorCommand:
             received=int(x[8]),
             dropped=int(x[9]),
             controller_request=int(x[10]),
+            friction_request=float(x[11]),
         )
 
     def to_vector(self) -> np.ndarray:
@@ -76,6 +80,7 @@ class OperatorCommand:
                 self.received,
                 self.dropped,
                 self.controller_request,
+                self.friction_request,
             ],
             float,
         )

@@ -1,13 +1,14 @@
 """The operator's LCM messages as vectors, and which values a reader accepts.
 
-Each message type becomes the same 8 numbers, [mode_request, frame, kind, value (3), estop,
-controller_request] (the `operator_command` layout's entries of those names,
+Each message type becomes the same 9 numbers, [mode_request, frame, kind, value (3), estop,
+controller_request, friction_request] (the `operator_command` layout's entries of those names,
 pedi_drake.operator.command), so the input system treats both sources alike:
 
-  foot_command_lcmt (the project's own type): copied; codes outside their sets are out of range.
+  foot_command_lcmt (the project's own type): copied; codes outside their sets, and a friction
+    request other than 0 outside FRICTION_RANGE, are out of range.
   rc_command_lcmt (the Go1 remote, walk-these-ways layout): sticks -> a foot velocity, or a base
     twist with `sticks: walk`, buttons -> a mode request and the E-stop (RemoteMapping), no
-    controller request; a ninth number, the largest stick deflection, lets `remote_in_range`
+    controller or friction request; a tenth number, the largest stick deflection, lets `remote_in_range`
     reject sticks outside [-1, 1].
 """
 
@@ -15,6 +16,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from pedi_drake.friction import FRICTION_RANGE
 from pedi_drake.operator.command import (
     CONTROLLER_NONE,
     CONTROLLER_REQUESTS,
@@ -30,16 +32,26 @@ from pedi_drake.operator.command import (
 )
 from pedi_drake.operator.config import RemoteMapping
 
-MESSAGE_VECTOR_SIZE = 8
+MESSAGE_VECTOR_SIZE = 9
 # Sticks are floats in [-1, 1] on the wire; this much beyond counts as rounding.
 _STICK_TOLERANCE = 1e-3
 
 
 def foot_command_vector(message) -> np.ndarray:
-    """[mode_request, frame, kind, value (3), estop, controller_request] of a foot_command_lcmt."""
+    """[mode_request, frame, kind, value (3), estop, controller_request, friction_request] of a
+    foot_command_lcmt."""
     estop = 1.0 if message.estop else 0.0
     return np.array(
-        [message.mode_request, message.frame, message.kind, *message.value, estop, message.controller_request], float
+        [
+            message.mode_request,
+            message.frame,
+            message.kind,
+            *message.value,
+            estop,
+            message.controller_request,
+            message.friction_request,
+        ],
+        float,
     )
 
 
@@ -55,6 +67,7 @@ def foot_command_in_range(values: np.ndarray) -> bool:
         and values[1] in (FRAME_TRUNK, FRAME_WORLD)
         and values[2] in KINDS
         and values[7] in CONTROLLER_REQUESTS
+        and (values[8] == 0.0 or FRICTION_RANGE[0] <= values[8] <= FRICTION_RANGE[1])
     )
 
 
@@ -70,9 +83,9 @@ def _deadband(stick: float, deadband: float) -> float:
 
 def remote_command_vector(mapping: RemoteMapping) -> Callable[[object], np.ndarray]:
     """The function rc_command_lcmt -> [mode_request, frame, kind, value (3), estop,
-    controller_request] for `mapping`.
+    controller_request, friction_request] for `mapping`.
 
-    The ninth entry is the largest stick deflection (see `remote_in_range`); a stick that is not
+    The tenth entry is the largest stick deflection (see `remote_in_range`); a stick that is not
     finite makes the velocity non-finite (rejected by the inbox).
     """
     frame = FRAME_TRUNK if mapping.frame == "trunk" else FRAME_WORLD
@@ -99,11 +112,11 @@ def remote_command_vector(mapping: RemoteMapping) -> Callable[[object], np.ndarr
         else:
             mode = MODE_NONE
         estop = any(getattr(message, button) != 0 for button in mapping.estop_buttons)
-        return np.array([mode, frame, kind, *value, 1.0 if estop else 0.0, CONTROLLER_NONE, sticks.max()], float)
+        return np.array([mode, frame, kind, *value, 1.0 if estop else 0.0, CONTROLLER_NONE, 0.0, sticks.max()], float)
 
     return to_vector
 
 
 def remote_in_range(values: np.ndarray) -> bool:
-    """Whether every stick of a remote vector (its ninth entry) is within [-1, 1]."""
+    """Whether every stick of a remote vector (its tenth entry) is within [-1, 1]."""
     return bool(values[MESSAGE_VECTOR_SIZE] <= 1.0 + _STICK_TOLERANCE)

@@ -14,7 +14,7 @@ stamps.
 A periodic update takes in what arrived (polling the bus: the diagram's time is the only
 clock, so a lock-step simulation and a real-time run see the same ages) and keeps in the discrete
 state: the newest command, the last mode the operator asked for, the latched E-stop and the
-diagram time of the last valid message, the last controller asked for. `age` on the output is
+diagram time of the last valid message, the last controller and friction coefficient asked for. `age` on the output is
 the time since then [s].
 """
 
@@ -42,8 +42,10 @@ from pedi_drake.operator.messages import (
 )
 
 # Discrete state: [mode_request, frame, kind, value (3), estop, t_last [s], received, dropped,
-# controller_request].
-_MODE, _FRAME_KIND_VALUE, _ESTOP, _T_LAST, _RECEIVED, _DROPPED, _CONTROLLER = 0, slice(1, 6), 6, 7, 8, 9, 10
+# controller_request, friction_request].
+_MODE, _FRAME_KIND_VALUE, _ESTOP, _T_LAST, _RECEIVED, _DROPPED, _CONTROLLER, _FRICTION = (
+    0, slice(1, 6), 6, 7, 8, 9, 10, 11
+)  # fmt: skip
 FOOT_COMMAND_ENCODED_SIZE = len(foot_command_lcmt().encode())
 # Silence after which a foot command is taken whatever its stamps (a restarted or new sender) [s]:
 # longer than any delivery delay, and the foot already holds after the teleop phase's hold_after.
@@ -134,6 +136,8 @@ class OperatorInput(LeafSystemWithoutWitnesses):
             x[_ESTOP] = max(x[_ESTOP], values[6])  # latched
             if values[7] != CONTROLLER_NONE:  # as a mode request, it stands until another
                 x[_CONTROLLER] = values[7]
+            if values[8] != 0.0:  # so does a friction coefficient
+                x[_FRICTION] = values[8]
             x[_T_LAST] = context.get_time()
         x[_RECEIVED], x[_DROPPED] = received, dropped
         discrete_state.set_value(self._state, x)

@@ -31,6 +31,7 @@ class ScriptStep:
     kind: int = KIND_VELOCITY
     estop: bool = False
     controller_request: int = CONTROLLER_NONE
+    friction_request: float = 0.0  # [-] a ground friction coefficient for the controllers; 0: none
 
 
 def script_command(steps: list[ScriptStep], t: float) -> ScriptStep | None:
@@ -50,6 +51,7 @@ def foot_command_message(step: ScriptStep, t: float, sequence: int) -> foot_comm
     message.value = [float(v) for v in step.value]
     message.estop = 1 if step.estop else 0
     message.controller_request = step.controller_request
+    message.friction_request = float(step.friction_request)
     return message
 
 

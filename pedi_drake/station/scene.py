@@ -1,4 +1,5 @@
-"""Scene objects: flat ground and the models of models/scenes, placed as the Scenario says."""
+"""Scene objects: flat ground, terrain (pedi_drake.terrain) and the models of models/scenes,
+placed as the Scenario says."""
 
 import numpy as np
 from pydrake.geometry import AddContactMaterial, Box, HalfSpace, ProximityProperties
@@ -10,6 +11,7 @@ from pydrake.multibody.tree import ModelInstanceIndex, PrismaticSpring
 from pedi_drake import robot
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.scenario import SceneObject
+from pedi_drake.terrain import is_terrain, terrain_box, terrain_colour
 
 # Model file and the body welded to the world (None: the object is free) for each kind.
 SCENE_MODELS = {
@@ -62,13 +64,34 @@ def add_ground(plant: MultibodyPlant, friction: float) -> None:
     )
 
 
-def add_scene_object(plant: MultibodyPlant, obj: SceneObject, X_WB_initial: RigidTransform) -> ModelInstanceIndex:
+def add_terrain(plant: MultibodyPlant, obj: SceneObject, ground_friction: float) -> ModelInstanceIndex:
+    """Adds terrain object `obj` (before Finalize): a model instance of its name holding one body,
+    welded to the world, with the object's box as collision (its own friction, or
+    `ground_friction` [-]) and visual geometry. Returns the model instance."""
+    model = plant.AddModelInstance(obj.instance_name)
+    body = plant.AddRigidBody(obj.instance_name, model)
+    box = terrain_box(obj, ground_friction)
+    plant.WeldFrames(plant.world_frame(), body.body_frame(), box.X_WC)
+    properties = ProximityProperties()
+    AddContactMaterial(friction=CoulombFriction(box.friction, box.friction), properties=properties)
+    shape = Box(*box.size)
+    plant.RegisterCollisionGeometry(body, RigidTransform(), shape, obj.instance_name, properties)
+    plant.RegisterVisualGeometry(body, RigidTransform(), shape, obj.instance_name, terrain_colour(obj, ground_friction))
+    return model
+
+
+def add_scene_object(
+    plant: MultibodyPlant, obj: SceneObject, X_WB_initial: RigidTransform, ground_friction: float = 0.8
+) -> ModelInstanceIndex:
     """Adds `obj` to `plant` (before Finalize) and returns its model instance.
 
     `position` and `yaw` place the model frame in the world, except for `back_object`, whose
     `position` is an offset from the centre of the trunk's top face in the trunk frame
-    (`X_WB_initial` is the trunk's initial pose).
+    (`X_WB_initial` is the trunk's initial pose). Terrain without a friction of its own has
+    `ground_friction` [-].
     """
+    if is_terrain(obj):
+        return add_terrain(plant, obj, ground_friction)
     filename, welded_body = SCENE_MODELS[obj.kind]
     parser = Parser(plant)
     parser.SetAutoRenaming(True)

@@ -52,7 +52,7 @@ def MakeSimulationStation(scenario: Scenario, meshcat: Meshcat | None = None) ->
     add_ground(plant, scenario.ground_friction)
     X_WB0 = initial_trunk_pose(scenario.robot, error.foot_radius)
     for obj in scenario.scene:
-        add_scene_object(plant, obj, X_WB0)
+        add_scene_object(plant, obj, X_WB0, scenario.ground_friction)
     plant.Finalize()
     plant_map = robot.Go1PlantMap.from_plant(plant, model)
     set_default_go1_state(plant, plant_map, scenario.robot, error.foot_radius)

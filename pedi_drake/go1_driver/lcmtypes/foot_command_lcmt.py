@@ -13,11 +13,11 @@ class foot_command_lcmt(object):
     pedi_drake's own type (not the Go1 bridge's), for a haptic device, a joystick or a program.
     """
 
-    __slots__ = ["timestamp_us", "sequence", "mode_request", "frame", "kind", "value", "estop", "controller_request"]
+    __slots__ = ["timestamp_us", "sequence", "mode_request", "frame", "kind", "value", "estop", "controller_request", "friction_request"]
 
-    __typenames__ = ["int64_t", "int64_t", "int8_t", "int8_t", "int8_t", "double", "int8_t", "int8_t"]
+    __typenames__ = ["int64_t", "int64_t", "int8_t", "int8_t", "int8_t", "double", "int8_t", "int8_t", "double"]
 
-    __dimensions__ = [None, None, None, None, None, [3], None, None]
+    __dimensions__ = [None, None, None, None, None, [3], None, None, None]
 
     def __init__(self):
         self.timestamp_us = 0
@@ -65,6 +65,13 @@ class foot_command_lcmt(object):
         LCM Type: int8_t
         """
 
+        self.friction_request = 0.0
+        """
+        0 no request, else the ground friction coefficient the controllers are to use from now on
+        [-], in [0.05, 1.5] (a value outside is dropped as out of range).
+        LCM Type: double
+        """
+
 
     def encode(self):
         buf = BytesIO()
@@ -75,7 +82,7 @@ class foot_command_lcmt(object):
     def _encode_one(self, buf):
         buf.write(struct.pack(">qqbbb", self.timestamp_us, self.sequence, self.mode_request, self.frame, self.kind))
         buf.write(struct.pack('>3d', *self.value[:3]))
-        buf.write(struct.pack(">bb", self.estop, self.controller_request))
+        buf.write(struct.pack(">bbd", self.estop, self.controller_request, self.friction_request))
 
     @staticmethod
     def decode(data: bytes):
@@ -92,13 +99,13 @@ class foot_command_lcmt(object):
         self = foot_command_lcmt()
         self.timestamp_us, self.sequence, self.mode_request, self.frame, self.kind = struct.unpack(">qqbbb", buf.read(19))
         self.value = struct.unpack('>3d', buf.read(24))
-        self.estop, self.controller_request = struct.unpack(">bb", buf.read(2))
+        self.estop, self.controller_request, self.friction_request = struct.unpack(">bbd", buf.read(10))
         return self
 
     @staticmethod
     def _get_hash_recursive(parents):
         if foot_command_lcmt in parents: return 0
-        tmphash = (0x93903d6b5e92cd54) & 0xffffffffffffffff
+        tmphash = (0x3360c6efde045ede) & 0xffffffffffffffff
         tmphash  = (((tmphash<<1)&0xffffffffffffffff) + (tmphash>>63)) & 0xffffffffffffffff
         return tmphash
     _packed_fingerprint = None
