@@ -158,8 +158,10 @@ def _missions(d: dict) -> str:
 def _walking(d: dict) -> str:
     parts = []
     for key, row in d["summary"].items():
-        mission = key.split()[0].removeprefix("walking/")
+        mission = key.split()[0].rsplit("/", 1)[-1]
         text = f"{mission} {row['succeeded']}/{row['runs']}"
+        if row.get("fell"):
+            text += f" ({row['fell']} fell)"
         if row.get("goal_error_max_m") is not None:
             text += f", goal within {100 * row['goal_error_max_m']:.1f} cm and {row['goal_yaw_error_max_deg']:.1f} deg"
         if row.get("walking_speed_min_m_s") is not None:
@@ -376,6 +378,13 @@ ROWS: tuple[Row, ...] = (
         _walking,
         "python -m pedi_drake.benchmarks.walking --controllers whole_body --trot-speeds 0.6,0.7,0.8",
         summary=True,
+    ),
+    Row(
+        "Static walk over a 1 m bridge of mu 0.2 on the HQP, with the friction coefficient set for it "
+        "and left at 0.8, seed 0 and 5 noisy seeds, by ground truth",
+        "terrain.json",
+        _walking,
+        "python -m pedi_drake.benchmarks.terrain",
     ),
     Row(
         "Controller side of a hardware run while trotting, replayed unpaced (walking/trot_forward)",

@@ -109,29 +109,13 @@ def summarise(runs: list[dict]) -> dict:
     }
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--missions", default=",".join(WALKING_MISSIONS))
-    parser.add_argument("--controllers", default=",".join(CONTROLLERS))
-    parser.add_argument("--noise-seeds", default="1,2,3,4,5", help="seeds run with sensor noise ('' for none)")
-    parser.add_argument("--trot-speeds", default="", help="commanded speeds of extra 3 m trots [m/s]")
-    parser.add_argument("--engine", choices=ENGINES, default="ray", help="ray (every core) or serial")
-    parser.add_argument("--out", default="benchmarks/results/walking.json")
-    args = parser.parse_args()
-    missions = [m for m in args.missions.split(",") if m]
-    written = Path(tempfile.mkdtemp(prefix="walking_benchmark_"))
-    for speed in [float(v) for v in args.trot_speeds.split(",") if v]:
-        path = written / f"trot_at_{speed:.2f}.yaml"
-        path.write_text(TROT_AT_SPEED.format(distance=TROT_DISTANCE, speed=speed, duration=TROT_DISTANCE / speed))
-        missions.append(str(path))
+def measure(missions: list[str], controllers: list[str], seeds: list[int], engine: str) -> dict[str, list[dict]]:
+    """Runs `walking_study` on `engine`; every run's result, by "<mission> <controller>"."""
     for mission in missions:
         load_mission(mission)
-    controllers = [c for c in args.controllers.split(",") if c]
-    seeds = [int(s) for s in args.noise_seeds.split(",") if s]
     study = walking_study(missions, controllers, seeds)
     with tempfile.TemporaryDirectory() as folder:
-        rows = run_study(study, Path(folder), make_engine(args.engine)).rows
-    shutil.rmtree(written)
+        rows = run_study(study, Path(folder), make_engine(engine)).rows
     results: dict[str, list[dict]] = {}
     for row in sorted(rows, key=lambda r: r["index"]):
         result = result_of(row)
@@ -139,7 +123,11 @@ def main() -> None:
         result["seed"], result["noise"] = noise["random_seed"], noise["sensor_noise.enabled"]
         mission = Path(row["factor.mission"]).stem if row["factor.mission"].endswith(".yaml") else row["factor.mission"]
         results.setdefault(f"{mission} {row['factor.controller']}", []).append(result)
-    summary = {key: summarise(runs) for key, runs in results.items()}
+    return results
+
+
+def print_table(summary: dict[str, dict]) -> None:
+    """One row per mission and controller of `summarise`'s figures (see the module docstring)."""
 
     def cm(value):
         return f"{100 * value:7.2f}" if value is not None else "      -"
@@ -165,7 +153,10 @@ def main() -> None:
             print(f"    door opened {row['door_opened_deg_min']:.0f} deg at least (floor {DOOR_OPENED_DEG:.0f})")
         for reason in row["failures"]:
             print(f"    failed: {reason}")
-    out = Path(args.out)
+
+
+def write_results(out: Path, results: dict[str, list[dict]], summary: dict[str, dict]) -> None:
+    """Writes `summary` and every run's walking rows to the JSON file `out`."""
     out.parent.mkdir(parents=True, exist_ok=True)
     runs = {
         key: [
@@ -179,6 +170,36 @@ def main() -> None:
     }
     out.write_text(json.dumps(stamped({"summary": summary, "runs": runs}), indent=2, default=str))
     print(f"wrote {out}")
+
+
+def seeds_of(text: str) -> list[int]:
+    """The noise seeds of a comma-separated `--noise-seeds`."""
+    return [int(s) for s in text.split(",") if s]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--missions", default=",".join(WALKING_MISSIONS))
+    parser.add_argument("--controllers", default=",".join(CONTROLLERS))
+    parser.add_argument("--noise-seeds", default="1,2,3,4,5", help="seeds run with sensor noise ('' for none)")
+    parser.add_argument("--trot-speeds", default="", help="commanded speeds of extra 3 m trots [m/s]")
+    parser.add_argument("--engine", choices=ENGINES, default="ray", help="ray (every core) or serial")
+    parser.add_argument("--out", default="benchmarks/results/walking.json")
+    args = parser.parse_args()
+    missions = [m for m in args.missions.split(",") if m]
+    written = Path(tempfile.mkdtemp(prefix="walking_benchmark_"))
+    for speed in [float(v) for v in args.trot_speeds.split(",") if v]:
+        path = written / f"trot_at_{speed:.2f}.yaml"
+        path.write_text(TROT_AT_SPEED.format(distance=TROT_DISTANCE, speed=speed, duration=TROT_DISTANCE / speed))
+        missions.append(str(path))
+    controllers = [c for c in args.controllers.split(",") if c]
+    try:
+        results = measure(missions, controllers, seeds_of(args.noise_seeds), args.engine)
+    finally:
+        shutil.rmtree(written)
+    summary = {key: summarise(runs) for key, runs in results.items()}
+    print_table(summary)
+    write_results(Path(args.out), results, summary)
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ stride over the cycle's duration.
 """
 
 import dataclasses
+import math
 
 from pedi_drake.exceptions import PediError
 
@@ -89,6 +90,28 @@ class StaticWalkTiming:
     def stride(self, speed: float) -> float:
         """[m] how far each foot moves per cycle at `speed` [m/s]."""
         return speed * self.cycle
+
+    def slowed(self, factor: float) -> "StaticWalkTiming":
+        """This timing with its swings and shifts `factor` times as long (the contact ramps, the
+        controller's, and the sway and step height as they are)."""
+        return dataclasses.replace(self, swing=factor * self.swing, shift=factor * self.shift)
+
+
+# [-] the friction coefficient of the ground the static walk's timing was measured on (the
+# walking benchmark's scenario, pedi_drake.benchmarks.walking).
+NOMINAL_WALK_FRICTION = 0.8
+
+
+def friction_slowdown(mu: float) -> float:
+    """The factor s >= 1 by which a static walk on ground of friction coefficient `mu` [-] (the one
+    the controllers are given) stretches its swings and shifts and divides its twist.
+
+    Each slot moves the CoM rest to rest by a quintic: with durations s times as long and the twist
+    1/s of it, the strides are the same and every acceleration the plan asks for is 1/s^2 of it,
+    so the tangential force the feet need for it scales by mu / NOMINAL_WALK_FRICTION, as the
+    friction the ground offers does (paper 002 crosses its mu = 0.2 bridge at a slower static walk).
+    """
+    return max(1.0, math.sqrt(NOMINAL_WALK_FRICTION / mu))
 
 
 @dataclasses.dataclass(frozen=True)

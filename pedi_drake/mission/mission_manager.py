@@ -155,7 +155,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
         self._mission = mission
         # The posture planner's worker starts here, not in an update (pedi_drake.mission.posture_planner).
         planner = shared_planner() if needs_posture_planner(mission) else None
-        self._env = MissionEnvironment(prongs, force_estimate, planner, wait_for_plans, contact_ramp_time)
+        self._env = MissionEnvironment(prongs, force_estimate, planner, wait_for_plans, contact_ramp_time, friction)
         self._prong_tips_B = prong_tips_B(prongs)
         self._friction = friction
         self._safety_margin = float(safety_margin)

@@ -114,6 +114,7 @@ class MissionEnvironment:
         planner: PosturePlanner | None = None,
         wait_for_plans: bool = True,
         contact_ramp_time: float = 0.3,
+        friction: float = 0.8,
     ):
         self.prongs = prongs
         self.num_prongs = 0 if prongs is None else prongs.num_prongs
@@ -125,6 +126,13 @@ class MissionEnvironment:
         self.wait_for_plans = wait_for_plans
         # [s] how long the controller takes to ramp a contact's load in or out.
         self.contact_ramp_time = contact_ramp_time
+        # [-] the ground friction coefficient the controllers are given until the mission or the
+        # operator changes it (MissionProgress.friction).
+        self.friction = friction
+
+    def friction_now(self, progress: MissionProgress) -> float:
+        """[-] the friction coefficient the controllers are given now."""
+        return self.friction if progress.friction is None else progress.friction
 
 
 def _fail(progress: MissionProgress, reason: str) -> str:

@@ -28,7 +28,14 @@ from pydrake.math import RollPitchYaw, RotationMatrix
 from pedi_drake import robot
 from pedi_drake.exceptions import PediError, UnreachableTarget
 from pedi_drake.locomotion.footholds import NOMINAL_FEET_B, PlanarPose
-from pedi_drake.locomotion.gait import CYCLE_LENGTH, GAITS, SWING, GaitLimits, StaticWalkTiming
+from pedi_drake.locomotion.gait import (
+    CYCLE_LENGTH,
+    GAITS,
+    SWING,
+    GaitLimits,
+    StaticWalkTiming,
+    friction_slowdown,
+)
 from pedi_drake.locomotion.static_walk import SlotPlan, choose_cycle, replan_slot
 from pedi_drake.mission import spec, trot_steps
 from pedi_drake.mission.progress import FAILED, LEG_MODE_FOOT, RUNNING, SUCCEEDED, LegTrajectory, MissionProgress
@@ -71,13 +78,17 @@ class WalkState:
     slowed_slots: int = 0  # slots of a cycle under way replanned slower from where the feet landed
     distance: float = 0.0  # [m] the walking line's path length
     until: float = 0.0  # [s] centring: when it ends
+    # The cycle's friction_slowdown (gait.py): chosen at each cycle's start from the friction
+    # coefficient the controllers are given then.
+    slowdown: float = 1.0
 
     def __deepcopy__(self, memo) -> "WalkState":
         return self
 
 
-def _timing(env) -> StaticWalkTiming:
-    return StaticWalkTiming(ramp=env.contact_ramp_time)
+def _timing(env, state: "WalkState") -> StaticWalkTiming:
+    """The timing of `state`'s cycle: the controller's contact ramps, slowed for the friction."""
+    return StaticWalkTiming(ramp=env.contact_ramp_time).slowed(state.slowdown)
 
 
 def _line_of(view: RobotView, progress: MissionProgress) -> tuple[PlanarPose, np.ndarray]:
@@ -135,17 +146,19 @@ class WalkRunnerBase:
 
     def _next_slot(self, phase, progress, view, env, state: WalkState, line: PlanarPose, t: float) -> WalkState:
         """Plans and starts the slot after `state`'s (a new cycle after the last)."""
-        timing = _timing(env)
         com_xy = line.to_world(np.zeros(2)) if state.plan is None else state.plan.com_end_xy
         index = (state.index + 1) % CYCLE_LENGTH
         cycle, twist, stopping = state.cycle, np.asarray(state.twist, float), state.stopping
         slowed = state.slowed_cycles
         if index == 0:
+            state = dataclasses.replace(state, slowdown=friction_slowdown(env.friction_now(progress)))
+        timing = _timing(env, state)
+        if index == 0:
             wanted = None if stopping else self.twist(phase, state, line, t, progress, view)
             if wanted is None and not stopping:
                 progress.records[-1].metrics["walked_until_s"] = t  # the stop starts
             stopping = wanted is None
-            twist = np.zeros(3) if stopping else np.asarray(wanted, float)
+            twist = np.zeros(3) if stopping else np.asarray(wanted, float) / state.slowdown
             if stopping and _squared_up(state.feet_xy, line):
                 return self._centre(progress, state, line, t)
             chosen = choose_cycle(line, com_xy, state.feet_xy, twist, timing)
@@ -208,7 +221,7 @@ class WalkRunnerBase:
             self._record(progress, state, view)
             return self.finished(phase, progress, view, state)
         plan = state.plan
-        timing = _timing(env)
+        timing = _timing(env, state)
         if plan.slot.kind == SWING:
             state = self._swing(phase, progress, view, state, timing)
             if state is None:
