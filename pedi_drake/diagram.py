@@ -48,6 +48,7 @@ from pedi_drake.runtime.wall_clock import WallClock
 from pedi_drake.scenario import MISSION_CONTROLLERS, Scenario
 from pedi_drake.station_interface import MakeStation
 from pedi_drake.suf.live_suf_system import LiveSufSystem
+from pedi_drake.terrain import terrain_table
 from pedi_drake.viz.force_display import ForceDisplay
 
 # Signals logged by every run (name -> exported port of the diagram).
@@ -287,7 +288,10 @@ def MakePedipulationDiagram(
         builder.Connect(station.GetOutputPort("sim.plant_state"), estimator.GetInputPort("plant_state"))
     else:
         estimator = builder.AddNamedSystem(
-            "estimator", KalmanEstimator(scenario.kalman, scenario.robot.initial_xy, scenario.robot.prongs)
+            "estimator",
+            KalmanEstimator(
+                scenario.kalman, scenario.robot.initial_xy, scenario.robot.prongs, terrain_table(scenario.scene)
+            ),
         )
         for name in ("imu", "position_measured", "velocity_measured", "torque_estimated", "foot_contact"):
             builder.Connect(station.GetOutputPort(f"go1.{name}"), estimator.GetInputPort(name))
@@ -336,6 +340,7 @@ def MakePedipulationDiagram(
                     mission,
                     prongs=scenario.robot.prongs,
                     friction=scenario.ground_friction,
+                    terrain=terrain_table(scenario.scene),
                     force_estimate=force_estimate,
                     safety_margin=scenario.whole_body.safety_margin,
                     contact_ramp_time=max(

@@ -14,7 +14,8 @@ box welded to the world, sized by the object's `size`, with its own friction coe
 
 `surface_at` gives the height, normal and friction under a point of the ground plan: what a
 foothold, the estimator's ground or a contact's friction cone takes from the terrain. Both
-simulators build the same boxes (`terrain_box`).
+simulators build the same boxes (`terrain_box`). `terrain_table` packs a scene's terrain for
+compiled code, where `terrain_height` reads the height under a point from it.
 """
 
 import dataclasses
@@ -24,6 +25,7 @@ import numpy as np
 from pydrake.math import RigidTransform, RollPitchYaw
 
 from pedi_drake.friction import FRICTION_RANGE
+from pedi_drake.runtime.jit import kernel
 
 TERRAIN_KINDS = ("slope", "platform", "friction_patch")
 MAX_SLOPE_ANGLE = 35.0  # [deg] steeper than any the Go1's static walk is asked to climb
@@ -119,6 +121,52 @@ def surface_at(scene, ground_friction: float, x: float, y: float) -> Surface:
         surface = _surface_of(obj, ground_friction, x, y)
         if surface is not None and surface.height > highest.height:
             highest = surface
+    return highest
+
+
+# Columns of a `terrain_table` row.
+TABLE_COLUMNS = 9
+_SLOPE_ROW, _BLOCK_ROW = 0.0, 1.0
+
+
+def terrain_table(scene) -> np.ndarray:
+    """(k, TABLE_COLUMNS) of the terrain objects of `scene` (others skipped), for `terrain_height`:
+    per row [kind (0 slope, 1 platform or patch), x, y, z of the placement, cos yaw, sin yaw,
+    extent along x (a slope's run), width, top height (a slope's tan angle)] [m, -]."""
+    rows = []
+    for obj in scene:
+        if not is_terrain(obj):
+            continue
+        x, y, z = obj.position
+        head = [x, y, z, math.cos(obj.yaw), math.sin(obj.yaw)]
+        if obj.kind == "slope":
+            a = math.radians(obj.angle)
+            rows.append([_SLOPE_ROW, *head, obj.size[0] * math.cos(a), obj.size[1], math.tan(a)])
+        else:
+            rows.append([_BLOCK_ROW, *head, *obj.size])
+    return np.array(rows, dtype=float).reshape(len(rows), TABLE_COLUMNS)
+
+
+@kernel
+def terrain_height(table: np.ndarray, x: float, y: float) -> float:
+    """[m] the height of the terrain of `table` (`terrain_table`) under the world point (x, y), or
+    of the flat ground (0) where there is none: `surface_at`'s height, for compiled code."""
+    highest = 0.0
+    for k in range(table.shape[0]):
+        dx, dy = x - table[k, 1], y - table[k, 2]
+        c, s = table[k, 4], table[k, 5]
+        along, across = c * dx + s * dy, -s * dx + c * dy
+        if abs(across) > 0.5 * table[k, 7]:
+            continue
+        if table[k, 0] == _SLOPE_ROW:
+            if not 0.0 <= along <= table[k, 6]:
+                continue
+            height = table[k, 3] + along * table[k, 8]
+        else:
+            if abs(along) > 0.5 * table[k, 6]:
+                continue
+            height = table[k, 3] + table[k, 8]
+        highest = max(highest, height)
     return highest
 
 

@@ -15,8 +15,10 @@ a carpet's pile do);
   a small random walk in contact and a large one in the air;
 * update, every foot: p_WF - p_WB = R_WB p_BF(q) (leg kinematics);
   every foot in contact: v_WB = -R_WB (J(q) qd + w_B x p_BF) + (its rolling velocity) (the
-  contact point does not move), and, on flat ground, p_WF,z + s + c F = foot radius, F the foot's
-  vertical load from the joint torques (F = -J^-T tau, quasi-static); every loaded prong
+  contact point does not move), and p_WF,z + s + c F = h + foot radius, F the foot's vertical
+  load from the joint torques (F = -J^-T tau, quasi-static), h the height of the ground under the
+  foot's estimate (0 on flat ground; on terrain, the map of it the estimator is given,
+  pedi_drake.terrain: the scene's slopes and platforms); every loaded prong
   tip likewise (it does not move and touches the ground); with no foot and no prong loaded the
   trunk rests on the ground (lying): v_WB = 0; and while the trunk rests on the ground with the
   feet loaded (the feet carry a share of the weight within `RESTING_LOAD_SHARES`, the trunk lower
@@ -61,10 +63,12 @@ from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offse
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.runtime.jit import kernel
+from pedi_drake.terrain import TABLE_COLUMNS, terrain_height
 from pedi_drake.vector3 import rotation_matrix_kernel
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
 NUM_STATES = 20
+FEET = 6  # index of the first foot position p_WF (3 per foot) in x
 COMPLIANCE = 18  # index of the feet's compliance c [m/N] in x
 SINK = 19  # index of the feet's sink s [m] in x
 # s is kept within +-this [m]: no foot sinks further than its radius.
@@ -507,14 +511,16 @@ def _update_kernel(
     noise_std,
     resting_height,
     learn_sink,
+    ground,
 ):
     """`FloatingBaseKalmanFilter.update` on plain arrays: (x, P, whether the correction succeeded).
 
     `tau` (12,) the joint torques [N m] (the feet's loads); `tips_B` (k, 4): the loaded prong tips'
     positions in the trunk frame [m] and radii [m]; `resting_height` [m]: the height of a trunk
     resting on the ground (`_resting_height`), 0 when it does not rest; `learn_sink`: whether the
-    feet's heights correct c and s (else they are held). The compliance and the sink are kept
-    within +-MAX_COMPLIANCE and +-MAX_SINK.
+    feet's heights correct c and s (else they are held); `ground` (4,) [m]: the height of the
+    ground under each foot (0 on flat ground; the terrain's, pedi_drake.terrain). The compliance
+    and the sink are kept within +-MAX_COMPLIANCE and +-MAX_SINK.
     """
     p_BF, J = foot_kinematics_kernel(q, offsets)
     forces = _vertical_forces_kernel(R_WB, J, tau)
@@ -528,7 +534,8 @@ def _update_kernel(
     holds_sink = not (learn_sink and (resting_trunk or tips_B.shape[0] > 0))
     sinks = np.zeros(4)
     for i in range(4):
-        sinks[i] = (x[SINK] if holds_sink else 0.0) + (0.0 if learn_sink else x[COMPLIANCE] * forces[i])
+        # A foot on terrain sits that much higher: a negative sink, for the height row.
+        sinks[i] = (x[SINK] if holds_sink else 0.0) + (0.0 if learn_sink else x[COMPLIANCE] * forces[i]) - ground[i]
     P = P.copy()
     for held, index in ((holds_sink, SINK), (not learn_sink, COMPLIANCE)):
         if held:
@@ -604,6 +611,7 @@ def _step_kernel(
     sink_prior,
     rest_points,
     weight,
+    terrain,
 ):
     """One tick of the estimator on its state, in place: True when the estimate was updated.
 
@@ -611,7 +619,8 @@ def _step_kernel(
     output (see base_state.py). Both are left as they are (the last estimate held) when a sample
     is not usable: a non-finite input, an unusable IMU quaternion, joint angles outside
     `plausible_q` (2, 12: lower, upper [rad]) before the first estimate (no leg_control_data
-    yet), or a correction that failed.
+    yet), or a correction that failed. `terrain` (k, 9): pedi_drake.terrain's table of the ground's
+    terrain, whose height under each foot's estimate the feet's height rows take.
     """
     usable, quaternion, R = _imu_kernel(imu)
     if not usable:
@@ -664,6 +673,9 @@ def _step_kernel(
         and x[2] < rest_height + RESTING_HEIGHT_SLACK
     )
     rested = filter_state[-1] + 1.0 if resting else 0.0
+    ground = np.zeros(4)
+    for i in range(4):
+        ground[i] = terrain_height(terrain, x[FEET + 3 * i], x[FEET + 3 * i + 1])
     x, P, corrected = _update_kernel(
         x,
         P,
@@ -682,6 +694,7 @@ def _step_kernel(
         measurement_noise_std,
         rest_height if rested >= RESTING_TICKS else 0.0,
         still,
+        ground,
     )
     if not corrected:
         return False
@@ -715,10 +728,13 @@ class FloatingBaseKalmanFilter:
         prong_tips_B: np.ndarray | None = None,
         prong_tip_radius: float = 0.0,
         weight: float = robot.TOTAL_MASS * -GRAVITY_W[2],
+        terrain: np.ndarray | None = None,
     ):
         """`weight` [N]: the robot's (prongs included), against which the feet's loads tell a
-        trunk resting on the ground."""
+        trunk resting on the ground; `terrain`: pedi_drake.terrain's table of the ground's terrain,
+        whose height under each stance foot its height row takes (None: flat ground)."""
         self.config = config
+        self.terrain = np.zeros((0, TABLE_COLUMNS)) if terrain is None else np.array(terrain, dtype=float)
         self.p_BI = np.array(p_BI, dtype=float)
         self.foot_radius = float(foot_radius)
         # Prong tip centres in the trunk frame (k, 3) [m]: a loaded tip pins the trunk like a foot.
@@ -767,6 +783,7 @@ class FloatingBaseKalmanFilter:
             self._sink_prior,
             self._rest_points,
             self._weight,
+            self.terrain,
         )
 
     def warm_up(self) -> None:
@@ -864,6 +881,7 @@ class FloatingBaseKalmanFilter:
             self._measurement_noise_std,
             _resting_height(np.asarray(imu.R_WB, dtype=float), self._rest_points) if trunk_resting else 0.0,
             learn_sink,
+            np.zeros(4),
         )
         if not corrected:
             raise np.linalg.LinAlgError("Kalman correction: an innovation variance is not positive")
@@ -908,7 +926,13 @@ class KalmanEstimator(LeafSystemWithoutWitnesses):
     contact_set -> estimator has a delay. Filter state: [initialised flag, x (18), P (18 x 18)].
     """
 
-    def __init__(self, config: KalmanEstimatorConfig, initial_xy=(0.0, 0.0), prongs: ProngDesign | None = None):
+    def __init__(
+        self,
+        config: KalmanEstimatorConfig,
+        initial_xy=(0.0, 0.0),
+        prongs: ProngDesign | None = None,
+        terrain: np.ndarray | None = None,
+    ):
         super().__init__()
         self.config = config
         self._xy = np.array(config.initial_xy if config.initial_xy is not None else initial_xy, dtype=float)
@@ -916,7 +940,12 @@ class KalmanEstimator(LeafSystemWithoutWitnesses):
         radius = 0.0 if prongs is None else prongs.tip_radius
         mass = robot.TOTAL_MASS + (0.0 if prongs is None else prongs.num_prongs * prongs.mass)
         self.filter = FloatingBaseKalmanFilter(
-            config, imu_offset_B(), prong_tips_B=tips, prong_tip_radius=radius, weight=mass * -GRAVITY_W[2]
+            config,
+            imu_offset_B(),
+            prong_tips_B=tips,
+            prong_tip_radius=radius,
+            weight=mass * -GRAVITY_W[2],
+            terrain=terrain,
         )
         self.filter.warm_up()
         num_contacts = 4 + (0 if prongs is None else prongs.num_prongs)

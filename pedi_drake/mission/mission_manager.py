@@ -134,6 +134,7 @@ class MissionManager(LeafSystemWithoutWitnesses):
         *,
         prongs: ProngDesign | None = None,
         friction: float = 0.8,
+        terrain: np.ndarray | None = None,
         safety_margin: float = 0.03,
         period: float = MISSION_PERIOD,
         force_estimate: str = "joint_torque",
@@ -145,6 +146,8 @@ class MissionManager(LeafSystemWithoutWitnesses):
             mission: the phases to run.
             prongs: the robot's prongs (their tips count as supports when loaded), or None.
             friction: ground friction coefficient sent to the controller [-].
+            terrain: the ground's terrain (pedi_drake.terrain's table; None: flat ground), where
+                walks put their feet down and how high they carry the trunk.
             safety_margin: the stance's support polygon is shrunk by this for the capture point [m].
             period: update period [s].
             contact_ramp_time: how long the controller takes to ramp a contact's load in or out [s].
@@ -155,7 +158,9 @@ class MissionManager(LeafSystemWithoutWitnesses):
         self._mission = mission
         # The posture planner's worker starts here, not in an update (pedi_drake.mission.posture_planner).
         planner = shared_planner() if needs_posture_planner(mission) else None
-        self._env = MissionEnvironment(prongs, force_estimate, planner, wait_for_plans, contact_ramp_time, friction)
+        self._env = MissionEnvironment(
+            prongs, force_estimate, planner, wait_for_plans, contact_ramp_time, friction, terrain
+        )
         self._prong_tips_B = prong_tips_B(prongs)
         self._friction = friction
         self._safety_margin = float(safety_margin)

@@ -52,6 +52,7 @@ from pedi_drake.mission.walk import RUNNERS as WALK_RUNNERS
 from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.suf.posture import Posture, PostureCase
+from pedi_drake.terrain import TABLE_COLUMNS, terrain_height
 from pedi_drake.trajectory import (
     CircularPath,
     PiecewiseQuintic,
@@ -115,6 +116,7 @@ class MissionEnvironment:
         wait_for_plans: bool = True,
         contact_ramp_time: float = 0.3,
         friction: float = 0.8,
+        terrain: np.ndarray | None = None,
     ):
         self.prongs = prongs
         self.num_prongs = 0 if prongs is None else prongs.num_prongs
@@ -129,6 +131,12 @@ class MissionEnvironment:
         # [-] the ground friction coefficient the controllers are given until the mission or the
         # operator changes it (MissionProgress.friction).
         self.friction = friction
+        # The ground's terrain (pedi_drake.terrain's table; empty: flat ground).
+        self.terrain = np.zeros((0, TABLE_COLUMNS)) if terrain is None else np.asarray(terrain, dtype=float)
+
+    def ground_height(self, xy) -> float:
+        """[m] the ground's height under the world point `xy` (x, y) [m]."""
+        return terrain_height(self.terrain, float(xy[0]), float(xy[1]))
 
     def friction_now(self, progress: MissionProgress) -> float:
         """[-] the friction coefficient the controllers are given now."""

@@ -63,7 +63,7 @@ class WalkState:
     index: int  # the running slot's index in the cycle
     plan: SlotPlan | None  # the running slot's plan; None: the walk is centring (its last move)
     feet_xy: np.ndarray  # (4, 2) the feet's planned positions, world [m]
-    height: float  # [m] the trunk's height above the ground
+    height: float  # [m] the trunk's height above the mean ground height under the four feet
     com_offset_L: np.ndarray  # (2,) the CoM's offset from the trunk origin in the heading's frame [m]
     stage: str = "down"  # a swing's stage: "unload", "swing", "load"; "down" for a shift
     t_apex: float = 0.0  # [s] when the swing foot is at its apex: touchdowns count after it
@@ -103,6 +103,26 @@ def _line_of(view: RobotView, progress: MissionProgress) -> tuple[PlanarPose, np
     return PlanarPose(float(com_xy[0]), float(com_xy[1]), yaw), offset_L
 
 
+def _ground_under(env, feet_xy: np.ndarray) -> float:
+    """[m] the mean height of the ground (the terrain's, env.ground_height) under the four feet: the
+    trunk walks its standing height above it, up and down slopes alike."""
+    return float(np.mean([env.ground_height(foot) for foot in feet_xy]))
+
+
+def _attitude(env, feet_xy: np.ndarray, yaw: float) -> RotationMatrix:
+    """The trunk's orientation at heading `yaw` [rad] over the feet at `feet_xy` (4, 2) [m]: pitched
+    and rolled as the plane through the ground under them (least squares), so that on a slope the
+    front and rear legs, or the two sides, stand at the same length (level on flat ground)."""
+    heights = np.array([env.ground_height(foot) for foot in feet_xy])
+    if not np.any(heights):
+        return _heading(yaw)
+    heading = PlanarPose(0.0, 0.0, yaw).rotation()
+    feet_L = (feet_xy - feet_xy.mean(axis=0)) @ heading  # rows: each foot in the heading's frame
+    (rise_x, rise_y), *_ = np.linalg.lstsq(feet_L, heights - heights.mean(), rcond=None)
+    # Nose up on the way up (pitch about +y is nose down), the higher side up.
+    return RotationMatrix(RollPitchYaw(math.atan(rise_y), -math.atan(rise_x), yaw))
+
+
 def _trunk_xy(com_xy: np.ndarray, yaw: float, offset_L: np.ndarray) -> np.ndarray:
     """The trunk origin's x, y [m] that puts the CoM at `com_xy` with the heading `yaw`."""
     return np.asarray(com_xy, float) - PlanarPose(0.0, 0.0, yaw).rotation() @ offset_L
@@ -132,12 +152,13 @@ class WalkRunnerBase:
             )
         line, offset = _line_of(view, progress)
         p_ref = refs.body_position.sample(view.time).position
+        feet_xy = view.feet_W_array()[:, :2].copy()
         state = WalkState(
             cycle=(),
             index=CYCLE_LENGTH - 1,
             plan=None,
-            feet_xy=view.feet_W_array()[:, :2].copy(),
-            height=float(p_ref[2]),
+            feet_xy=feet_xy,
+            height=float(p_ref[2]) - _ground_under(env, feet_xy),
             com_offset_L=offset,
         )
         progress.memo["line"] = line
@@ -160,7 +181,7 @@ class WalkRunnerBase:
             stopping = wanted is None
             twist = np.zeros(3) if stopping else np.asarray(wanted, float) / state.slowdown
             if stopping and _squared_up(state.feet_xy, line):
-                return self._centre(progress, state, line, t)
+                return self._centre(progress, env, state, line, t)
             chosen = choose_cycle(line, com_xy, state.feet_xy, twist, timing)
             if chosen is None:
                 raise UnreachableTarget(
@@ -177,9 +198,14 @@ class WalkRunnerBase:
         refs = progress.references
         p_now = refs.body_position.sample(t).position
         R_now = refs.body_orientation.sample(t).rotation
-        goal = np.array([*_trunk_xy(plan.com_end_xy, plan.line_end.yaw, state.com_offset_L), state.height])
+        feet_after = state.feet_xy.copy()
+        if plan.slot.kind == SWING:
+            feet_after[robot.LEG_NAMES.index(plan.slot.leg)] = plan.foothold_xy
+        trunk_z = state.height + _ground_under(env, feet_after)
+        goal = np.array([*_trunk_xy(plan.com_end_xy, plan.line_end.yaw, state.com_offset_L), trunk_z])
         refs.body_position = QuinticSegment(p_now, goal, t, plan.duration)
-        refs.body_orientation = QuinticOrientationSegment(R_now, _heading(plan.line_end.yaw), t, plan.duration)
+        attitude = _attitude(env, feet_after, plan.line_end.yaw)
+        refs.body_orientation = QuinticOrientationSegment(R_now, attitude, t, plan.duration)
         stage = "down"
         if plan.slot.kind == SWING:
             refs.contacts[robot.LEG_NAMES.index(plan.slot.leg)] = 0.0
@@ -199,15 +225,17 @@ class WalkRunnerBase:
             distance=state.distance + travelled,
         )
 
-    def _centre(self, progress, state: WalkState, line: PlanarPose, t: float) -> WalkState:
+    def _centre(self, progress, env, state: WalkState, line: PlanarPose, t: float) -> WalkState:
         """The walk's last move: the CoM over the middle of the four feet, at the line's heading."""
         refs = progress.references
         p_now = refs.body_position.sample(t).position
         R_now = refs.body_orientation.sample(t).rotation
         centre = state.feet_xy.mean(axis=0)
-        goal = np.array([*_trunk_xy(centre, line.yaw, state.com_offset_L), state.height])
+        trunk_z = state.height + _ground_under(env, state.feet_xy)
+        goal = np.array([*_trunk_xy(centre, line.yaw, state.com_offset_L), trunk_z])
         refs.body_position = QuinticSegment(p_now, goal, t, CENTRE_DURATION)
-        refs.body_orientation = QuinticOrientationSegment(R_now, _heading(line.yaw), t, CENTRE_DURATION)
+        attitude = _attitude(env, state.feet_xy, line.yaw)
+        refs.body_orientation = QuinticOrientationSegment(R_now, attitude, t, CENTRE_DURATION)
         return dataclasses.replace(state, plan=None, until=t + CENTRE_DURATION)
 
     def step(self, phase, progress, view, env):
@@ -223,7 +251,7 @@ class WalkRunnerBase:
         plan = state.plan
         timing = _timing(env, state)
         if plan.slot.kind == SWING:
-            state = self._swing(phase, progress, view, state, timing)
+            state = self._swing(phase, progress, view, env, state, timing)
             if state is None:
                 return FAILED
             progress.memo["walk"] = state
@@ -237,7 +265,7 @@ class WalkRunnerBase:
         self._record(progress, progress.memo["walk"], view)
         return RUNNING
 
-    def _swing(self, phase, progress, view, state: WalkState, timing: StaticWalkTiming) -> WalkState | None:
+    def _swing(self, phase, progress, view, env, state: WalkState, timing: StaticWalkTiming) -> WalkState | None:
         """Advances the swing of the running slot; None if the foot found no ground."""
         plan, t, refs = state.plan, view.time, progress.references
         leg = plan.slot.leg
@@ -246,15 +274,16 @@ class WalkRunnerBase:
             if t < plan.t0 + timing.ramp:
                 return state
             start = view.foot_W(leg)
-            end = np.array([*plan.foothold_xy, robot.FOOT_RADIUS - PLACE_DEPTH])
+            ground = env.ground_height(plan.foothold_xy)
+            end = np.array([*plan.foothold_xy, ground + robot.FOOT_RADIUS - PLACE_DEPTH])
             apex = 0.5 * (start + end)
-            apex[2] = max(start[2], robot.FOOT_RADIUS) + timing.step_height
+            apex[2] = max(start[2], ground + robot.FOOT_RADIUS) + timing.step_height
             half = 0.5 * timing.swing
             path = PiecewiseQuintic.through(np.array([start, apex, end]), t, [half, half])
             refs.legs[leg] = LegTrajectory(LEG_MODE_FOOT, path)
             return dataclasses.replace(state, stage="swing", t_apex=t + half, t_swing_end=t + timing.swing)
         if state.stage == "swing":
-            touched = t >= state.t_apex and swing_foot_down(view, leg, 0.0)
+            touched = t >= state.t_apex and swing_foot_down(view, leg, env.ground_height(view.foot_W(leg)[:2]))
             if not touched:
                 if t > state.t_swing_end + LATE_TOUCHDOWN:
                     progress.reason = f"{phase.name}: {leg} felt no ground {LATE_TOUCHDOWN} s after its swing's end"
