@@ -39,6 +39,7 @@ kept, not reset (the payload is still there).
 """
 
 import dataclasses
+import math
 
 import numpy as np
 from pydrake.systems.framework import BasicVector, Context, DiscreteValues
@@ -46,7 +47,8 @@ from pydrake.systems.framework import BasicVector, Context, DiscreteValues
 from pedi_drake.control import references
 from pedi_drake.estimation.base_state import BASE_STATE_SIZE
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
-from pedi_drake.vector3 import orientation_error_W, rotation_matrix_wxyz
+from pedi_drake.runtime.jit import kernel
+from pedi_drake.vector3 import orientation_error_kernel, rotation_matrix_kernel
 
 # A trunk lower than this [m] may be resting on the ground (a Go1 lying on its folded legs holds
 # its trunk at 0.09-0.12 m); it is carried by its legs only above.
@@ -89,6 +91,78 @@ class TrunkLoadCompensationConfig:
         return found
 
 
+@kernel
+def _learning_kernel(
+    base: np.ndarray, contact_set: np.ndarray, leg_reference: np.ndarray, enabled: bool
+) -> tuple[bool, bool]:
+    """`TrunkLoadCompensator.learning` on its inputs' values: base_state (13), contact_set (4 feet,
+    then the prong tips), leg_reference (48)."""
+    down = 0
+    lifted_free = True
+    for k in range(4):
+        if contact_set[k] >= 0.5:
+            down += 1
+        elif round(leg_reference[k * references.LEG_BLOCK]) != references.LEG_MODE_JOINTS:
+            lifted_free = False
+    standing = down == 4 or (down == 3 and lifted_free)
+    carried = enabled and base[6] > CARRIED_HEIGHT and standing
+    on_prongs = False
+    for k in range(4, contact_set.shape[0]):
+        on_prongs = on_prongs or contact_set[k] >= 0.5
+    return carried and not on_prongs, carried
+
+
+@kernel
+def _learn_kernel(
+    learnt: np.ndarray,
+    body: np.ndarray,
+    base: np.ndarray,
+    contact_set: np.ndarray,
+    leg_reference: np.ndarray,
+    enabled: bool,
+    position_step: float,
+    orientation_step: float,
+    linear_limit: np.ndarray,
+    max_angular: float,
+) -> None:
+    """One learning step of (b, beta) `learnt` (6,) in place: b += ki T (p_ref - p) and
+    beta += ki_R T rot(R_ref R^T) (`position_step`, `orientation_step`: the gains times the period
+    [1/s^2]), each bounded, when `_learning_kernel` says the errors measure the load; nothing on a
+    non-finite reference or estimate (the controller refuses that tick)."""
+    position, attitude = _learning_kernel(base, contact_set, leg_reference, enabled)
+    if not attitude:
+        return
+    for k in range(body.shape[0]):
+        if not math.isfinite(body[k]):
+            return
+    for k in range(base.shape[0]):
+        if not math.isfinite(base[k]):
+            return
+    if position:
+        for k in range(3):
+            value = learnt[k] + position_step * (body[k] - base[4 + k])
+            learnt[k] = min(max(value, -linear_limit[k]), linear_limit[k])
+    error = np.empty(3)
+    orientation_error_kernel(rotation_matrix_kernel(body[3:7]), rotation_matrix_kernel(base[0:4]), error)
+    for k in range(3):
+        value = learnt[3 + k] + orientation_step * error[k]
+        learnt[3 + k] = min(max(value, -max_angular), max_angular)
+
+
+@kernel
+def _wrench_kernel(learnt: np.ndarray, base: np.ndarray, inertia_B: np.ndarray, mass: float, out: np.ndarray) -> None:
+    """The learnt load `learnt` (b, beta) as the wrench [torque; force] on the trunk, world frame,
+    into `out` (6,): -(R I R^T beta, m b), R the estimate's attitude (identity before it has one)."""
+    known = base[0] != 0.0 or base[1] != 0.0 or base[2] != 0.0 or base[3] != 0.0
+    for k in range(4):
+        known = known and math.isfinite(base[k])
+    R = rotation_matrix_kernel(base[0:4]) if known else np.eye(3)
+    torque = R @ (inertia_B @ (R.T @ learnt[3:6]))
+    for k in range(3):
+        out[k] = -torque[k]
+        out[3 + k] = -mass * learnt[k]
+
+
 class TrunkLoadCompensator(LeafSystemWithoutWitnesses):
     """The unmodelled load on the trunk, learnt, as an external wrench for the controller.
 
@@ -129,46 +203,48 @@ class TrunkLoadCompensator(LeafSystemWithoutWitnesses):
             {self.input_port_ticket(self.base_state_port.get_index()), self.xd_ticket()},
         )
         self.DeclareStateOutputPort("learnt", self.learnt_state)
+        # Its kernels are compiled (or loaded from the cache) here, not in the first control tick.
+        context = self.CreateDefaultContext()
+        for port in (self.body_reference_port, self.leg_reference_port, self.base_state_port, self.contact_set_port):
+            port.FixValue(context, np.zeros(port.size()))
+        self._learn(context, context.get_mutable_discrete_state())
+        self.wrench(context)
 
     def learning(self, context: Context) -> tuple[bool, bool]:
         """(position, attitude): which of the trunk's tracking errors measure the load now."""
-        base = self.base_state_port.Eval(context)
-        contact_set = self.contact_set_port.Eval(context)
-        feet_down = contact_set[:4] >= 0.5
-        modes = np.round(self.leg_reference_port.Eval(context)[:: references.LEG_BLOCK])
-        lifted_free = all(modes[k] == references.LEG_MODE_JOINTS for k in range(4) if not feet_down[k])
-        standing = bool(np.all(feet_down)) or (int(np.count_nonzero(feet_down)) == 3 and lifted_free)
-        carried = self.config.enabled and base[6] > CARRIED_HEIGHT and standing
-        on_prongs = bool(np.any(contact_set[4:] >= 0.5))
-        return carried and not on_prongs, carried
+        return _learning_kernel(
+            self.base_state_port.Eval(context),
+            self.contact_set_port.Eval(context),
+            self.leg_reference_port.Eval(context),
+            self.config.enabled,
+        )
 
     def _learn(self, context: Context, discrete_state: DiscreteValues) -> None:
         c = self.config
-        position, attitude = self.learning(context)
-        if not attitude:
-            return
-        body = self.body_reference_port.Eval(context)
-        base = self.base_state_port.Eval(context)
-        if not (np.all(np.isfinite(body)) and np.all(np.isfinite(base))):
-            return  # the controller refuses the tick; nothing to learn from it
-        learnt = discrete_state.get_mutable_value(self.learnt_state)
-        if position:
-            position_error = body[0:3] - base[4:7]
-            learnt[LINEAR] = np.clip(
-                learnt[LINEAR] + c.position_gain * self.period * position_error, -self._linear_limit, self._linear_limit
-            )
-        attitude_error = orientation_error_W(rotation_matrix_wxyz(body[3:7]), rotation_matrix_wxyz(base[0:4]))
-        learnt[ANGULAR] = np.clip(
-            learnt[ANGULAR] + c.orientation_gain * self.period * attitude_error, -c.max_angular, c.max_angular
+        _learn_kernel(
+            discrete_state.get_mutable_value(self.learnt_state),
+            self.body_reference_port.Eval(context),
+            self.base_state_port.Eval(context),
+            self.contact_set_port.Eval(context),
+            self.leg_reference_port.Eval(context),
+            c.enabled,
+            c.position_gain * self.period,
+            c.orientation_gain * self.period,
+            self._linear_limit,
+            float(c.max_angular),
         )
 
     def wrench(self, context: Context) -> np.ndarray:
         """The learnt load as the external wrench on the trunk, [torque; force] world [N m, N]."""
-        learnt = context.get_discrete_state(self.learnt_state).value()
-        base = self.base_state_port.Eval(context)
-        R_WB = rotation_matrix_wxyz(base[0:4]) if np.all(np.isfinite(base[0:4])) and base[0:4].any() else np.eye(3)
-        inertia_W = R_WB @ self.rotational_inertia @ R_WB.T
-        return -np.concatenate([inertia_W @ learnt[ANGULAR], self.mass * learnt[LINEAR]])
+        out = np.empty(6)
+        _wrench_kernel(
+            context.get_discrete_state(self.learnt_state).value(),
+            self.base_state_port.Eval(context),
+            self.rotational_inertia,
+            self.mass,
+            out,
+        )
+        return out
 
     def _wrench(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self.wrench(context))
