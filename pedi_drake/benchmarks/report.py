@@ -380,8 +380,9 @@ ROWS: tuple[Row, ...] = (
         summary=True,
     ),
     Row(
-        "Static walks on the HQP up and down 15-degree slopes, and over a 1 m bridge of mu 0.2 with the "
-        "friction coefficient set for it and left at 0.8; seed 0 and 5 noisy seeds, by ground truth",
+        "Static walks on the HQP up and down 15-degree slopes, a trot's half turn on the platform between "
+        "them, and over a 1 m bridge of mu 0.2 with the friction coefficient set for it and left at 0.8; "
+        "seed 0 and 5 noisy seeds, by ground truth",
         "terrain.json",
         _walking,
         "python -m pedi_drake.benchmarks.terrain",

@@ -1,7 +1,7 @@
 """The terrain floors: static walks over terrain in simulation, seed 0 without noise and more seeds
 with sensor noise, on the Kalman estimate, judged by ground truth (pedi_drake.evaluation.walks).
 
-    python -m pedi_drake.benchmarks.terrain [--missions terrain/slope_up_and_down,terrain/slippery_bridge]
+    python -m pedi_drake.benchmarks.terrain [--missions terrain/slope_up_and_down,...]
         [--controllers whole_body] [--noise-seeds 1,2,3,4,5] [--engine ray|serial]
         [--out benchmarks/results/terrain.json]
 
@@ -21,7 +21,7 @@ from pedi_drake.batch.engines import ENGINES
 from pedi_drake.benchmarks.walking import measure, print_table, seeds_of, summarise, write_results
 from pedi_drake.mission.spec import SetFriction, load_mission, resolve_mission
 
-TERRAIN_MISSIONS = ["terrain/slope_up_and_down", "terrain/slippery_bridge"]
+TERRAIN_MISSIONS = ["terrain/slope_up_and_down", "terrain/climb_turn_descend", "terrain/slippery_bridge"]
 
 
 def without_friction_changes(mission: str, folder: Path) -> Path | None:

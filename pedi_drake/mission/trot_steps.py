@@ -87,7 +87,7 @@ def step(runner, phase, progress: MissionProgress, view: RobotView, env) -> str:
     t, refs = view.time, progress.references
     early = 0
     for leg in list(refs.legs):
-        if t >= state.t_apex and swing_foot_down(view, leg, 0.0):
+        if t >= state.t_apex and swing_foot_down(view, leg, env.ground_height(view.foot_W(leg)[:2])):
             _land(progress, view, leg)
             early += 1
     if early:
@@ -139,9 +139,10 @@ def _half_period(runner, phase, progress: MissionProgress, view: RobotView, env,
         refs.contacts[robot.LEG_NAMES.index(leg)] = 0.0
         start = view.foot_W(leg)
         hold = trot_foothold_W(leg, line_now, twist, error_W, timing)
-        end = np.array([*hold, robot.FOOT_RADIUS - TROT_PLACE_DEPTH])
+        ground = env.ground_height(hold)
+        end = np.array([*hold, ground + robot.FOOT_RADIUS - TROT_PLACE_DEPTH])
         apex = 0.5 * (start + end)
-        apex[2] = robot.FOOT_RADIUS + timing.step_height
+        apex[2] = max(start[2] - robot.FOOT_RADIUS, ground) + robot.FOOT_RADIUS + timing.step_height
         half_swing = 0.5 * timing.swing
         path = PiecewiseQuintic.through(np.array([start, start, apex, end]), t, [timing.ramp, half_swing, half_swing])
         refs.legs[leg] = LegTrajectory(LEG_MODE_FOOT, path)
