@@ -142,7 +142,7 @@ def _half_period(runner, phase, progress: MissionProgress, view: RobotView, env,
         ground = env.ground_height(hold)
         end = np.array([*hold, ground + robot.FOOT_RADIUS - TROT_PLACE_DEPTH])
         apex = 0.5 * (start + end)
-        apex[2] = max(start[2] - robot.FOOT_RADIUS, ground) + robot.FOOT_RADIUS + timing.step_height
+        apex[2] = max(env.ground_height(start[:2]), ground) + robot.FOOT_RADIUS + timing.step_height
         half_swing = 0.5 * timing.swing
         path = PiecewiseQuintic.through(np.array([start, start, apex, end]), t, [timing.ramp, half_swing, half_swing])
         refs.legs[leg] = LegTrajectory(LEG_MODE_FOOT, path)
