@@ -44,34 +44,31 @@ def test_the_walk_slows_so_that_its_accelerations_scale_with_the_friction():
     assert (slowed.sway / slowed.shift**2) / (nominal.sway / nominal.shift**2) == pytest.approx(0.2 / 0.8)
 
 
-def test_a_walk_onto_ice_told_of_it_keeps_its_feet(tmp_path):
-    path = tmp_path / "ice.yaml"
-    path.write_text(MISSION)
+def _walked(tmp_path, mission: str, duration: float):
+    """(run record, the walk's row of result.json) of `mission` from standing: it succeeded, the
+    robot did not fall and no loaded foot slid more than MAX_STANCE_SLIP."""
+    path = tmp_path / "mission.yaml"
+    path.write_text(mission)
     scenario = load_scenario(
-        scenario_text=f"{{mission: {path}, robot: {{initial_pose: standing}}, simulation_duration: 20.0}}"
+        scenario_text=f"{{mission: {path}, robot: {{initial_pose: standing}}, simulation_duration: {duration}}}"
     )
-    record = simulate(scenario=scenario, name="ice", quiet=True, replay=False)
+    record = simulate(scenario=scenario, name="terrain", quiet=True, replay=False)
     result = judge.judge_run(record)
     assert result["success"], result["reason"]
     assert not result["fell"]
     (walk,) = result["walks"]
     assert max(walk["max_stance_slip_m"].values()) <= MAX_STANCE_SLIP, walk["max_stance_slip_m"]
+    return record, walk
+
+
+def test_a_walk_onto_ice_told_of_it_keeps_its_feet(tmp_path):
+    _, walk = _walked(tmp_path, MISSION, 20.0)
     # At half the twist with cycles twice as long: the walk took about twice the nominal time.
     assert walk["walking_speed_m_s"] < 0.15 / 2 + 0.01
 
 
 def test_a_walk_up_a_slope_carries_the_trunk_above_the_ground_pitched_with_it(tmp_path):
-    path = tmp_path / "ramp.yaml"
-    path.write_text(SLOPE_MISSION)
-    scenario = load_scenario(
-        scenario_text=f"{{mission: {path}, robot: {{initial_pose: standing}}, simulation_duration: 14.0}}"
-    )
-    record = simulate(scenario=scenario, name="ramp", quiet=True, replay=False)
-    result = judge.judge_run(record)
-    assert result["success"], result["reason"]
-    assert not result["fell"]
-    (walk,) = result["walks"]
-    assert max(walk["max_stance_slip_m"].values()) <= MAX_STANCE_SLIP, walk["max_stance_slip_m"]
+    record, walk = _walked(tmp_path, SLOPE_MISSION, 14.0)
     assert walk["estimate_height_error_max_m"] < 0.01
     # At the end: every foot on the slope at its height there, the trunk 0.28 m above their mean
     # height (within 2 cm) and pitched nose up by the slope's 15 degrees (within 3).

@@ -12,13 +12,11 @@ walking benchmark's (pedi_drake.benchmarks.walking): successes, falls in the fai
 largest stance foot slip (how far a loaded foot slid within one stance), the estimate's drift.
 """
 
-import argparse
 import shutil
 import tempfile
 from pathlib import Path
 
-from pedi_drake.batch.engines import ENGINES
-from pedi_drake.benchmarks.walking import measure, print_table, seeds_of, summarise, write_results
+from pedi_drake.benchmarks.walking import report, seeds_of, study_parser
 from pedi_drake.mission.spec import SetFriction, load_mission, resolve_mission
 
 TERRAIN_MISSIONS = ["terrain/slope_up_and_down", "terrain/climb_turn_descend", "terrain/slippery_bridge"]
@@ -39,25 +37,16 @@ def without_friction_changes(mission: str, folder: Path) -> Path | None:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--missions", default=",".join(TERRAIN_MISSIONS))
-    parser.add_argument("--controllers", default="whole_body")
-    parser.add_argument("--noise-seeds", default="1,2,3,4,5", help="seeds run with sensor noise ('' for none)")
-    parser.add_argument("--engine", choices=ENGINES, default="ray", help="ray (every core) or serial")
-    parser.add_argument("--out", default="benchmarks/results/terrain.json")
-    args = parser.parse_args()
+    args = study_parser(__doc__, TERRAIN_MISSIONS, ["whole_body"], "benchmarks/results/terrain.json").parse_args()
     missions = [m for m in args.missions.split(",") if m]
     written = Path(tempfile.mkdtemp(prefix="terrain_benchmark_"))
     try:
         variants = [without_friction_changes(mission, written) for mission in missions]
         missions += [str(path) for path in variants if path is not None]
         controllers = [c for c in args.controllers.split(",") if c]
-        results = measure(missions, controllers, seeds_of(args.noise_seeds), args.engine)
+        report(missions, controllers, seeds_of(args.noise_seeds), args.engine, Path(args.out))
     finally:
         shutil.rmtree(written)
-    summary = {key: summarise(runs) for key, runs in results.items()}
-    print_table(summary)
-    write_results(Path(args.out), results, summary)
 
 
 if __name__ == "__main__":

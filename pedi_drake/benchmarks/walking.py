@@ -172,19 +172,34 @@ def write_results(out: Path, results: dict[str, list[dict]], summary: dict[str, 
     print(f"wrote {out}")
 
 
+def report(missions: list[str], controllers: list[str], seeds: list[int], engine: str, out: Path) -> None:
+    """Runs the study (`measure`), prints its table and writes it to `out`."""
+    results = measure(missions, controllers, seeds, engine)
+    summary = {key: summarise(runs) for key, runs in results.items()}
+    print_table(summary)
+    write_results(out, results, summary)
+
+
 def seeds_of(text: str) -> list[int]:
     """The noise seeds of a comma-separated `--noise-seeds`."""
     return [int(s) for s in text.split(",") if s]
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--missions", default=",".join(WALKING_MISSIONS))
-    parser.add_argument("--controllers", default=",".join(CONTROLLERS))
+def study_parser(doc: str, missions: list[str], controllers: list[str], out: str) -> argparse.ArgumentParser:
+    """The command line of a walking study: --missions, --controllers, --noise-seeds, --engine and
+    --out, with these defaults."""
+    parser = argparse.ArgumentParser(description=doc, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--missions", default=",".join(missions))
+    parser.add_argument("--controllers", default=",".join(controllers))
     parser.add_argument("--noise-seeds", default="1,2,3,4,5", help="seeds run with sensor noise ('' for none)")
-    parser.add_argument("--trot-speeds", default="", help="commanded speeds of extra 3 m trots [m/s]")
     parser.add_argument("--engine", choices=ENGINES, default="ray", help="ray (every core) or serial")
-    parser.add_argument("--out", default="benchmarks/results/walking.json")
+    parser.add_argument("--out", default=out)
+    return parser
+
+
+def main() -> None:
+    parser = study_parser(__doc__, WALKING_MISSIONS, CONTROLLERS, "benchmarks/results/walking.json")
+    parser.add_argument("--trot-speeds", default="", help="commanded speeds of extra 3 m trots [m/s]")
     args = parser.parse_args()
     missions = [m for m in args.missions.split(",") if m]
     written = Path(tempfile.mkdtemp(prefix="walking_benchmark_"))
@@ -194,12 +209,9 @@ def main() -> None:
         missions.append(str(path))
     controllers = [c for c in args.controllers.split(",") if c]
     try:
-        results = measure(missions, controllers, seeds_of(args.noise_seeds), args.engine)
+        report(missions, controllers, seeds_of(args.noise_seeds), args.engine, Path(args.out))
     finally:
         shutil.rmtree(written)
-    summary = {key: summarise(runs) for key, runs in results.items()}
-    print_table(summary)
-    write_results(Path(args.out), results, summary)
 
 
 if __name__ == "__main__":
