@@ -125,6 +125,10 @@ def _half_period(runner, phase, progress: MissionProgress, view: RobotView, env,
         # Every foot has been placed at rest: the trot ends on four feet where the trunk is.
         refs.body_position = QuinticSegment(p_now, p_now, t, 1e-3)
         return dataclasses.replace(state, stopping=True, done_at=t + timing.ramp + 0.1)
+    # The half period starts where the trunk is (the estimate), not where its reference was: a
+    # trunk pushed off its line is caught by where the feet land around it, not pulled back by
+    # stance legs reaching for a line it has left.
+    p_now = np.array([view.base.p_WB[0], view.base.p_WB[1], p_now[2]])
     line_now = PlanarPose(float(p_now[0]), float(p_now[1]), state.line.yaw)
     line_end = line_now.moved(twist, timing.half)
     velocity_W = np.array([*(line_now.rotation() @ twist[:2]), 0.0])
