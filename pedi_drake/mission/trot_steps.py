@@ -2,8 +2,9 @@
 run through the whole-body controller's references.
 
 Every half period: the pair that swung lands (its contact loaded, its foot task dropped), the twist
-for the next half period is taken (the phase's, rate-limited), the trunk's reference moves on at
-it (its position at constant velocity, its heading rest to rest), and the other pair unloads and
+for the next half period is taken (the phase's, rate-limited), the trunk's reference starts at the
+estimate's position and moves on at it (its position at constant velocity, its heading rest to
+rest), and the other pair unloads and
 swings to its Raibert foothold. A foot whose sensor feels the ground after the apex lands at once
 (early); one that has not by the half period's end lands then (late). When the walking is over
 the twist ramps down and two half periods at rest put the feet under the hips.
