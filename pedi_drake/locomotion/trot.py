@@ -3,11 +3,12 @@
 A trot has two feet down at a time, on a line through the trunk: it balances by where it puts
 its feet, not by keeping the centre of mass over a support. Each half period the trunk's reference
 starts where the trunk is and moves on at the twist (the trunk's position at constant velocity,
-its heading rest to rest over the half period), the pair that landed takes the load, and the other pair swings. A swing foot lands
-at Raibert's point: its place under its hip at the middle of its coming stance on the walking
-line extrapolated at the twist (pedi_drake.locomotion.footholds), plus `velocity_gain` times the
-trunk's velocity error, which steps the feet towards a trunk that runs ahead of its reference
-(or away from one that lags) and so brings it back.
+its heading rest to rest over the half period), the pair that landed takes the load, and the
+other pair swings. A swing foot lands at Raibert's point: its place under its hip at the middle
+of its coming stance on the walking line extrapolated at the twist
+(pedi_drake.locomotion.footholds), plus `velocity_gain` times the trunk's velocity error, which
+steps the feet towards a trunk that runs ahead of its reference (or away from one that lags) and
+so brings it back.
 
 The twist changes by at most `acceleration` (and `yaw_acceleration`) per second: a trot starts and
 stops over a few steps.
