@@ -101,6 +101,9 @@ def test_mission_specific_outcome(mission_result):
         assert result["box"]["moved_m"] >= 0.02
     if name in EXPECTED_OBSTACLES:
         assert obstacle_calls(result["presses"]) == EXPECTED_OBSTACLES[name]
+    if name == "push_box_away_on_prongs":
+        assert result["object_push"]["moved_m"] >= 0.20
+        assert max(result["object_push"]["stance_feet_slide_m"].values()) <= 0.01
     if name == "push_light_box":
         assert result["object_push"]["moved_m"] >= 0.10
         assert max(result["object_push"]["stance_feet_slide_m"].values()) <= 0.01

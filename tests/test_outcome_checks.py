@@ -225,7 +225,31 @@ def test_a_box_moved_too_little_fails_the_push_naming_it(push_plant):
     times, states = _push_states(plant, q0, 0.05)
     row, problem = judge_object_push(plant, ObjectPush(**PUSH), PUSH_PHASES, times, states)
     assert row["moved_m"] == pytest.approx(0.05, abs=1e-3)
-    assert "light_box moved 5.0 cm in push_box" in problem
+    assert "light_box moved 5.0 cm from push_box to the end of push_box" in problem
+
+
+def _slide_states(plant, q0, push_shift, slide_shift):
+    """Plant states over 0-4 s: the box moves `push_shift` [m] along x in the push phase (1-2 s)
+    and `slide_shift` more in the phase after it (2-3 s), as a struck box slides on."""
+    times = np.linspace(0.0, 4.0, 401)
+    shift = push_shift * np.clip(times - 1.0, 0.0, 1.0) + slide_shift * np.clip(times - 2.0, 0.0, 1.0)
+    box = root_body(plant, plant.GetModelInstanceByName("light_box"))
+    states = np.zeros((plant.num_multibody_states(), len(times)))
+    states[: len(q0)] = q0[:, None]
+    states[box.floating_positions_start() + 4] += shift
+    return times, states
+
+
+def test_a_struck_box_is_measured_after_it_slid_until_the_named_phase_ends(push_plant):
+    plant, q0 = push_plant
+    times, states = _slide_states(plant, q0, 0.04, 0.16)
+    phases = [*PUSH_PHASES, {"name": "box_slides", "t_start": 2.0, "t_end": 3.0}]
+    struck = ObjectPush(**{**PUSH, "distance": 0.18})
+    row, problem = judge_object_push(plant, struck, phases, times, states)
+    assert row["moved_m"] == pytest.approx(0.04, abs=1e-3) and "4.0 cm" in problem
+    measured_later = ObjectPush(**{**PUSH, "distance": 0.18, "until": "box_slides"})
+    row, problem = judge_object_push(plant, measured_later, phases, times, states)
+    assert problem == "" and row["moved_m"] == pytest.approx(0.20, abs=1e-3) and row["until"] == "box_slides"
 
 
 def test_stance_feet_that_slid_fail_the_push(push_plant):
@@ -242,4 +266,13 @@ def test_an_object_push_naming_no_scene_object_is_refused(tmp_path):
     path = tmp_path / "bad_push.yaml"
     path.write_text(text)
     with pytest.raises(MissionFileError, match="object_push.object: must name a scene object"):
+        load_mission(str(path))
+
+
+def test_an_object_push_measured_until_an_earlier_phase_is_refused(tmp_path):
+    text = (missions_dir() / "push_light_box.yaml").read_text()
+    text = text.replace("stance_slide: 0.01}", "stance_slide: 0.01, until: touch_box}")
+    path = tmp_path / "bad_until.yaml"
+    path.write_text(text)
+    with pytest.raises(MissionFileError, match="object_push.until: must name `phase` or a phase after it"):
         load_mission(str(path))

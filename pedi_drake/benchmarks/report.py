@@ -146,10 +146,10 @@ def _missions(d: dict) -> str:
     if sensing:
         right, pressed = sum(row["obstacles_correct"] for row in sensing), sum(row["runs"] for row in sensing)
         text += f"; obstacles told apart (rigid or soft, fixed or mobile) in {right} of {pressed} runs"
-    pushes = [row for row in summary.values() if "object_pushed_m_min" in row]
-    for row in pushes:
+    pushes = {name: row for name, row in summary.items() if "object_pushed_m_min" in row}
+    for name, row in pushes.items():
         text += (
-            f"; light obstacle pushed at least {100 * row['object_pushed_m_min']:.1f} cm, stance feet within "
+            f"; {name}: object pushed at least {100 * row['object_pushed_m_min']:.1f} cm, stance feet within "
             f"{1e3 * row['stance_foot_slide_m_max']:.1f} mm"
         )
     return text

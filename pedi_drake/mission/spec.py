@@ -553,9 +553,11 @@ class BoxLift:
 
 @dataclasses.dataclass
 class ObjectPush:
-    """A push the judge requires, by physics (the logged plant state): over the phase `phase`,
-    the scene object `object` moved at least `distance` on the floor while every foot on the
-    ground stayed within `stance_slide` of where it was at the phase start."""
+    """A push the judge requires, by physics (the logged plant state): from the start of the phase
+    `phase` to the end of the phase `until` (that phase itself when empty), the scene object
+    `object` moved at least `distance` on the floor, while over `phase` every foot on the ground
+    stayed within `stance_slide` of where it was at the phase start. A later `until` lets a struck
+    object finish sliding before it is measured."""
 
     # Scene object (model instance) name of the pushed object.
     object: str = ""
@@ -565,6 +567,8 @@ class ObjectPush:
     distance: float = 0.10
     # Largest horizontal motion of a stance foot over the phase [m].
     stance_slide: float = 0.01
+    # Name of the phase at whose end the object's motion is measured; empty: `phase`.
+    until: str = ""
 
 
 @dataclasses.dataclass
@@ -891,6 +895,15 @@ def _check_object_push(check: ObjectPush, scene: list[SceneObject], phase_names:
     problems = {
         "object": (check.object in objects, f"must name a scene object ({objects}), got {check.object!r}"),
         "phase": (check.phase in phase_names, f"must name a phase of the mission, got {check.phase!r}"),
+        "until": (
+            not check.until
+            or (
+                check.until in phase_names
+                and check.phase in phase_names
+                and phase_names.index(check.until) >= phase_names.index(check.phase)
+            ),
+            f"must name `phase` or a phase after it, got {check.until!r}",
+        ),
         "distance": (math.isfinite(check.distance) and check.distance > 0, f"must be > 0 [m], got {check.distance}"),
         "stance_slide": (
             math.isfinite(check.stance_slide) and check.stance_slide > 0,
