@@ -83,6 +83,10 @@ RESTING_HEIGHT_SLACK = 0.03
 # ... and both have held for this many ticks in a row (a load passes through the band as the legs
 # take the weight, without the trunk resting).
 RESTING_TICKS = 50
+# With no foot or prong in contact the trunk is taken to rest on the ground (not sliding) only
+# while its estimate is at most this far above its resting height [m]: a Go1 on its folded legs
+# holds its trunk up to about 0.07 m above it, a walking one 0.2 m and more.
+UNLOADED_REST_SLACK = 0.1
 # c and s are learnt, and a resting trunk recognised, only while the robot is still: every joint
 # and the trunk turning slower than this [rad/s], by the encoders and the gyro (measurements, not
 # the estimate: a trunk pinned to its resting height by the estimate would otherwise confirm
@@ -289,7 +293,9 @@ def _predict_kernel(x, P, R_WB, w_B, f_B, p_BI, dt, rolling, in_contact, noise_s
 
 
 @kernel
-def _measurement_rows(in_contact, num_tips, use_height, noise_std, vertical_forces, resting_trunk, learn_sink):
+def _measurement_rows(
+    in_contact, num_tips, use_height, noise_std, vertical_forces, resting_trunk, learn_sink, may_rest
+):
     """The measurement model of `update` for the feet `in_contact` and `num_tips` loaded prong tips:
     (columns (m, 3), coefficients (m, 3), variances (m,)), row i of H being coefficients[i, j] at
     columns[i, j] summed over j (a coefficient 0 where a row has fewer non-zeros).
@@ -299,8 +305,9 @@ def _measurement_rows(in_contact, num_tips, use_height, noise_std, vertical_forc
     relative to the trunk, the stance feet's trunk velocities, their heights with their sink
     (`use_height`: p_WF,z + s + c F; with `learn_sink` false, p_WF,z alone, s and c held, and s
     held too unless the trunk rests or a prong tip is loaded), each
-    loaded tip's trunk velocity and height, with nothing loaded the resting trunk's horizontal
-    velocity, and the resting trunk's height (`resting_trunk`).
+    loaded tip's trunk velocity and height, with nothing loaded and the trunk low enough to rest
+    (`may_rest`) the resting trunk's horizontal velocity, and the resting trunk's height
+    (`resting_trunk`).
     """
     foot_position, foot_velocity = noise_std[0], noise_std[1]
     ground_height, resting_velocity = noise_std[2], noise_std[3]
@@ -308,10 +315,12 @@ def _measurement_rows(in_contact, num_tips, use_height, noise_std, vertical_forc
     for i in range(4):
         if in_contact[i]:
             stance += 1
-    # No foot or prong loaded: the trunk rests on the ground (on its belly or knees) while the
-    # legs move freely; it does not slide, so a zero horizontal velocity keeps the IMU from
-    # drifting while the legs unfold (the knees may push it up: z is left to the IMU).
-    resting = stance == 0 and num_tips == 0
+    # No foot or prong loaded, the trunk low: it rests on the ground (on its belly or knees) while
+    # the legs move freely; it does not slide, so a zero horizontal velocity keeps the IMU from
+    # drifting while the legs unfold (the knees may push it up: z is left to the IMU). A trunk
+    # higher up with nothing loaded is between steps (a trot's diagonal pairs change over in a
+    # few ticks in which neither pair is both scheduled and sensed) or falling: it moves.
+    resting = stance == 0 and num_tips == 0 and may_rest
     m = 12 + 3 * stance + (stance if use_height else 0) + (2 if resting else 0) + 4 * num_tips
     m += 1 if resting_trunk else 0
     columns = np.zeros((m, 3), dtype=np.int64)
@@ -512,6 +521,7 @@ def _update_kernel(
     resting_height,
     learn_sink,
     ground,
+    may_rest,
 ):
     """`FloatingBaseKalmanFilter.update` on plain arrays: (x, P, whether the correction succeeded).
 
@@ -519,14 +529,15 @@ def _update_kernel(
     positions in the trunk frame [m] and radii [m]; `resting_height` [m]: the height of a trunk
     resting on the ground (`_resting_height`), 0 when it does not rest; `learn_sink`: whether the
     feet's heights correct c and s (else they are held); `ground` (4,) [m]: the height of the
-    ground under each foot (0 on flat ground; the terrain's, pedi_drake.terrain). The compliance
-    and the sink are kept within +-MAX_COMPLIANCE and +-MAX_SINK.
+    ground under each foot (0 on flat ground; the terrain's, pedi_drake.terrain); `may_rest`:
+    whether the trunk is low enough to rest on the ground (with nothing loaded it then does not
+    slide). The compliance and the sink are kept within +-MAX_COMPLIANCE and +-MAX_SINK.
     """
     p_BF, J = foot_kinematics_kernel(q, offsets)
     forces = _vertical_forces_kernel(R_WB, J, tau)
     resting_trunk = use_height and resting_height > 0.0
     columns, coefficients, noise = _measurement_rows(
-        in_contact, tips_B.shape[0], use_height, noise_std, forces, resting_trunk, learn_sink
+        in_contact, tips_B.shape[0], use_height, noise_std, forces, resting_trunk, learn_sink, may_rest
     )
     # The held parts of each foot's sink (s, c F) go into the measurement itself, and a held state
     # is decorrelated from the others first, so that no row moves it through its covariance (a
@@ -676,6 +687,7 @@ def _step_kernel(
     ground = np.zeros(4)
     for i in range(4):
         ground[i] = terrain_height(terrain, x[FEET + 3 * i], x[FEET + 3 * i + 1])
+    may_rest = x[2] - terrain_height(terrain, x[0], x[1]) < rest_height + UNLOADED_REST_SLACK
     x, P, corrected = _update_kernel(
         x,
         P,
@@ -695,6 +707,7 @@ def _step_kernel(
         rest_height if rested >= RESTING_TICKS else 0.0,
         still,
         ground,
+        may_rest,
     )
     if not corrected:
         return False
@@ -853,6 +866,7 @@ class FloatingBaseKalmanFilter:
         tau: np.ndarray | None = None,
         trunk_resting: bool = False,
         learn_sink: bool = True,
+        may_rest: bool = True,
     ):
         """Corrects (x, P) with the leg kinematics of all feet and the no-slip of the feet in contact
         (whose centres move at their `rolling` velocities (4, 3) [m/s], when given), and with each
@@ -860,7 +874,9 @@ class FloatingBaseKalmanFilter:
         move, and touches the ground. `tau` (12,): the joint torques [N m] that give the feet's
         loads, and with them their sink; None: no load known, so the compliance is left as it is.
         `trunk_resting`: the trunk rests on flat ground (its lowest rigid point touches it);
-        `learn_sink`: the feet's heights correct c and s (the robot is nearly still), else hold them.
+        `learn_sink`: the feet's heights correct c and s (the robot is nearly still), else hold them;
+        `may_rest`: the trunk is low enough to rest on the ground (with no foot or prong in contact
+        it then does not slide; higher up it is between steps or falling).
         Raises np.linalg.LinAlgError when P is not positive definite."""
         tips = self._tips[np.asarray(tips_loaded, bool)] if tips_loaded is not None else self._tips[:0]
         x, P, corrected = _update_kernel(
@@ -882,6 +898,7 @@ class FloatingBaseKalmanFilter:
             _resting_height(np.asarray(imu.R_WB, dtype=float), self._rest_points) if trunk_resting else 0.0,
             learn_sink,
             np.zeros(4),
+            may_rest,
         )
         if not corrected:
             raise np.linalg.LinAlgError("Kalman correction: an innovation variance is not positive")
