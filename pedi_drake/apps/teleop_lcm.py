@@ -34,7 +34,10 @@ whatever its bytes; pedi_drake.operator.message_stream), e.g. the fuzzed operato
 feedback message (the scenario's `operator.feedback_channel`) and plays the script or the log
 on the controller's clock: the step or message of time t goes out when the controller's
 diagram time is t (the feedback carries it), so an operator started before the controller still
-acts at the moments it was written for.
+acts at the moments it was written for. `--start_on_leg LEG` waits instead for the first
+feedback that reports that foot driven (the robot offers it: a teleop_foot phase has begun) and
+plays the script from then, its times counted from that moment, as an operator does at the end
+of a mission whose length it cannot know.
 
 The bus and channel are the scenario's (`operator.lcm_bus` in `lcm_buses`, `operator.channel`),
 the ones `run_sim.py` with `operator: {source: lcm}` listens on.
@@ -187,6 +190,23 @@ def controller_clock_start(lcm: DrakeLcmInterface, channel: str, timeout: float)
     return wall - diagram_time
 
 
+def offer_start(lcm: DrakeLcmInterface, channel: str, leg: str, timeout: float) -> float | None:
+    """The wall-clock time (time.monotonic) [s] of the first foot_feedback_lcmt on `channel` that
+    reports `leg` driven; None when none came within `timeout` [s]."""
+    index = LEG_NAMES.index(leg)
+    arrived = []
+
+    def take(data: bytes) -> None:
+        if not arrived and foot_feedback_lcmt.decode(data).leg == index:
+            arrived.append(time.monotonic())
+
+    lcm.Subscribe(channel, take)
+    deadline = time.monotonic() + timeout
+    while not arrived and time.monotonic() < deadline:
+        lcm.HandleSubscriptions(50)
+    return arrived[0] if arrived else None
+
+
 class KeyboardOperator:
     """The command the keys have set so far (see the module docstring)."""
 
@@ -297,6 +317,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--start_on_feedback", action="store_true", help="play on the controller's clock, from its first feedback"
     )
+    parser.add_argument(
+        "--start_on_leg", choices=LEG_NAMES, default=None, help="play from the robot's offer of this foot"
+    )
     parser.add_argument("--start_timeout", type=float, default=120.0, help="longest wait for that feedback [s]")
     args = parser.parse_args(argv)
     if not (math.isfinite(args.rate) and args.rate > 0 and math.isfinite(args.speed) and args.speed > 0):
@@ -329,6 +352,14 @@ def main(argv: list[str] | None = None) -> int:
         start = controller_clock_start(DrakeLcm(url), config.feedback_channel, args.start_timeout)
         if start is None:
             print(f"no feedback on {config.feedback_channel} within {args.start_timeout} s", file=sys.stderr)
+            return 1
+    elif args.start_on_leg:
+        start = offer_start(DrakeLcm(url), config.feedback_channel, args.start_on_leg, args.start_timeout)
+        if start is None:
+            print(
+                f"no offer of {args.start_on_leg} on {config.feedback_channel} within {args.start_timeout} s",
+                file=sys.stderr,
+            )
             return 1
     if messages is not None:
         count = play_messages(messages, lcm.Publish, time.monotonic() if start is None else start)

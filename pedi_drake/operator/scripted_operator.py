@@ -5,6 +5,12 @@ start time until the next one's; after the last step's `until` nothing more is p
 operator falls silent). Messages go out every `period` [s] of diagram time, with a sequence
 number, on a DrakeLcm (memq:// in one process, udpm:// to another). `script_stream` makes the
 same messages as data, for a MessagePlayer or a file.
+
+With `start_on_leg`, the operator waits, silent, until the robot offers it that foot: the first
+haptic feedback (foot_feedback_lcmt on `feedback_channel`) that reports the leg driven, as a
+teleop_foot phase's does from its first update. The script's times then count from that
+feedback's diagram time, as an operator at the end of a long mission starts when the robot is
+ready, whenever that is.
 """
 
 import dataclasses
@@ -13,11 +19,12 @@ import numpy as np
 from pydrake.lcm import DrakeLcmInterface
 from pydrake.systems.framework import EventStatus
 
-from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt
+from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt, foot_feedback_lcmt
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.operator.command import CONTROLLER_NONE, FRAME_TRUNK, KIND_VELOCITY, MODE_NONE
-from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL
+from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL, DEFAULT_FOOT_FEEDBACK_CHANNEL
 from pedi_drake.operator.message_stream import TimedMessage
+from pedi_drake.robot import LEG_NAMES
 
 
 @dataclasses.dataclass(frozen=True)
@@ -66,7 +73,8 @@ def script_stream(steps: list[ScriptStep], rate: float, end: float, channel: str
 
 
 class ScriptedOperator(LeafSystemWithoutWitnesses):
-    """Publishes `steps` on `channel` every `period` [s] until `until` [s] (diagram time)."""
+    """Publishes `steps` on `channel` every `period` [s] until `until` [s] (script time: diagram
+    time, or from the robot's offer of the foot `start_on_leg`, read on `feedback_channel`)."""
 
     def __init__(
         self,
@@ -76,17 +84,42 @@ class ScriptedOperator(LeafSystemWithoutWitnesses):
         until: float = np.inf,
         period: float = 0.01,
         channel: str = DEFAULT_FOOT_COMMAND_CHANNEL,
+        start_on_leg: str = "",
+        feedback_channel: str = DEFAULT_FOOT_FEEDBACK_CHANNEL,
     ):
         super().__init__()
+        if start_on_leg and start_on_leg not in LEG_NAMES:
+            raise ValueError(f"start_on_leg must be one of {LEG_NAMES}, got {start_on_leg!r}")
         self._lcm, self._steps, self._until, self._channel = lcm, list(steps), until, channel
         self._sequence = self.DeclareDiscreteState(1)
+        # The diagram time the script starts at: 0, or NaN until the robot offers the foot.
+        self._start = self.DeclareDiscreteState([np.nan if start_on_leg else 0.0])
+        # Feedback times [s] that reported the leg driven, since the last update (the bus's
+        # poller, the operator input, hands them over).
+        self._offers: list[float] = []
+        if start_on_leg:
+            leg = LEG_NAMES.index(start_on_leg)
+
+            def take(data: bytes) -> None:
+                message = foot_feedback_lcmt.decode(data)
+                if message.leg == leg:
+                    self._offers.append(message.timestamp_us * 1e-6)
+
+            lcm.Subscribe(feedback_channel, take)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._publish)
 
     def _publish(self, context, discrete_state) -> EventStatus:
         t = context.get_time()
-        step = script_command(self._steps, t)
-        if step is None or t > self._until:
-            return EventStatus.DidNothing()
+        start = float(context.get_discrete_state(self._start).get_value()[0])
+        if np.isnan(start):
+            if not self._offers:
+                return EventStatus.DidNothing()
+            start = min(self._offers)
+            self._offers.clear()
+            discrete_state.set_value(self._start, [start])
+        step = script_command(self._steps, t - start)
+        if step is None or t - start > self._until:
+            return EventStatus.Succeeded()
         sequence = int(context.get_discrete_state(self._sequence).get_value()[0])
         self._lcm.Publish(self._channel, foot_command_message(step, t, sequence).encode())
         discrete_state.set_value(self._sequence, [sequence + 1])
