@@ -1,6 +1,6 @@
 """An operator's stream of raw messages: kept in an LCM event log, played in lock step by a
 MessagePlayer at its diagram times, played on the wall clock, and aligned to a controller's clock
-by its first feedback message."""
+by its first feedback message or to the robot's offer of a foot."""
 
 import threading
 import time
@@ -9,7 +9,8 @@ import pytest
 from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
 
-from pedi_drake.apps.teleop_lcm import controller_clock_start
+from pedi_drake.apps.teleop_lcm import controller_clock_start, offer_start
+from pedi_drake.go1_driver.lcmtypes import foot_command_lcmt
 from pedi_drake.operator.feedback import feedback_message, feedback_vector
 from pedi_drake.operator.message_stream import (
     MessagePlayer,
@@ -18,6 +19,7 @@ from pedi_drake.operator.message_stream import (
     read_lcm_log,
     write_lcm_log,
 )
+from pedi_drake.operator.scripted_operator import ScriptedOperator, ScriptStep
 
 STREAM = [
     TimedMessage(0.0, "a", b"\x00\x01"),
@@ -71,3 +73,44 @@ def test_the_operator_takes_the_controllers_clock_from_its_feedback():
     start = controller_clock_start(lcm, "feedback", timeout=2.0)
     assert before - 12.5 <= start <= time.monotonic() - 12.5
     assert controller_clock_start(DrakeLcm("memq://"), "feedback", timeout=0.1) is None
+
+
+def _feedback(leg: int, t: float) -> bytes:
+    return feedback_message(feedback_vector(leg, None, 0.0, 0.0, 0, False), t, 1).encode()
+
+
+def test_the_operator_app_starts_when_the_robot_offers_it_the_foot():
+    lcm = DrakeLcm("memq://")
+    # Feedback of no driven foot first (the robot walking), then of FR driven (its teleop phase).
+    threading.Timer(0.1, lambda: lcm.Publish("feedback", _feedback(-1, 40.0))).start()
+    threading.Timer(0.3, lambda: lcm.Publish("feedback", _feedback(0, 41.0))).start()
+    before = time.monotonic()
+    start = offer_start(lcm, "feedback", "FR", timeout=2.0)
+    assert before + 0.25 <= start <= time.monotonic()
+    other = DrakeLcm("memq://")
+    threading.Timer(0.05, lambda: other.Publish("feedback", _feedback(1, 3.0))).start()
+    assert offer_start(other, "feedback", "FR", timeout=0.3) is None
+
+
+def test_the_scripted_operator_waits_for_the_offer_and_counts_its_script_from_it():
+    lcm = DrakeLcm("memq://")
+    steps = [ScriptStep(0.0, (0.0, 0.0, 0.0)), ScriptStep(0.105, (0.0, 0.0, 0.05))]
+    operator = ScriptedOperator(lcm, steps, period=0.01, start_on_leg="FR", feedback_channel="feedback")
+    commands = []
+    lcm.Subscribe("operator_foot_command", lambda data: commands.append(foot_command_lcmt.decode(data)))
+    simulator = Simulator(operator)
+    simulator.Initialize()
+    lcm.Publish("feedback", _feedback(-1, 0.2))
+    lcm.HandleSubscriptions(0)
+    simulator.AdvanceTo(0.5)
+    lcm.HandleSubscriptions(0)
+    assert commands == [], "silent until the robot offers the foot"
+    lcm.Publish("feedback", _feedback(0, 0.5))
+    lcm.HandleSubscriptions(0)
+    simulator.AdvanceTo(0.65)
+    lcm.HandleSubscriptions(0)
+    times = [c.timestamp_us * 1e-6 for c in commands]
+    assert times[0] == pytest.approx(0.5, abs=1e-9)
+    # The script's step at 0.105 s goes out at the first update 0.105 s or more after the offer.
+    lifted = [t for t, c in zip(times, commands, strict=True) if c.value[2] > 0.0]
+    assert lifted[0] == pytest.approx(0.61, abs=1e-9) and all(t < 0.61 for t in times if t not in lifted)
