@@ -4,7 +4,8 @@ bridge in a second process, judged against the bridge's ground truth.
     python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_name NAME]
                                   [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
                                   [--separate] [--robot drake|mujoco]
-                                  [--operator_log FILE] [--callbacks] [--pin]
+                                  [--operator_log FILE | --operator_script FILE [--operator_leg LEG]]
+                                  [--callbacks] [--pin]
                                   [--flood_at S [--flood_duration S] [--flood_rate HZ]]
 
 Starts `python -m pedi_drake.apps.sim_bridge --mission M --truth_log ...` (the robot side,
@@ -25,10 +26,16 @@ soft feet); everything else is unchanged. For either robot, `sil.json` has the m
 judged by the truth log's contact forces (`touches`, pedi_drake.evaluation.touches), a
 `success_by_truth` (the mission's success and every touch happened by physics) and the estimate's
 vertical trunk error against the truth while standing still (`estimator_trunk_height_error`).
+Against the Drake robot, whose truth log carries the whole plant's state, the mission's other
+physical checks are judged on it too (`truth_checks`: an object push, an E-stop button press,
+every walk's true end pose and stance slip), and count in `success_by_truth`.
 
 `--operator_log FILE` adds an operator in a third process, as a person would run one:
 `python -m pedi_drake.apps.teleop_lcm --lcm_log FILE --start_on_feedback` on the same bus, which
 plays the log's messages on the controller's clock (the scenario needs `operator: {source: lcm}`).
+`--operator_script FILE` plays a teleop_lcm script instead (its velocities in the trunk frame),
+from the robot's offer of the foot `--operator_leg` (FR): `python -m pedi_drake.apps.teleop_lcm
+--script FILE --start_on_leg FR`, as for missions/terrain/field_course.ops.
 
 `--callbacks` times the controller side's Python callbacks (pedi_drake.measuring.callback_profile) and keeps
 those over 1 ms of the loop's CPU time, and the garbage collections over 1 ms, each with its
@@ -59,15 +66,20 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 from pydrake.common.yaml import yaml_load
 
 from pedi_drake import robot
+from pedi_drake.apps.bridge_options import bridge_scenario
 from pedi_drake.apps.sim_bridge import TRUTH_LOG_PERIOD
 from pedi_drake.apps.status_flood import expected_rejections, number_problem
+from pedi_drake.evaluation.button_press import judge_button_press, plunger_travel
 from pedi_drake.evaluation.estimator_accuracy import STANDING_TRUNK_HEIGHT
+from pedi_drake.evaluation.object_push import judge_object_push
 from pedi_drake.evaluation.touches import judge_touches
+from pedi_drake.evaluation.walks import WALK_KINDS, judge_walks
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.go1_driver.link import lateness_against_earliest
 from pedi_drake.measuring.callback_profile import slow_calls
@@ -77,6 +89,7 @@ from pedi_drake.run import run
 from pedi_drake.run_checks import check_out_dir
 from pedi_drake.run_logs import read_run_logs
 from pedi_drake.scenario import apply_scenario_text, lcm_url_is_valid, load_scenario
+from pedi_drake.station_interface import MakeStation
 
 GROUP = "239.255.76.67"
 # The README's controller program, beside the package in a source checkout.
@@ -90,6 +103,8 @@ STILL_SPEED = 0.02
 BRIDGE_GAP = 0.02
 # [s] for the operator to finish its log after the controller side ended (then it is stopped).
 OPERATOR_END_TIMEOUT = 30.0
+# [s] an operator script waits this long for the robot's offer of the foot (a whole field course).
+OPERATOR_OFFER_TIMEOUT = 600.0
 # [s] of the loop's CPU time over which `--callbacks` keeps a call (a control period is 2 ms).
 SLOW_CALL = 0.001
 # [s] for the flood's publisher to leave once stopped.
@@ -177,6 +192,45 @@ def truth_touches(result: dict, touches: list, controller_logs: dict, truth: dic
     return judge_touches(touches, names, result["phases"], times, forces)
 
 
+def truth_checks(mission: str, robot_scenario, result: dict, controller_logs: dict, truth: dict) -> tuple[dict, str]:
+    """The mission's physical checks judged on the truth log's plant states, put on the controller's
+    clock (the phases') through the wall clock, as a simulated run's result.json has them: its
+    `object_push`, `button_press` and `walks` rows (pedi_drake.evaluation), and what failed ("" when
+    nothing did). `robot_scenario` is the robot side's scenario, whose plant the states are of.
+    ({}, "") for a truth log without plant states (the MuJoCo robot's)."""
+    if "plant_states" not in truth:
+        return {}, ""
+    spec = load_mission(mission)
+    plant = MakeStation(robot_scenario).GetSubsystemByName("plant")
+    clock = controller_logs["wall_clock"]
+    wall = truth["wall_time"]
+    inside = (wall >= clock.data[0, 0]) & (wall <= clock.data[0, -1])
+    times = np.interp(wall[inside], clock.data[0], clock.times)
+    states = truth["plant_states"][inside].T
+    phases = result["phases"]
+    rows, problems = {}, []
+    if spec.object_push is not None:
+        rows["object_push"], problem = judge_object_push(plant, spec.object_push, phases, times, states)
+        problems.append(problem)
+    if spec.button_press is not None:
+        check = spec.button_press
+        phase = next(phase for phase in spec.phases if phase.name == check.phase)
+        names = [str(name) for name in truth["scene_names"]]
+        forces = truth["scene_contact_forces"][inside].T
+        travel = plunger_travel(plant, check.button, states)
+        rows["button_press"], problem = judge_button_press(
+            check, phase.max_force, phases, times, travel, names, times, forces
+        )
+        problems.append(problem)
+    if any(isinstance(phase, WALK_KINDS) for phase in spec.phases):
+        foot_forces = SimpleNamespace(times=times, data=truth["foot_contact_forces"][inside].T)
+        rows["walks"], problem = judge_walks(
+            spec, phases, {}, plant, times, states, controller_logs["base_state"], foot_forces
+        )
+        problems.append(problem)
+    return rows, "; ".join(filter(None, problems))
+
+
 def start_transient(controller_logs: dict, truth: dict, window: float = START_WINDOW) -> dict:
     """What the robot did before the loop and in its first `window` [s]: the bridge's true trunk
     height at its first sample and at the loop's first tick [m] (the bridge holds its first pose
@@ -232,6 +286,8 @@ def run_sil(
     scenario_name: str = "default",
     separate: bool = False,
     operator_log: Path | None = None,
+    operator_script: Path | None = None,
+    operator_leg: str = "FR",
     records: list | None = None,
     callbacks: bool = False,
     pin: bool = False,
@@ -247,6 +303,8 @@ def run_sil(
     `separate`: the controller side runs as `run_sim.py --hardware` in a process of its own (see
     the module docstring) instead of in this one.
     `operator_log`: an LCM log of operator messages, played by an operator process (module docstring).
+    `operator_script`: a teleop_lcm script, played by an operator process from the robot's offer of
+    the foot `operator_leg` (module docstring).
     `records`: the controller side's RunRecord is appended to it (pedi_drake.run.run).
     `callbacks`: the controller side's Python callbacks that took more than SLOW_CALL of the loop's
     CPU time, and the collections longer than it, go into the result (`sil.slow_calls`,
@@ -317,10 +375,16 @@ def run_sil(
                 raise RuntimeError("the simulator bridge did not start within 60 s")
         # "go1_sim_bridge: running on URL (its scheduling)" (go1_mujoco_bridge: the same)
         bridge_scheduling = line.strip().rpartition("(")[2].rstrip(")")
-        if operator_log is not None:
+        if operator_log is not None or operator_script is not None:
+            plays = (
+                ["--lcm_log", str(operator_log), "--start_on_feedback"]
+                if operator_log is not None
+                else ["--script", str(operator_script), "--start_on_leg", operator_leg]
+                + ["--start_timeout", str(OPERATOR_OFFER_TIMEOUT)]
+            )
             operator = subprocess.Popen(
-                [sys.executable, "-m", "pedi_drake.apps.teleop_lcm", "--lcm_log", str(operator_log)]
-                + ["--lcm_url", url, "--start_on_feedback", "--scenario_name", scenario_name, "--scenario_text", text],
+                [sys.executable, "-m", "pedi_drake.apps.teleop_lcm", *plays]
+                + ["--lcm_url", url, "--scenario_name", scenario_name, "--scenario_text", text],
                 stdout=subprocess.PIPE,
                 stderr=subprocess.STDOUT,
                 text=True,
@@ -368,12 +432,16 @@ def run_sil(
         truth = {key: archive[key] for key in archive.files}
     logs = read_run_logs(out_dir)
     touch_rows, touch_problem = truth_touches(result, touches, logs, truth)
+    robot_scenario = bridge_scenario(load_scenario(scenario_name=scenario_name, scenario_text=text), mission)
+    checks, checks_problem = truth_checks(mission, robot_scenario, result, logs, truth)
     result["sil"] = {
         "robot": robot,
         "foot_errors": true_foot_errors(result, logs, truth),
         "touches": touch_rows,
         "touches_reason": touch_problem,
-        "success_by_truth": bool(result["success"]) and not touch_problem,
+        "truth_checks": checks,
+        "truth_checks_reason": checks_problem,
+        "success_by_truth": bool(result["success"]) and not touch_problem and not checks_problem,
         # The robot's feet, which the controller takes to be robot.FOOT_RADIUS [m].
         "robot_foot_radius_m": float(truth["foot_radius"]),
         "estimator_trunk_position_error": estimator_error(logs, truth),
@@ -511,6 +579,10 @@ def main() -> int:
     )
     parser.add_argument("--operator_log", default=None, help="LCM log of operator messages, played by an operator")
     parser.add_argument(
+        "--operator_script", default=None, help="teleop_lcm script, played from the robot's offer of a foot"
+    )
+    parser.add_argument("--operator_leg", choices=robot.LEG_NAMES, default="FR", help="the foot the script waits for")
+    parser.add_argument(
         "--callbacks", action="store_true", help="record the controller side's callbacks over 1 ms of CPU time"
     )
     parser.add_argument("--pin", action="store_true", help="the bridge on the last CPU, the controller on the others")
@@ -527,6 +599,8 @@ def main() -> int:
             "scenario_name": args.scenario_name,
             "separate": args.separate,
             "operator_log": args.operator_log,
+            "operator_script": args.operator_script,
+            "operator_leg": args.operator_leg,
             "callbacks": args.callbacks,
             "pin": args.pin,
             "flood_at": args.flood_at,
@@ -555,9 +629,27 @@ def main() -> int:
             f"{row['max_normal_force_n']:.1f} N (need {row['required_force_n']:.1f}): "
             f"{'touched' if row['touched'] else 'NOT touched'}"
         )
+    checks = result["sil"]["truth_checks"]
+    for row in checks.get("walks", []):
+        if "goal_error_m" in row:
+            print(
+                f"walk {row['phase']:<20}true distance from its goal {100 * row['goal_error_m']:.1f} cm, "
+                f"{math.degrees(row['goal_yaw_error_rad']):.1f} deg; largest stance slip "
+                f"{1000 * max(row['max_stance_slip_m'].values()):.1f} mm"
+            )
+    if "object_push" in checks and "moved_m" in checks["object_push"]:
+        print(f"{checks['object_push']['object']} moved {100 * checks['object_push']['moved_m']:.1f} cm (truth)")
+    if "button_press" in checks:
+        press = checks["button_press"]
+        print(
+            f"{press['button']}: {'pressed' if press.get('pressed') else 'NOT pressed'}, plunger "
+            f"{1000 * (press.get('max_travel_m') or 0.0):.1f} mm, "
+            f"largest true force {press.get('max_force_n') or 0.0:.1f} N"
+        )
+    reasons = "; ".join(filter(None, [result["sil"]["touches_reason"], result["sil"]["truth_checks_reason"]]))
     print(
         f"success by truth ({result['sil']['robot']} robot): {'yes' if result['sil']['success_by_truth'] else 'NO'}"
-        + (f" ({result['sil']['touches_reason']})" if result["sil"]["touches_reason"] else "")
+        + (f" ({reasons})" if reasons else "")
     )
     trunk = result["sil"]["estimator_trunk_position_error"]
     print(

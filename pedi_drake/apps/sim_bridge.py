@@ -210,7 +210,11 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
     builder.ExportOutput(receiver.GetOutputPort("message_counts"), "bridge.command_counts")
     builder.ExportOutput(station.GetOutputPort("sim.plant_state"), "sim.plant_state")
     clock = builder.AddNamedSystem("wall_clock", WallClock())
-    logged = [("log.plant_state", station.GetOutputPort("sim.plant_state")), ("log.wall_clock", clock.clock)]
+    logged = [
+        ("log.plant_state", station.GetOutputPort("sim.plant_state")),
+        ("log.wall_clock", clock.clock),
+        ("log.foot_contact_forces", station.GetOutputPort("sim.foot_contact_forces")),
+    ]
     if scenario.scene:  # the robot's contact forces on each scene object (none without a scene)
         logged.append(("log.scene_contact_forces", station.GetOutputPort("sim.scene_contact_forces")))
     for name, port in logged:
@@ -229,7 +233,9 @@ def write_truth_log(
     scene_names (the scene's object names, in order) and scene_contact_forces (N, len(scene_names) * 5)
     [N]: the true normal contact forces between each object and each foot / the rest of the robot
     (`sim.scene_contact_forces`, in the order of pedi_drake.station.scene_contact.scene_contact_index),
-    and foot_radius, the simulated feet's [m]."""
+    foot_radius, the simulated feet's [m], plant_states (N, nx), the whole plant's state (the scene's
+    objects too: what the mission's physical checks read), and foot_contact_forces (N, 12) [N], the
+    true contact force on each foot, world frame."""
     plant = diagram.GetSubsystemByName("station").GetSubsystemByName("plant")
     states = diagram.GetSubsystemByName("log.plant_state").FindLog(context).data()
     wall = diagram.GetSubsystemByName("log.wall_clock").FindLog(context).data()[0]
@@ -239,7 +245,13 @@ def write_truth_log(
     logged_forces = (
         diagram.GetSubsystemByName("log.scene_contact_forces").FindLog(context).data() if scene_names else None
     )
-    n = min(states.shape[1], len(wall), logged_forces.shape[1] if logged_forces is not None else len(wall))
+    foot_forces = diagram.GetSubsystemByName("log.foot_contact_forces").FindLog(context).data()
+    n = min(
+        states.shape[1],
+        len(wall),
+        foot_forces.shape[1],
+        logged_forces.shape[1] if logged_forces is not None else len(wall),
+    )
     p_WB, quaternion, p_WF = np.zeros((n, 3)), np.zeros((n, 4)), np.zeros((n, 4, 3))
     for k in range(n):
         plant.SetPositionsAndVelocities(plant_context, states[:, k])
@@ -259,6 +271,8 @@ def write_truth_log(
         scene_names=np.asarray(list(scene_names), dtype=str),
         scene_contact_forces=forces,
         foot_radius=foot_radius,
+        plant_states=states[:, :n].T,
+        foot_contact_forces=foot_forces[:, :n].T,
     )
     return path
 

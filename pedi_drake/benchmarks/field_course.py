@@ -31,6 +31,7 @@ from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.evaluation.judge import judge_run
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
+from pedi_drake.mission.spec import Walk, load_mission
 from pedi_drake.operator.command import FRAME_TRUNK
 from pedi_drake.operator.scripted_operator import ScriptedOperator
 from pedi_drake.resources import missions_dir
@@ -101,6 +102,8 @@ def run_course(seed: int) -> dict:
 def stage_row(seed: int, result: dict) -> dict:
     """The course's figures of one run, stage by stage (see the module docstring)."""
     walks = {row["phase"]: row for row in result.get("walks", [])}
+    tolerances = {phase.name: phase.tolerance for phase in load_mission(MISSION).phases if isinstance(phase, Walk)}
+    within = all(name in walks and walks[name]["goal_error_m"] <= tolerance for name, tolerance in tolerances.items())
     push = result.get("object_push") or {}
     press = result.get("button_press") or {}
     bridge = walks.get("cross_the_bridge", {})
@@ -116,6 +119,8 @@ def stage_row(seed: int, result: dict) -> dict:
         "bridge_stance_slip_max_m": max(bridge["max_stance_slip_m"].values()) if bridge else None,
         "stance_slip_max_m": max((max(row["max_stance_slip_m"].values()) for row in walks.values()), default=None),
         "estimate_drift_max_m": max((row["estimate_drift_m"] for row in walks.values()), default=None),
+        "on_the_platform": "climb" in walks and walks["climb"]["goal_error_m"] <= tolerances["climb"],
+        "walks_within_tolerance": within,
         "pressed": bool(press.get("pressed", False)),
         "plunger_travel_max_m": press.get("max_travel_m"),
         "button_true_force_max_n": press.get("max_force_n"),
@@ -167,11 +172,20 @@ def main() -> None:
         "pressed": sum(row["pressed"] for row in rows),
         "button_true_force_max_n": max((row["button_true_force_max_n"] or 0.0) for row in rows),
         "course_time_max_s": max(row["course_time_s"] for row in rows),
+        # Each stage by physics, in how many runs it happened.
+        "box_pushed_20cm": sum((row["box_moved_m"] or 0.0) >= 0.20 for row in rows),
+        "on_the_platform": sum(row["on_the_platform"] for row in rows),
+        "walks_within_tolerance": sum(row["walks_within_tolerance"] for row in rows),
         "wall_time_median_s": sorted(row["wall_time_s"] for row in rows)[len(rows) // 2],
     }
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(stamped({"summary": summary, "runs": rows}), indent=2))
+    print(
+        f"stages by physics over {summary['runs']} runs: box pushed 20 cm {summary['box_pushed_20cm']}, on the "
+        f"platform {summary['on_the_platform']}, every walk within its tolerance {summary['walks_within_tolerance']}, "
+        f"E-stop pressed {summary['pressed']}, fell {summary['fell']}"
+    )
     print(
         f"{summary['succeeded']} of {summary['runs']} courses; box moved at least "
         f"{100 * summary['box_moved_min_m']:.1f} cm; walks within {100 * summary['walk_goal_error_max_m']:.1f} cm "

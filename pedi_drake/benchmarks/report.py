@@ -175,6 +175,19 @@ def _walking(d: dict) -> str:
     return "; ".join(parts) + " (largest errors, slowest speed over the runs)"
 
 
+def _field_course(d: dict) -> str:
+    s = d["summary"]
+    return (
+        f"courses done: {s['succeeded']} of {s['runs']} ({s['fell']} fell); stages by physics: box struck 20 cm "
+        f"or more in {s['box_pushed_20cm']} (at least {100 * s['box_moved_min_m']:.1f} cm), on the platform in "
+        f"{s['on_the_platform']}, every walk within its tolerance in {s['walks_within_tolerance']} (largest "
+        f"distance from a goal {100 * s['walk_goal_error_max_m']:.1f} cm; tolerances 5 to 6 cm, the half turn's "
+        f"10 cm); stance slip on the mu 0.2 bridge at most "
+        f"{1e3 * s['bridge_stance_slip_max_m']:.1f} mm; E-stop pressed in {s['pressed']} runs, largest true force "
+        f"{s['button_true_force_max_n']:.1f} N (bound 15 N); the course takes up to {s['course_time_max_s']:.0f} s"
+    )
+
+
 def _estop_button(d: dict) -> str:
     parts = [
         f"{setup}: {row['succeeded']} of {row['runs']} pressed under the bound, largest true force "
@@ -386,6 +399,15 @@ ROWS: tuple[Row, ...] = (
         "terrain.json",
         _walking,
         "python -m pedi_drake.benchmarks.terrain",
+    ),
+    Row(
+        "Paper 002's field course in one run (terrain/field_course: trot, strike the box on the prongs, "
+        "climb, half turn, descend, the slippery bridge, the E-stop by a scripted operator), seed 0 and 5 "
+        "noisy seeds, by ground truth",
+        "field_course.json",
+        _field_course,
+        "python -m pedi_drake.benchmarks.field_course",
+        summary=True,
     ),
     Row(
         "Controller side of a hardware run while trotting, replayed unpaced (walking/trot_forward)",
