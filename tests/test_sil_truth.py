@@ -1,10 +1,16 @@
-"""apps.sil's judgement by the robot side's truth log: touches by contact force, the estimate's trunk height."""
+"""apps.sil's judgement by the robot side's truth log: touches by contact force, the estimate's trunk
+height, and the mission's physical checks on the plant's state."""
 
 import numpy as np
+import pytest
 
-from pedi_drake.apps.sil import estimator_height_error, truth_touches
+from pedi_drake.apps.bridge_options import bridge_scenario
+from pedi_drake.apps.sil import estimator_height_error, truth_checks, truth_touches
 from pedi_drake.mission.spec import Touch
 from pedi_drake.run_logs import SignalLog
+from pedi_drake.scenario import load_scenario
+from pedi_drake.station.scene import root_body
+from pedi_drake.station_interface import MakeStation
 
 PERIOD = 0.002  # [s] controller tick
 
@@ -69,3 +75,39 @@ def test_the_height_error_leaves_out_a_trunk_rising_or_lowering():
     z_estimated = np.interp(t, wall, z_true) + np.where(moving, 0.02, 0.001)
     error = estimator_height_error(_controller_logs(50.0, n, z_estimated), {"wall_time": wall, "p_WB": p_WB})
     assert abs(error["max_m"] - 0.001) < 1e-6
+
+
+def _push_light_box_truth(box_shift: float) -> tuple[object, dict, dict]:
+    """The robot side's scenario of push_light_box, the controller's logs (wall 1000 to 1003 s) and
+    a truth log from wall 999 to 1004 s in which the box moves `box_shift` [m] along x during the
+    push phase (1-2 s on the controller's clock)."""
+    scenario = bridge_scenario(load_scenario(), "push_light_box")
+    plant = MakeStation(scenario).GetSubsystemByName("plant")
+    q0 = plant.GetPositions(plant.CreateDefaultContext())
+    wall = 999.0 + 0.01 * np.arange(501)
+    ramp = np.clip(wall - 1001.0, 0.0, 1.0)
+    states = np.zeros((len(wall), plant.num_multibody_states()))
+    states[:, : len(q0)] = q0
+    box = root_body(plant, plant.GetModelInstanceByName("light_box"))
+    states[:, box.floating_positions_start() + 4] += box_shift * ramp
+    truth = {
+        "wall_time": wall,
+        "plant_states": states,
+        "scene_names": np.array([obj.instance_name for obj in scenario.scene]),
+        "scene_contact_forces": np.zeros((len(wall), 5 * len(scenario.scene))),
+        "foot_contact_forces": np.zeros((len(wall), 12)),
+    }
+    return scenario, _controller_logs(1000.0, 1500, np.zeros(1500)), truth
+
+
+def test_the_truth_logs_plant_state_judges_the_missions_object_push():
+    phases = [{"name": "push_box", "kind": "press", "t_start": 1.0, "t_end": 2.0}]
+    scenario, logs, truth = _push_light_box_truth(0.12)
+    rows, problem = truth_checks("push_light_box", scenario, {"phases": phases}, logs, truth)
+    assert problem == "" and rows["object_push"]["moved_m"] == pytest.approx(0.12, abs=1e-3)
+    scenario, logs, truth = _push_light_box_truth(0.04)
+    rows, problem = truth_checks("push_light_box", scenario, {"phases": phases}, logs, truth)
+    assert "light_box moved 4.0 cm" in problem
+    # The MuJoCo robot's truth log has no plant state: nothing more to judge.
+    del truth["plant_states"]
+    assert truth_checks("push_light_box", scenario, {"phases": phases}, logs, truth) == ({}, "")
