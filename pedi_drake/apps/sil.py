@@ -4,7 +4,8 @@ bridge in a second process, judged against the bridge's ground truth.
     python -m pedi_drake.apps.sil [--mission hit_target_front] [--scenario_name NAME]
                                   [--scenario_text YAML] [--lcm_url URL] [--out out/sil_<mission>]
                                   [--separate] [--robot drake|mujoco]
-                                  [--operator_log FILE | --operator_script FILE [--operator_leg LEG]]
+                                  [--operator_log FILE | --operator_script FILE [--operator_leg LEG]
+                                   | --operator_search_button HEADING_DEG]
                                   [--callbacks] [--pin]
                                   [--flood_at S [--flood_duration S] [--flood_rate HZ]]
 
@@ -35,7 +36,9 @@ every walk's true end pose and stance slip), and count in `success_by_truth`.
 plays the log's messages on the controller's clock (the scenario needs `operator: {source: lcm}`).
 `--operator_script FILE` plays a teleop_lcm script instead (its velocities in the trunk frame),
 from the robot's offer of the foot `--operator_leg` (FR): `python -m pedi_drake.apps.teleop_lcm
---script FILE --start_on_leg FR`, as for missions/terrain/field_course.ops.
+--script FILE --start_on_leg FR`. `--operator_search_button HEADING_DEG` runs the operator that
+finds an E-stop button by touch (`teleop_lcm --search_button HEADING_DEG`), as for
+terrain/field_course.
 
 `--callbacks` times the controller side's Python callbacks (pedi_drake.measuring.callback_profile) and keeps
 those over 1 ms of the loop's CPU time, and the garbage collections over 1 ms, each with its
@@ -288,6 +291,7 @@ def run_sil(
     operator_log: Path | None = None,
     operator_script: Path | None = None,
     operator_leg: str = "FR",
+    operator_search_button: float | None = None,
     records: list | None = None,
     callbacks: bool = False,
     pin: bool = False,
@@ -304,7 +308,8 @@ def run_sil(
     the module docstring) instead of in this one.
     `operator_log`: an LCM log of operator messages, played by an operator process (module docstring).
     `operator_script`: a teleop_lcm script, played by an operator process from the robot's offer of
-    the foot `operator_leg` (module docstring).
+    the foot `operator_leg` (module docstring); `operator_search_button`: the robot's heading at
+    the button [deg], for an operator that finds it by touch instead.
     `records`: the controller side's RunRecord is appended to it (pedi_drake.run.run).
     `callbacks`: the controller side's Python callbacks that took more than SLOW_CALL of the loop's
     CPU time, and the collections longer than it, go into the result (`sil.slow_calls`,
@@ -375,13 +380,16 @@ def run_sil(
                 raise RuntimeError("the simulator bridge did not start within 60 s")
         # "go1_sim_bridge: running on URL (its scheduling)" (go1_mujoco_bridge: the same)
         bridge_scheduling = line.strip().rpartition("(")[2].rstrip(")")
-        if operator_log is not None or operator_script is not None:
-            plays = (
-                ["--lcm_log", str(operator_log), "--start_on_feedback"]
-                if operator_log is not None
-                else ["--script", str(operator_script), "--start_on_leg", operator_leg]
-                + ["--start_timeout", str(OPERATOR_OFFER_TIMEOUT)]
+        plays = None
+        if operator_log is not None:
+            plays = ["--lcm_log", str(operator_log), "--start_on_feedback"]
+        elif operator_script is not None or operator_search_button is not None:
+            plays = ["--start_on_leg", operator_leg, "--start_timeout", str(OPERATOR_OFFER_TIMEOUT)] + (
+                ["--script", str(operator_script)]
+                if operator_script is not None
+                else ["--search_button", str(operator_search_button)]
             )
+        if plays is not None:
             operator = subprocess.Popen(
                 [sys.executable, "-m", "pedi_drake.apps.teleop_lcm", *plays]
                 + ["--lcm_url", url, "--scenario_name", scenario_name, "--scenario_text", text],
@@ -583,6 +591,9 @@ def main() -> int:
     )
     parser.add_argument("--operator_leg", choices=robot.LEG_NAMES, default="FR", help="the foot the script waits for")
     parser.add_argument(
+        "--operator_search_button", type=float, default=None, help="an operator that finds an E-stop by touch [deg]"
+    )
+    parser.add_argument(
         "--callbacks", action="store_true", help="record the controller side's callbacks over 1 ms of CPU time"
     )
     parser.add_argument("--pin", action="store_true", help="the bridge on the last CPU, the controller on the others")
@@ -601,6 +612,7 @@ def main() -> int:
             "operator_log": args.operator_log,
             "operator_script": args.operator_script,
             "operator_leg": args.operator_leg,
+            "operator_search_button": args.operator_search_button,
             "callbacks": args.callbacks,
             "pin": args.pin,
             "flood_at": args.flood_at,

@@ -30,6 +30,11 @@ log, as lcm-logger writes: each event on its own channel at its time from the lo
 whatever its bytes; pedi_drake.operator.message_stream), e.g. the fuzzed operator of
 `python -m pedi_drake.benchmarks.teleop`.
 
+`--search_button HEADING_DEG` runs an operator program instead of a script: it waits for the
+robot's offer of `--start_on_leg` (FR), then finds an E-stop button's cap by touch in front of the
+foot and presses it (pedi_drake.operator.button_search), the robot facing HEADING_DEG (world yaw),
+reading the haptic feedback as it goes.
+
 `--start_on_feedback` waits (up to `--start_timeout` s) for the controller's first haptic
 feedback message (the scenario's `operator.feedback_channel`) and plays the script or the log
 on the controller's clock: the step or message of time t goes out when the controller's
@@ -59,6 +64,7 @@ from pydrake.lcm import DrakeLcm, DrakeLcmInterface
 from pedi_drake.exceptions import PediError
 from pedi_drake.friction import FRICTION_RANGE
 from pedi_drake.go1_driver.lcmtypes import foot_feedback_lcmt
+from pedi_drake.operator.button_search import ButtonSearch
 from pedi_drake.operator.command import (
     CONTROLLER_NONE,
     CONTROLLER_PROJECTED_IMPEDANCE,
@@ -188,6 +194,33 @@ def controller_clock_start(lcm: DrakeLcmInterface, channel: str, timeout: float)
         return None
     wall, diagram_time = arrived[0]
     return wall - diagram_time
+
+
+def run_program(
+    lcm: DrakeLcmInterface, channel: str, feedback_channel: str, leg: str, program, rate: float, start: float
+) -> int:
+    """Runs operator `program` (pedi_drake.operator.scripted_operator) at `rate` [Hz] from `start`
+    (time.monotonic, the robot's offer of `leg`), reading the latest haptic feedback's force on
+    `feedback_channel` before each command; the number of messages sent."""
+    index = LEG_NAMES.index(leg)
+    force: list[np.ndarray] = []
+
+    def take(data: bytes) -> None:
+        message = foot_feedback_lcmt.decode(data)
+        if message.leg == index:
+            force[:] = [np.array(message.force, float)]
+
+    lcm.Subscribe(feedback_channel, take)
+    state, sequence = program.initial_state(), 0
+    while True:
+        lcm.HandleSubscriptions(0)
+        t = time.monotonic() - start
+        step, state = program.command(state, t, force[0] if force else None)
+        if step is None:
+            return sequence
+        sequence += 1
+        lcm.Publish(channel, foot_command_message(step, t, sequence).encode())
+        time.sleep(max(0.0, start + sequence / rate - time.monotonic()))
 
 
 def offer_start(lcm: DrakeLcmInterface, channel: str, leg: str, timeout: float) -> float | None:
@@ -321,6 +354,9 @@ def main(argv: list[str] | None = None) -> int:
         "--start_on_leg", choices=LEG_NAMES, default=None, help="play from the robot's offer of this foot"
     )
     parser.add_argument("--start_timeout", type=float, default=120.0, help="longest wait for that feedback [s]")
+    parser.add_argument(
+        "--search_button", type=float, default=None, help="find and press an E-stop button by touch, facing this [deg]"
+    )
     args = parser.parse_args(argv)
     if not (math.isfinite(args.rate) and args.rate > 0 and math.isfinite(args.speed) and args.speed > 0):
         print("--rate and --speed must be finite numbers > 0", file=sys.stderr)
@@ -337,7 +373,7 @@ def main(argv: list[str] | None = None) -> int:
             messages = read_lcm_log(Path(args.lcm_log))
             if not messages:
                 raise ScriptError(f"{args.lcm_log}: no messages")
-        elif args.script or not sys.stdin.isatty():
+        elif args.search_button is None and (args.script or not sys.stdin.isatty()):
             source = args.script or "<stdin>"
             text = Path(args.script).read_text() if args.script else sys.stdin.read()
             steps = parse_script(text, source, frame)
@@ -353,14 +389,20 @@ def main(argv: list[str] | None = None) -> int:
         if start is None:
             print(f"no feedback on {config.feedback_channel} within {args.start_timeout} s", file=sys.stderr)
             return 1
-    elif args.start_on_leg:
-        start = offer_start(DrakeLcm(url), config.feedback_channel, args.start_on_leg, args.start_timeout)
+    elif args.start_on_leg or args.search_button is not None:
+        start = offer_start(DrakeLcm(url), config.feedback_channel, args.start_on_leg or "FR", args.start_timeout)
         if start is None:
             print(
                 f"no offer of {args.start_on_leg} on {config.feedback_channel} within {args.start_timeout} s",
                 file=sys.stderr,
             )
             return 1
+    if args.search_button is not None:
+        program = ButtonSearch(math.radians(args.search_button))
+        leg = args.start_on_leg or "FR"
+        count = run_program(lcm, config.channel, config.feedback_channel, leg, program, args.rate, start)
+        print(f"sent {count} foot commands searching for the button on {config.channel} ({url})")
+        return 0
     if messages is not None:
         count = play_messages(messages, lcm.Publish, time.monotonic() if start is None else start)
         print(f"sent {count} messages of {args.lcm_log} ({url})")

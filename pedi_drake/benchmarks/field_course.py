@@ -5,19 +5,21 @@ stage judged by physics.
         [--out benchmarks/results/field_course.json]
 
 The course runs on the HQP with the Kalman estimate; seed 0 without sensor noise, the others with
-it. The E-stop press comes from a scripted operator (missions/terrain/field_course.ops) on an
-in-process LCM bus, started when the robot offers it the FR foot (ScriptedOperator's
-`start_on_leg`), as `python -m pedi_drake.apps.teleop_lcm --start_on_leg FR` does over a real
-bus. Prints one row per run: the box's slide after the prong strike, each walk's true distance
-from its goal (the climb's goal is on the platform), the largest stance foot slip on the
-slippery bridge, the plunger's travel and the true force on it, falls, and the course's
-simulated time (to the mission's end) beside its wall time; writes every row and the run's
-result.json figures to the JSON file. Runs go in parallel, one per worker process.
+it. The E-stop press comes from an operator program that finds the button's cap by touch
+(pedi_drake.operator.button_search) on an in-process LCM bus, started when the robot offers it the
+FR foot, as `python -m pedi_drake.apps.teleop_lcm --search_button 180` does over a real bus.
+
+Prints one row per run: the box's slide after the prong strike, each walk's true distance from its
+goal (the climb's goal is on the platform), the largest stance foot slip on the slippery bridge,
+the plunger's travel and the true force on it, falls, and the course's simulated time (to the
+mission's end) beside its wall time; writes every row and the run's result.json figures to the
+JSON file. Runs go in parallel, one per worker process.
 """
 
 import argparse
 import concurrent.futures
 import json
+import math
 import os
 import time
 from pathlib import Path
@@ -26,20 +28,18 @@ from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder, EventStatus
 
-from pedi_drake.apps.teleop_lcm import parse_script
 from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.evaluation.judge import judge_run
 from pedi_drake.mission.progress import FAILED, SUCCEEDED
 from pedi_drake.mission.spec import Walk, load_mission
-from pedi_drake.operator.command import FRAME_TRUNK
+from pedi_drake.operator.button_search import ButtonSearch
 from pedi_drake.operator.scripted_operator import ScriptedOperator
-from pedi_drake.resources import missions_dir
 from pedi_drake.run import SETTLE_AFTER_MISSION, RunRecord
 from pedi_drake.scenario import load_scenario
 
 MISSION = "terrain/field_course"
-SCRIPT = missions_dir() / "terrain" / "field_course.ops"
+HEADING = math.pi  # [rad] the robot's heading at the button, as the operator sees it
 # [s] of simulated time at most: the course takes about 140 s.
 LONGEST = 200.0
 # The walks of the course, in order, by phase name.
@@ -47,8 +47,8 @@ WALKS = ("trot_to_box", "to_the_slope", "climb", "turn", "descend", "cross_the_b
 
 
 def run_course(seed: int) -> dict:
-    """judge_run's result.json of the field course at `seed` (0: no sensor noise), the scripted
-    operator on an in-process bus."""
+    """judge_run's result.json of the field course at `seed` (0: no sensor noise), the operator
+    program on an in-process bus."""
     lcm = DrakeLcm("memq://")
     noise = "" if seed == 0 else f", random_seed: {seed}, sensor_noise: {{enabled: true}}"
     text = f"{{mission: {MISSION}, simulation_duration: {LONGEST}, operator: {{source: lcm}}{noise}}}"
@@ -56,14 +56,9 @@ def run_course(seed: int) -> dict:
     built = MakePedipulationDiagram(scenario, operator_lcm=lcm)
     builder = DiagramBuilder()
     builder.AddSystem(built.diagram)
-    steps = parse_script(SCRIPT.read_text(), str(SCRIPT), frame=FRAME_TRUNK)
     builder.AddSystem(
         ScriptedOperator(
-            lcm,
-            steps,
-            until=steps[-1].start,
-            start_on_leg="FR",
-            feedback_channel=scenario.operator.feedback_channel,
+            lcm, program=ButtonSearch(HEADING), start_on_leg="FR", feedback_channel=scenario.operator.feedback_channel
         )
     )
     diagram = builder.Build()

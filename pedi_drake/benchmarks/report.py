@@ -402,7 +402,7 @@ ROWS: tuple[Row, ...] = (
     ),
     Row(
         "Paper 002's field course in one run (terrain/field_course: trot, strike the box on the prongs, "
-        "climb, half turn, descend, the slippery bridge, the E-stop by a scripted operator), seed 0 and 5 "
+        "climb, half turn, descend, the slippery bridge, the E-stop found by touch), seed 0 and 5 "
         "noisy seeds, by ground truth",
         "field_course.json",
         _field_course,

@@ -11,11 +11,17 @@ haptic feedback (foot_feedback_lcmt on `feedback_channel`) that reports the leg 
 teleop_foot phase's does from its first update. The script's times then count from that
 feedback's diagram time, as an operator at the end of a long mission starts when the robot is
 ready, whenever that is.
+
+Instead of fixed steps it may run a `program` that reacts to what it feels: an object with
+`initial_state()` and `command(state, t, force_W) -> (ScriptStep | None, state)`, given the time
+from the offer and the latest feedback's force on the foot (pedi_drake.operator.button_search);
+its state is kept in the Context.
 """
 
 import dataclasses
 
 import numpy as np
+from pydrake.common.value import Value
 from pydrake.lcm import DrakeLcmInterface
 from pydrake.systems.framework import EventStatus
 
@@ -79,8 +85,9 @@ class ScriptedOperator(LeafSystemWithoutWitnesses):
     def __init__(
         self,
         lcm: DrakeLcmInterface,
-        steps: list[ScriptStep],
+        steps: list[ScriptStep] | None = None,
         *,
+        program=None,
         until: float = np.inf,
         period: float = 0.01,
         channel: str = DEFAULT_FOOT_COMMAND_CHANNEL,
@@ -90,13 +97,21 @@ class ScriptedOperator(LeafSystemWithoutWitnesses):
         super().__init__()
         if start_on_leg and start_on_leg not in LEG_NAMES:
             raise ValueError(f"start_on_leg must be one of {LEG_NAMES}, got {start_on_leg!r}")
-        self._lcm, self._steps, self._until, self._channel = lcm, list(steps), until, channel
+        if (steps is None) == (program is None):
+            raise ValueError("give the operator either steps or a program")
+        if program is not None and not start_on_leg:
+            raise ValueError("a program reads the feedback of the foot it is offered: give start_on_leg")
+        self._lcm, self._steps, self._until, self._channel = lcm, list(steps or []), until, channel
+        self._program = program
+        if program is not None:
+            self._program_state = self.DeclareAbstractState(Value(program.initial_state()))
         self._sequence = self.DeclareDiscreteState(1)
         # The diagram time the script starts at: 0, or NaN until the robot offers the foot.
         self._start = self.DeclareDiscreteState([np.nan if start_on_leg else 0.0])
         # Feedback times [s] that reported the leg driven, since the last update (the bus's
-        # poller, the operator input, hands them over).
+        # poller, the operator input, hands them over), and the latest such feedback's force [N].
         self._offers: list[float] = []
+        self._force: list[np.ndarray] = []
         if start_on_leg:
             leg = LEG_NAMES.index(start_on_leg)
 
@@ -104,23 +119,31 @@ class ScriptedOperator(LeafSystemWithoutWitnesses):
                 message = foot_feedback_lcmt.decode(data)
                 if message.leg == leg:
                     self._offers.append(message.timestamp_us * 1e-6)
+                    self._force[:] = [np.array(message.force, float)]
 
             lcm.Subscribe(feedback_channel, take)
-        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._publish)
+        self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._publish)
 
-    def _publish(self, context, discrete_state) -> EventStatus:
+    def _publish(self, context, state) -> EventStatus:
         t = context.get_time()
+        discrete = state.get_mutable_discrete_state()
         start = float(context.get_discrete_state(self._start).get_value()[0])
         if np.isnan(start):
             if not self._offers:
                 return EventStatus.DidNothing()
             start = min(self._offers)
             self._offers.clear()
-            discrete_state.set_value(self._start, [start])
-        step = script_command(self._steps, t - start)
+            discrete.set_value(self._start, [start])
+        if self._program is None:
+            step = script_command(self._steps, t - start)
+        else:
+            force = self._force[0] if self._force else None
+            previous = context.get_abstract_state(self._program_state).get_value()
+            step, following = self._program.command(previous, t - start, force)
+            state.get_mutable_abstract_state(self._program_state).set_value(following)
         if step is None or t - start > self._until:
             return EventStatus.Succeeded()
         sequence = int(context.get_discrete_state(self._sequence).get_value()[0])
         self._lcm.Publish(self._channel, foot_command_message(step, t, sequence).encode())
-        discrete_state.set_value(self._sequence, [sequence + 1])
+        discrete.set_value(self._sequence, [sequence + 1])
         return EventStatus.Succeeded()
