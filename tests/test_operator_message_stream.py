@@ -5,6 +5,7 @@ by its first feedback message or to the robot's offer of a foot."""
 import threading
 import time
 
+import numpy as np
 import pytest
 from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
@@ -114,3 +115,38 @@ def test_the_scripted_operator_waits_for_the_offer_and_counts_its_script_from_it
     # The script's step at 0.105 s goes out at the first update 0.105 s or more after the offer.
     lifted = [t for t, c in zip(times, commands, strict=True) if c.value[2] > 0.0]
     assert lifted[0] == pytest.approx(0.61, abs=1e-9) and all(t < 0.61 for t in times if t not in lifted)
+
+
+class _CountingProgram:
+    """A program whose state counts its commands and whose command carries the force it was given."""
+
+    @staticmethod
+    def initial_state() -> int:
+        return 0
+
+    @staticmethod
+    def command(state: int, t: float, force_W):
+        if state >= 3:
+            return None, state
+        felt = 0.0 if force_W is None else float(force_W[2])
+        return ScriptStep(t, (0.0, 0.0, felt)), state + 1
+
+
+def test_the_scripted_operator_runs_a_program_on_the_feedback_it_feels():
+    lcm = DrakeLcm("memq://")
+    operator = ScriptedOperator(
+        lcm, program=_CountingProgram(), period=0.01, start_on_leg="FR", feedback_channel="feedback"
+    )
+    commands = []
+    lcm.Subscribe("operator_foot_command", lambda data: commands.append(foot_command_lcmt.decode(data)))
+    simulator = Simulator(operator)
+    simulator.Initialize()
+    pushed = feedback_message(feedback_vector(0, np.array([0.0, 0.0, 7.5]), 15.0, 0.0, 0, False), 0.1, 1)
+    lcm.Publish("feedback", pushed.encode())
+    lcm.HandleSubscriptions(0)
+    simulator.AdvanceTo(0.2)
+    lcm.HandleSubscriptions(0)
+    # Three commands, each with the force the program felt; then the program is over (silent).
+    assert [c.value[2] for c in commands] == [7.5, 7.5, 7.5]
+    with pytest.raises(ValueError, match="give start_on_leg"):
+        ScriptedOperator(lcm, program=_CountingProgram())

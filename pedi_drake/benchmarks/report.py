@@ -92,6 +92,21 @@ def _sil_walk(d: dict) -> str:
     )
 
 
+def _sil_field_course(d: dict) -> str:
+    text = _sil_walk(d)
+    for run in d["runs"]:
+        checks = run.get("truth_checks") or {}
+        walks = [row["goal_error_m"] for row in checks.get("walks", []) if "goal_error_m" in row]
+        push, press = checks.get("object_push", {}), checks.get("button_press", {})
+        text += (
+            f"; by the bridge's truth: box pushed {100 * push.get('moved_m', 0.0):.1f} cm, walks within "
+            f"{100 * max(walks, default=0.0):.1f} cm of their goals, E-stop "
+            f"{'pressed' if press.get('pressed') else 'not pressed'} with at most "
+            f"{press.get('max_force_n') or 0.0:.1f} N"
+        )
+    return text
+
+
 def _station(d: dict) -> str:
     cases = d["cases"]
     return (
@@ -421,6 +436,15 @@ ROWS: tuple[Row, ...] = (
         _sil_walk,
         "python -m pedi_drake.benchmarks.sil_floors --missions walking/walk_square --runs 3 "
         "--scenario_text '{simulation_duration: 100.0}'",
+    ),
+    Row(
+        "Paper 002's field course at real time against the simulator bridge (apps.sil), the E-stop "
+        "operator in a third process",
+        "sil_field_course.json",
+        _sil_field_course,
+        "python -m pedi_drake.benchmarks.sil_floors --missions terrain/field_course --runs 1 "
+        "--scenario_text '{operator: {source: lcm}, simulation_duration: 300.0}' --operator_search_button 180 "
+        "--work /tmp/silcourse --out benchmarks/results/sil_field_course.json",
     ),
     Row(
         "Hardware path at real time against the simulator bridge (apps.sil, three missions)",

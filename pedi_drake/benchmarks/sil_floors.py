@@ -2,7 +2,8 @@
 
     python -m pedi_drake.benchmarks.sil_floors [--missions hit_target_front open_door prong_push_box]
         [--runs 5] [--scenario_name default] [--separate | --callbacks] [--pin] [--flood_at S]
-        [--robot drake|mujoco] [--out benchmarks/results/sil_floors.json]
+        [--robot drake|mujoco] [--operator_search_button HEADING_DEG]
+        [--out benchmarks/results/sil_floors.json]
 
 Each run is `python -m pedi_drake.apps.sil --mission M` (the simulator bridge in its own process,
 the controller here, both at real time), judged by the bridge's ground truth. With `--separate`
@@ -26,6 +27,10 @@ run, the costliest of them beside the longest stalls: what the late ticks comput
 with a real one's joint friction and rotor inertia, rubber feet of 23 mm that sink about 17 mm);
 a run's success is then the mission's and every touch's by that engine's contact forces, and its
 feet are held to the floor beyond the difference of the foot radii.
+`--operator_search_button HEADING_DEG` adds the operator that finds an E-stop button by touch in a
+third process (`apps.sil --operator_search_button`), for terrain/field_course; a run's success then
+takes the mission's physical checks on the Drake robot side's plant state too (`truth_checks`: its
+object push, button press and walks).
 `--flood_at S` runs them with `apps.sil --flood_at S`: S seconds after the first command, a third
 process floods every status channel with malformed messages for a second (500 a second of each
 kind: a wrong fingerprint, truncated, NaN fields). Such a run meets the floors only if, besides,
@@ -103,11 +108,12 @@ def one_run(
     pin: bool = False,
     flood_at: float | None = None,
     robot_side: str = "drake",
+    operator_search_button: float | None = None,
 ) -> dict:
     load_before = _load()
     start = time.monotonic()
     options = {"scenario_name": scenario_name, "separate": separate, "callbacks": callbacks, "pin": pin}
-    options.update(flood_at=flood_at, robot=robot_side)
+    options.update(flood_at=flood_at, robot=robot_side, operator_search_button=operator_search_button)
     result = run_sil(mission, out_dir, scenario_text=scenario_text, **options)
     driver, sil = result["driver"], result["sil"]
     height = sil["estimator_trunk_height_error"]
@@ -118,7 +124,8 @@ def one_run(
         "robot": robot_side,
         # The mission's own success and every touch it requires by the robot side's contact forces.
         "success": bool(sil["success_by_truth"]),
-        "reason": result["reason"] or sil["touches_reason"],
+        "reason": "; ".join(filter(None, [result["reason"], sil["touches_reason"], sil["truth_checks_reason"]])),
+        "truth_checks": sil["truth_checks"],
         "touches": sil["touches"],
         "sensed_touches": result.get("sensed_touches"),
         "foot_radius_difference_mm": 1e3 * max(0.0, sil["robot_foot_radius_m"] - FOOT_RADIUS),
@@ -175,6 +182,9 @@ def main() -> None:
     parser.add_argument(
         "--robot", choices=sorted(BRIDGES), default="drake", help="the robot side's physics engine (apps.sil --robot)"
     )
+    parser.add_argument(
+        "--operator_search_button", type=float, default=None, help="an operator finding an E-stop by touch [deg]"
+    )
     parser.add_argument("--work", default="out/sil_floors", help="folder of the runs' outputs")
     parser.add_argument("--out", default="benchmarks/results/sil_floors.json")
     args = parser.parse_args()
@@ -194,6 +204,7 @@ def main() -> None:
                 args.pin,
                 args.flood_at,
                 args.robot,
+                args.operator_search_button,
             )
             rows.append(row)
             error = row["max_true_foot_error_mm"]
