@@ -122,11 +122,22 @@ class ScriptedOperator(LeafSystemWithoutWitnesses):
                     self._force[:] = [np.array(message.force, float)]
 
             lcm.Subscribe(feedback_channel, take)
-        self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._publish)
+        if program is None:
+            self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._publish_steps)
+        else:
+            # A program's state is abstract: only an unrestricted update may change it.
+            self.DeclarePeriodicUnrestrictedUpdateEvent(period, 0.0, self._publish_program)
 
-    def _publish(self, context, state) -> EventStatus:
+    def _publish_steps(self, context, discrete_state) -> EventStatus:
+        return self._publish(context, discrete_state, None)
+
+    def _publish_program(self, context, state) -> EventStatus:
+        return self._publish(context, state.get_mutable_discrete_state(), state)
+
+    def _publish(self, context, discrete, state) -> EventStatus:
+        """Publishes the command at the context's time into `discrete` (the discrete state); with
+        a program, its next state goes into `state` (the whole state: an unrestricted update)."""
         t = context.get_time()
-        discrete = state.get_mutable_discrete_state()
         start = float(context.get_discrete_state(self._start).get_value()[0])
         if np.isnan(start):
             if not self._offers:
