@@ -156,7 +156,7 @@ def test_kalman_kernels_equal_their_python_source():
         num_tips = 2 * (k % 2)
         loads = rng.uniform(0, 40, 4)
         resting, learn = bool(k % 3 == 0), bool(k % 5 != 0)
-        args = (contact, num_tips, True, noise_std, loads, resting, learn)
+        args = (contact, num_tips, True, noise_std, loads, resting, learn, bool(k % 4 != 0))
         rows = ke._measurement_rows(*args)
         for compiled, reference in zip(rows, ke._measurement_rows.py_func(*args), strict=True):
             np.testing.assert_array_equal(compiled, reference)
@@ -220,7 +220,8 @@ def test_kalman_correction_is_the_textbook_update():
 def test_kalman_measurement_rows_are_the_filter_measurement_model():
     """Every contact pattern: the rows' H against the model written out (feet relative to the trunk,
     the stance feet's trunk velocity and height with their sink s + c F, the tips' velocity and
-    height, the resting trunk's horizontal velocity, and a resting trunk's height)."""
+    height, with nothing loaded and the trunk low enough to rest its horizontal velocity, and a
+    resting trunk's height)."""
     noise_std = np.array([0.003, 0.05, 0.004, 0.06])
     loads = np.array([10.0, 20.0, 30.0, 40.0])
     n = ke.NUM_STATES
@@ -228,8 +229,9 @@ def test_kalman_measurement_rows_are_the_filter_measurement_model():
         contact = np.array([pattern >> i & 1 for i in range(4)], dtype=bool)
         for num_tips in (0, 1, 2):
             for resting_trunk in (False, True):
-                for learn in (False, True):
-                    rows = ke._measurement_rows(contact, num_tips, True, noise_std, loads, resting_trunk, learn)
+                for learn, may_rest in ((False, True), (True, True), (True, False)):
+                    args = (contact, num_tips, True, noise_std, loads, resting_trunk, learn, may_rest)
+                    rows = ke._measurement_rows(*args)
                     columns, coefficients, noise = rows
                     H = _measurement_matrix(columns, coefficients)
                     stance = np.flatnonzero(contact)
@@ -254,7 +256,7 @@ def test_kalman_measurement_rows_are_the_filter_measurement_model():
                     for _ in range(num_tips):
                         expected += velocity + [np.eye(n)[2]]
                         variances += [0.05**2] * 3 + [0.004**2]
-                    if not len(stance) and not num_tips:
+                    if not len(stance) and not num_tips and may_rest:
                         expected += velocity[:2]
                         variances += [0.06**2] * 2
                     if resting_trunk:

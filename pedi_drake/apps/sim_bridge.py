@@ -225,6 +225,11 @@ def MakeSimBridgeDiagram(scenario: Scenario, lcm: DrakeLcmInterface, config: Go1
     return diagram
 
 
+# The truth log's keys that only this bridge writes (the MuJoCo robot's has the others): its plant's
+# state is what apps.sil judges a mission's physical checks on.
+DRAKE_ONLY_TRUTH = ("plant_states", "foot_contact_forces")
+
+
 def write_truth_log(
     diagram, context, path: Path, scene_names: list[str] = (), foot_radius: float = robot.FOOT_RADIUS
 ) -> Path:
