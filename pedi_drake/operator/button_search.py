@@ -69,8 +69,9 @@ PRESS_TIME = 4.5  # [s]: the foot meets the cap after about 1 s, its reference 7
 HOLD = 1.0  # [s]
 RELEASE = 0.08  # [m]
 SPEED = 0.03  # [m/s] of the moves without contact (at twice that: back, over, home, lift)
-# [m/s] of the sweeps beyond APPROACH, where the cap may be: the cap is rigid sideways, and a bump
-# at 1.5 cm/s struck it with 20 N for a moment (its force bound is 15 N), at 0.8 cm/s with 10 N.
+# [m/s] of the sweeps beyond APPROACH, where the cap may be: the cap is rigid sideways, and in trial
+# runs a bump at 1.5 cm/s struck it with about 20 N for a moment (its force bound is 15 N), at
+# 0.8 cm/s with about 10 N.
 SWEEP_SPEED = 0.008
 APPROACH = 0.055  # [m] of each sweep at SPEED: the cap's rim is not expected within 6 cm of the start
 AUTONOMOUS = 0.5  # [s] the autonomous request is held this long, then the program ends
