@@ -132,9 +132,10 @@ def apply_mission(scenario: Scenario, mission: MissionSpec) -> Scenario:
 
 def whole_body_controller(scenario: Scenario, name: str):
     """The whole-body controller `name` ("whole_body" or "projected_impedance") of `scenario`."""
+    terrain = terrain_table(scenario.scene)
     if name == "projected_impedance":
-        return ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs)
-    return WholeBodyController(scenario.whole_body, scenario.robot.prongs)
+        return ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs, terrain)
+    return WholeBodyController(scenario.whole_body, scenario.robot.prongs, terrain)
 
 
 def _add_controller_switch(

@@ -79,6 +79,13 @@ def joint_frames(geometry: LegGeometry, q_leg: np.ndarray) -> tuple[list[np.ndar
     return positions, rotations
 
 
+def working_position_B(leg: str, working_depth: float) -> np.ndarray:
+    """Where leg_to_pedipulation lifts the foot of `leg` [m], trunk frame: `working_depth` [m]
+    below the hip joint, beside it as the thigh offset puts it."""
+    geometry = leg_geometry(leg)
+    return geometry.p_BH + geometry.p_HT - np.array([0.0, 0.0, working_depth])
+
+
 def foot_position_B(leg: str, q_leg: np.ndarray) -> np.ndarray:
     """Foot centre in the trunk frame [m] for the leg's joint angles (hip, thigh, calf) [rad]."""
     positions, _ = joint_frames(leg_geometry(leg), np.asarray(q_leg, float))

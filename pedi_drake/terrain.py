@@ -147,11 +147,22 @@ def terrain_table(scene) -> np.ndarray:
     return np.array(rows, dtype=float).reshape(len(rows), TABLE_COLUMNS)
 
 
+def terrain_map(table: np.ndarray | None) -> np.ndarray:
+    """`table` (a `terrain_table`) as the contiguous float array compiled code takes, the flat
+    ground's empty table for None; refused unless it has TABLE_COLUMNS columns."""
+    if table is None:
+        return np.zeros((0, TABLE_COLUMNS))
+    table = np.ascontiguousarray(table, dtype=float)
+    if table.ndim != 2 or table.shape[1] != TABLE_COLUMNS:
+        raise ValueError(f"a terrain table has {TABLE_COLUMNS} columns per row, got shape {table.shape}")
+    return table
+
+
 @kernel
-def terrain_height(table: np.ndarray, x: float, y: float) -> float:
-    """[m] the height of the terrain of `table` (`terrain_table`) under the world point (x, y), or
-    of the flat ground (0) where there is none: `surface_at`'s height, for compiled code."""
-    highest = 0.0
+def _highest_row(table: np.ndarray, x: float, y: float) -> tuple:
+    """(row of `table` whose surface is the highest over the world point (x, y), or -1 for the flat
+    ground; that surface's height [m])."""
+    highest, row = 0.0, -1
     for k in range(table.shape[0]):
         dx, dy = x - table[k, 1], y - table[k, 2]
         c, s = table[k, 4], table[k, 5]
@@ -166,8 +177,31 @@ def terrain_height(table: np.ndarray, x: float, y: float) -> float:
             if abs(along) > 0.5 * table[k, 6]:
                 continue
             height = table[k, 3] + table[k, 8]
-        highest = max(highest, height)
-    return highest
+        if height > highest:
+            highest, row = height, k
+    return row, highest
+
+
+@kernel
+def terrain_height(table: np.ndarray, x: float, y: float) -> float:
+    """[m] the height of the terrain of `table` (`terrain_table`) under the world point (x, y), or
+    of the flat ground (0) where there is none: `surface_at`'s height, for compiled code."""
+    return _highest_row(table, x, y)[1]
+
+
+@kernel
+def terrain_normal(table: np.ndarray, x: float, y: float, normal: np.ndarray) -> None:
+    """Writes into `normal` (3,) the unit normal (world) of the terrain of `table` under the world
+    point (x, y), z where there is none: `surface_at`'s normal, for compiled code."""
+    row = _highest_row(table, x, y)[0]
+    normal[0], normal[1], normal[2] = 0.0, 0.0, 1.0
+    if row >= 0 and table[row, 0] == _SLOPE_ROW:
+        # A slope rises along its placement's x: its normal leans back against that direction.
+        cos_a = 1.0 / math.sqrt(1.0 + table[row, 8] ** 2)
+        sin_a = table[row, 8] * cos_a
+        normal[0] = -sin_a * table[row, 4]
+        normal[1] = -sin_a * table[row, 5]
+        normal[2] = cos_a
 
 
 def terrain_problems(obj, where: str) -> list[str]:

@@ -11,7 +11,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from pedi_drake.exceptions import QpInfeasible
-from pedi_drake.friction import write_pyramid_faces
+from pedi_drake.friction import UP, write_pyramid_faces
 
 # Default relative tolerance of the SVD pseudo-inverses: singular values below this times the
 # largest one are treated as zero [-].
@@ -227,7 +227,7 @@ def friction_pyramid_rows(num_contacts: int, mu_eff: float) -> np.ndarray:
     (read-only; cached, it changes only with the friction and the number of contacts)."""
     local = np.zeros((6, 3))
     local[0, 2], local[1, 2] = -1.0, 1.0
-    write_pyramid_faces(local, 2, 0, mu_eff)
+    write_pyramid_faces(local, 2, 0, mu_eff, UP)
     G = np.kron(np.eye(num_contacts), local)
     G.flags.writeable = False
     return G

@@ -10,8 +10,7 @@ import pytest
 from pedi_drake import robot
 from pedi_drake.estimation.leg_odometry import foot_kinematics_B
 from pedi_drake.exceptions import SufError
-from pedi_drake.leg_kinematics import foot_position_B
-from pedi_drake.mission.phases import working_position_B
+from pedi_drake.leg_kinematics import foot_position_B, working_position_B
 from pedi_drake.mission.posture_planner import PosturePlanner, PostureRequest, solve_request
 from pedi_drake.suf.posture import (
     Posture,

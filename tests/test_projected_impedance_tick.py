@@ -21,6 +21,7 @@ import pytest
 import reference_projected_dynamics as pd
 from pydrake.systems.analysis import Simulator
 from reference_projected_impedance_tick import ReferenceTick
+from standing_context import standing_context
 
 from pedi_drake import robot
 from pedi_drake.control import compiled_projected_dynamics as cpd
@@ -31,6 +32,7 @@ from pedi_drake.control.projected_impedance_controller import ProjectedImpedance
 from pedi_drake.control.tick_steps import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.exceptions import QpInfeasible
+from pedi_drake.friction import UP
 from pedi_drake.mission.spec import missions_dir
 from pedi_drake.runtime import jit
 from pedi_drake.scenario import RobotConfig, load_scenario
@@ -180,12 +182,7 @@ def test_shadow_run_covers_its_mission(shadow):
 
 def standing_controller(config: ProjectedImpedanceConfig | None = None):
     controller = ProjectedImpedanceController(config or ProjectedImpedanceConfig())
-    context = controller.CreateDefaultContext()
-    X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
-    base = np.concatenate([X.rotation().ToQuaternion().wxyz(), X.translation(), np.zeros(6)])
-    controller.base_state_port.FixValue(context, base)
-    controller.position_port.FixValue(context, robot.STANDING_Q)
-    controller.velocity_port.FixValue(context, np.zeros(12))
+    context = standing_context(controller)
     return controller, context
 
 
@@ -224,12 +221,7 @@ def standing() -> ProjectedImpedanceController:
 
 def _fresh_context(controller):
     """A standing context on which both paths have ticked three times alike."""
-    context = controller.CreateDefaultContext()
-    X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
-    base = np.concatenate([X.rotation().ToQuaternion().wxyz(), X.translation(), np.zeros(6)])
-    controller.base_state_port.FixValue(context, base)
-    controller.position_port.FixValue(context, robot.STANDING_Q)
-    controller.velocity_port.FixValue(context, np.zeros(12))
+    context = standing_context(controller)
     for _ in range(3):
         assert status_of(controller, assert_paths_agree(controller, context)) == STATUS_OK
     return context
@@ -453,6 +445,7 @@ def test_tick_kernel_equals_its_python_source(standing):
             controller.model.dynamics.model_record,
             controller.model.dynamics.new_output(),
             tuple(inputs[:10]),
+            controller.terrain,
             *inputs[10:],
             *outputs,
         )
@@ -461,6 +454,7 @@ def test_tick_kernel_equals_its_python_source(standing):
             jit.python_records(controller.model.dynamics.model_record),
             jit.python_records(controller.model.dynamics.new_output()),
             tuple(inputs[:10]),
+            controller.terrain,
             *inputs[10:],
             *python_outputs,
         )
@@ -657,6 +651,7 @@ def test_contact_forces_kernel_solves_the_reference_qp(standing):
             controller._tick_params[0]["v_joints"],
             ramp,
             problem.friction,
+            np.tile(UP, (len(ramp), 1)),
             5.0,
             250.0,
             problem.torque_limit,

@@ -17,7 +17,7 @@ from pedi_drake.exceptions import ScenarioError
 from pedi_drake.run_checks import check_scene_geometry
 from pedi_drake.scenario import SceneObject, load_scenario
 from pedi_drake.station.scene import add_ground, add_scene_object
-from pedi_drake.terrain import surface_at, terrain_height, terrain_table
+from pedi_drake.terrain import surface_at, terrain_height, terrain_map, terrain_normal, terrain_table
 
 GROUND = 0.8
 SLOPE = SceneObject(kind="slope", name="ramp", position=[1.0, 0.5, 0.0], yaw=math.pi / 2, size=[1.0, 0.6], angle=15)
@@ -43,13 +43,22 @@ def test_the_surface_under_a_point_is_the_highest_terrain_over_it():
     assert (floor.height, floor.friction, floor.name) == (0.0, GROUND, "")
 
 
-def test_the_compiled_height_is_surface_at_s():
+def test_the_compiled_height_and_normal_are_surface_at_s():
     table = terrain_table([*SCENE, SceneObject(kind="box")])  # a box is no terrain: left out
     assert table.shape[0] == 3
     rng = np.random.default_rng(20261207)
+    normal = np.empty(3)
+    on_slope = 0
     for x, y in rng.uniform([-1.7, -0.6], [1.6, 2.2], size=(500, 2)):
-        assert terrain_height(table, x, y) == pytest.approx(surface_at(SCENE, GROUND, x, y).height, abs=1e-12)
+        surface = surface_at(SCENE, GROUND, x, y)
+        assert terrain_height(table, x, y) == pytest.approx(surface.height, abs=1e-12)
+        terrain_normal(table, x, y, normal)
+        np.testing.assert_allclose(normal, surface.normal, atol=1e-12)
+        on_slope += surface.name == "ramp"
+    assert on_slope > 20  # the sample met the slope's tilted normal, not only flat tops
     assert terrain_height(terrain_table([]), 1.1, 0.9) == 0.0
+    terrain_normal(terrain_map(None), 1.1, 0.9, normal)
+    np.testing.assert_array_equal(normal, [0.0, 0.0, 1.0])
 
 
 def test_the_plant_has_the_surface_surface_at_gives():

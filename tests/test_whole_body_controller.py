@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import reference_tasks
 from reference_stacks import ResolvedInputs, StackBuilder
+from standing_context import standing_context, tick
 
 from pedi_drake import robot
 from pedi_drake.benchmarks.demos import demo_scenario, run_demo
@@ -21,24 +22,8 @@ from pedi_drake.vector3 import orientation_error_W
 
 def standing_controller(config: WholeBodyControllerConfig | None = None):
     controller = WholeBodyController(config or WholeBodyControllerConfig())
-    context = controller.CreateDefaultContext()
-    X = initial_trunk_pose(RobotConfig(initial_pose="standing"))
-    base = np.concatenate([X.rotation().ToQuaternion().wxyz(), X.translation(), np.zeros(6)])
-    controller.base_state_port.FixValue(context, base)
-    controller.position_port.FixValue(context, robot.STANDING_Q)
-    controller.velocity_port.FixValue(context, np.zeros(12))
+    context = standing_context(controller)
     return controller, context
-
-
-def tick(controller, context, n: int = 1):
-    values = controller.AllocateDiscreteVariables()
-    for _ in range(n):
-        controller.CalcForcedDiscreteVariableUpdate(context, values)
-        context.SetDiscreteState(values)
-    return (
-        controller.command_port.Eval(context).copy(),
-        controller.diagnostics_port.Eval(context).copy(),
-    )
 
 
 def test_unconnected_references_stand_in_place():

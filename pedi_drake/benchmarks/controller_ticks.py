@@ -34,7 +34,7 @@ import numpy as np
 from pedi_drake.benchmarks.demos import DEMOS, demo_scenario, simulate_demo
 from pedi_drake.benchmarks.machine import stamped
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
-from pedi_drake.control.whole_body_controller import WholeBodyController
+from pedi_drake.diagram import whole_body_controller
 
 DEFAULT_OUT = Path("benchmarks/results/controller_ticks.json")
 PORTS = (
@@ -80,10 +80,7 @@ class _Variant:
     """One controller with its own context, replaying the recorded inputs."""
 
     def __init__(self, scenario, controller: str) -> None:
-        if controller == "projected_impedance":
-            self.system = ProjectedImpedanceController(scenario.projected_impedance, scenario.robot.prongs)
-        else:
-            self.system = WholeBodyController(scenario.whole_body, scenario.robot.prongs)
+        self.system = whole_body_controller(scenario, controller)
         self.name = controller
         self.context = self.system.CreateDefaultContext()
         self.values = self.system.AllocateDiscreteVariables()

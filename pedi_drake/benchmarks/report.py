@@ -205,6 +205,24 @@ def _field_course(d: dict) -> str:
     )
 
 
+def _walk_to(d: dict) -> str:
+    plans = d["plans"]
+    gains = [row["chosen_optimal"]["suf_n"] - row["fixed_optimal"]["suf_n"] for row in plans]
+    larger = sum(gain > 0.0 for gain in gains)
+    text = (
+        f"the chosen stop's optimal-posture SUF larger on {larger} of {len(plans)} shipped reach targets "
+        f"(by {min(gains):.1f} to {max(gains):.1f} N)"
+    )
+    for key, row in d["runs"].items():
+        error = row["true_foot_error_max_m"]
+        text += f"; {key}: {row['succeeded']} of {row['runs']}"
+        if error is not None:
+            text += f", touch within {1000 * error:.1f} mm"
+        if row["lift_optimal_suf_min_n"] is not None:
+            text += f", lift SUF median {row['lift_optimal_suf_median_n']:.1f} N"
+    return text
+
+
 def _estop_button(d: dict) -> str:
     parts = [
         f"{setup}: {row['succeeded']} of {row['runs']} pressed under the bound, largest true force "
@@ -418,6 +436,13 @@ ROWS: tuple[Row, ...] = (
         "--controllers whole_body --trot-speeds 0.6,0.7,0.8 --out benchmarks/results/walking_trots.json",
     ),
     Row(
+        "walk_to: the stop of largest SUF within 10 cm and 0.3 rad of the fixed stop, on every shipped reach "
+        "target (planned), and walk_to missions run with it and with the fixed stop, seed 0 and 5 noisy seeds",
+        "walk_to.json",
+        _walk_to,
+        "python -m pedi_drake.benchmarks.walk_to",
+    ),
+    Row(
         "Static walks on the HQP up and down 15-degree slopes, a trot's half turn on the platform between "
         "them, and over a 1 m bridge of mu 0.2 with the friction coefficient set for it and left at 0.8; "
         "seed 0 and 5 noisy seeds, by ground truth",
@@ -454,7 +479,7 @@ ROWS: tuple[Row, ...] = (
         _sil_field_course,
         "python -m pedi_drake.benchmarks.sil_floors --missions terrain/field_course --runs 1 "
         "--scenario_text '{operator: {source: lcm}, simulation_duration: 300.0}' --operator_search_button 180 "
-        "--work /tmp/silcourse --out benchmarks/results/sil_field_course.json",
+        "--work out/sil_field_course --out benchmarks/results/sil_field_course.json",
     ),
     Row(
         "Hardware path at real time against the simulator bridge (apps.sil, three missions)",

@@ -65,14 +65,16 @@ tau = r_a - Jc,a^T lam. The contact QP (Eq. 7) is
 
     min_lam   w_tau ||tau||^2 + w_f ||lam - lam_share||^2
     s.t.      Jc,u^T lam = r_u,
-              ramp_i f_min <= f_z,i <= ramp_i f_max               (unilateral, minimum normal force)
-              |f_x,i|, |f_y,i| <= mu_eff f_z,i                     (4-edge friction pyramid)
+              ramp_i f_min <= f_n,i <= ramp_i f_max               (unilateral, minimum normal force)
+              |f_t1,i|, |f_t2,i| <= mu_eff f_n,i                   (4-edge friction pyramid)
               |r_a - Jc,a^T lam| <= scale * tau_max                (torque limits)
 
-with lam_share an even share of the weight [N]. The equalities are eliminated (lam = lam_0 + Z z
-with Z a null-space basis of Jc,u^T) and the rest goes to DAQP. The final torque is
-tau = tau_m + tau_c (Eq. 8) with tau_c = tau - tau_m; because r - Jc^T lam lies in the range of
-I - P, P S^T tau_c = 0: the constrained-space torque never disturbs the impedance.
+with lam_share an even share of the weight [N], and f_n,i, f_t1,i, f_t2,i contact i's force along
+the normal of the ground under it and along its tangents (`pedi_drake.friction`). The equalities
+are eliminated (lam = lam_0 + Z z with Z a null-space basis of Jc,u^T) and the rest goes to DAQP.
+The final torque is tau = tau_m + tau_c (Eq. 8) with tau_c = tau - tau_m; because r - Jc^T lam
+lies in the range of I - P, P S^T tau_c = 0: the constrained-space torque never disturbs the
+impedance.
 
 Eq. 11, the force estimate. From the closed loop, the external force on the foot is estimated
 from the motion alone: F_ext_hat = Lambda eddot + D edot + K e [N]; the torso's error does not
@@ -89,7 +91,7 @@ import math
 
 import numpy as np
 
-from pedi_drake.friction import write_pyramid_faces
+from pedi_drake.friction import write_contact_force_rows
 from pedi_drake.numerics import daqp_kernel
 from pedi_drake.runtime.jit import kernel
 
@@ -524,6 +526,7 @@ def contact_forces(
     actuated: np.ndarray,
     ramp: np.ndarray,
     friction: float,
+    normals: np.ndarray,
     f_min: float,
     f_max: float,
     torque_limit: np.ndarray,
@@ -537,7 +540,9 @@ def contact_forces(
     equality_residual: np.ndarray,
 ) -> int:
     """projected_dynamics.solve_contact_forces (Eq. 7) for the k held contacts (Jc (3k, nv), r =
-    M vdot + h, ramp (k,), force_share (3k,)): the forces lam (3k,) [N], the torques tau (12,)
+    M vdot + h, ramp (k,), force_share (3k,), normals (k, 3): the unit normal (world) of the
+    ground under each, the axis of its friction pyramid of slope `friction` and of its force
+    bounds): the forces lam (3k,) [N], the torques tau (12,)
     [N m] and |Jc,u^T lam - r_u| in equality_residual[0]; returns CONTACT_FORCES_OK or
     CONTACT_FORCES_INFEASIBLE (lam and tau then meaningless). The QP goes to
     DAQP (`daqp_kernel.solve_qp`) with `proximal_weight` [units of its Hessian]."""
@@ -597,15 +602,7 @@ def contact_forces(
     G = np.zeros((rows, n))
     g = np.empty(rows)
     for c in range(k):
-        x, z = 3 * c, 3 * c + 2
-        row = 6 * c
-        G[row, z] = -1.0
-        G[row + 1, z] = 1.0
-        write_pyramid_faces(G, row + 2, x, friction)
-        g[row] = -f_min * ramp[c]
-        g[row + 1] = f_max * ramp[c]
-        for i in range(2, 6):
-            g[row + i] = 0.0
+        write_contact_force_rows(G, g, 6 * c, 3 * c, friction, normals[c], f_min * ramp[c], f_max * ramp[c])
     for i in range(na):
         for j in range(n):
             G[6 * k + i, j] = T[i, j]

@@ -16,8 +16,8 @@ projection loses nothing and halves the size of every QP below) then "feasibilit
 
 paper000 (Sec. III-B, two TSID levels, here strict):
     level 0 "physics" + "feasibility": floating-base dynamics, contact no-motion; contact force
-        limits and friction pyramid, torque limits, joint limits (hard), capture point in the
-        safety polygon (soft);
+        limits and friction pyramid (about the normal of the terrain under each contact), torque
+        limits, joint limits (hard), capture point in the safety polygon (soft);
     level 1 "pose": trunk position and attitude, pedipulation foot / leg joint reference (or the
         optional 5-D foot pose: foot position and the calf's roll and pitch), idle legs;
     level 2 "regularisation" (added so the optimum is unique): posture, contact forces, torques.
@@ -45,7 +45,7 @@ import numpy as np
 from pedi_drake import robot
 from pedi_drake.control import references
 from pedi_drake.control.config import WholeBodyControllerConfig
-from pedi_drake.friction import pyramid_slope, write_pyramid_faces
+from pedi_drake.friction import pyramid_slope, write_contact_force_rows
 from pedi_drake.runtime.jit import kernel, new_record
 from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rotation_matrix_kernel
 
@@ -265,22 +265,16 @@ def sliding_contact_rows(p, s, sliding, A, b, row: int) -> int:
 
 
 @kernel
-def contact_force_limit_rows(p, ramp, friction: float, G, h, hard: int) -> int:
-    """Per contact (6 rows): the normal force between f_min and f_max, both scaled by the contact's
-    ramp (so a contact coming or going has its force bounded to zero), and the four faces of the
-    friction pyramid (inscribed in the cone of `friction` when p.inscribed)."""
+def contact_force_limit_rows(p, ramp, friction: float, normals, G, h, hard: int) -> int:
+    """Per contact (6 rows): the force along the ground's normal (normals (nc, 3), unit, world)
+    between f_min and f_max, both scaled by the contact's ramp (so a contact coming or going has
+    its force bounded to zero), and the four faces of the friction pyramid about that normal
+    (inscribed in the cone of `friction` when p.inscribed)."""
     slope = pyramid_slope(friction, p.inscribed)
     for i in range(p.nc):
         for r in range(6):
             G[hard + r, :] = 0.0
-        f = p.nv + 3 * i
-        G[hard, f + 2] = -1.0
-        G[hard + 1, f + 2] = 1.0
-        write_pyramid_faces(G, hard + 2, f, slope)
-        h[hard] = -p.f_min * ramp[i]
-        h[hard + 1] = p.f_max * ramp[i]
-        for r in range(2, 6):
-            h[hard + r] = 0.0
+        write_contact_force_rows(G, h, hard, p.nv + 3 * i, slope, normals[i], p.f_min * ramp[i], p.f_max * ramp[i])
         hard += 6
     return hard
 
@@ -513,6 +507,7 @@ def build_levels(
     polygon_N: np.ndarray,
     polygon_d: np.ndarray,
     friction: float,
+    normals: np.ndarray,
     ground_height: float,
     relax_contacts: bool,
     T: np.ndarray,
@@ -523,7 +518,8 @@ def build_levels(
     `relax_contacts` finds no sliding contact (the fallback does not apply).
 
     body (19): the body reference vector; legs (48): the leg reference vector; ramp, no_motion
-    (nc,); polygon_N (k, 2), polygon_d (k,): the safety polygon's half-planes; T, t0: torque_map.
+    (nc,); polygon_N (k, 2), polygon_d (k,): the safety polygon's half-planes; normals (nc, 3):
+    the unit normal (world) of the ground under each contact; T, t0: torque_map.
     With `relax_contacts`, the tangential no-motion rows of the sliding contacts leave the physics
     level for a level of their own just below the limits, so that friction can brake them.
     """
@@ -542,7 +538,7 @@ def build_levels(
     level = _close_level(table, level, row, hard, soft)
 
     # Feasibility: force limits and friction, torque and joint limits (hard); capture point (soft).
-    hard = contact_force_limit_rows(p, ramp, friction, G, h, hard)
+    hard = contact_force_limit_rows(p, ramp, friction, normals, G, h, hard)
     hard = torque_limit_rows(p, T, t0, G, h, hard)
     hard = joint_limit_rows(p, s, G, h, hard)
     if p.balance:

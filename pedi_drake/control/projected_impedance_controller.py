@@ -54,6 +54,7 @@ from pedi_drake.control.whole_body_controller import diagnostics_layout
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
+from pedi_drake.terrain import terrain_map
 
 # Force-estimate filter state: per leg, the last impedance error rate (3), the filtered error
 # acceleration (3), and whether the leg had a foot impedance at the last tick (1).
@@ -72,12 +73,17 @@ def projected_diagnostics_layout(num_contacts: int) -> dict[str, slice]:
 class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
     """Paper 002's projected-inverse-dynamics impedance controller for the Go1 (and its prongs)."""
 
-    def __init__(self, config: ProjectedImpedanceConfig, prongs: ProngDesign | None = None) -> None:
+    def __init__(
+        self, config: ProjectedImpedanceConfig, prongs: ProngDesign | None = None, terrain: np.ndarray | None = None
+    ) -> None:
+        """`terrain`: the map of the ground (`pedi_drake.terrain.terrain_table`), under which each
+        held contact's friction pyramid stands on the terrain's normal; None: flat ground."""
         super().__init__()
         problems = config.validate()
         if problems:
             raise ConfigError("; ".join(problems))
         self.config = config
+        self.terrain = terrain_map(terrain)
         self.model = ControllerModel(prongs, com_bias=False)
         nc = self.model.num_contacts
         self.num_contacts = nc
@@ -168,7 +174,7 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
             ports[4].Eval(context) if ports[4].HasValue(context) else defaults["trunk_wrench"],
         )
         status = projected_impedance_tick.projected_impedance_tick(
-            self._tick_params, self.model.dynamics.model_record, self._snapshot, inputs, *states, *outputs
+            self._tick_params, self.model.dynamics.model_record, self._snapshot, inputs, self.terrain, *states, *outputs
         )
         diag = outputs[-1]
         now = time.perf_counter()

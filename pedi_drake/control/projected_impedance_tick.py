@@ -29,6 +29,7 @@ from pedi_drake.dynamics.go1_dynamics import add_trunk_external_wrench, go1_dyna
 from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offsets
 from pedi_drake.friction import pyramid_slope
 from pedi_drake.runtime.jit import kernel, new_record
+from pedi_drake.terrain import terrain_normal
 from pedi_drake.vector3 import axis_angle_kernel, orientation_error_kernel, rotation_matrix_kernel
 
 # Slices of the diagnostics vector the tick writes, in this order (projected_diagnostics_layout):
@@ -316,6 +317,7 @@ def projected_impedance_tick(
     dynamics_model: np.ndarray,
     snapshot: np.ndarray,
     inputs: tuple,
+    terrain: np.ndarray,
     last_command: np.ndarray,
     last_reference: np.ndarray,
     last_ramp: np.ndarray,
@@ -334,7 +336,9 @@ def projected_impedance_tick(
     and diagnostics (all but the two timing entries) and returns the tick's status. The records
     are one-element arrays: TICK_PARAMS_DTYPE, go1_dynamics.model_record and the workspace
     `snapshot` (go1_dynamics.output_dtype: the dynamics terms this tick used). `polygon_x` is
-    only checked: paper 002's law has no balance task."""
+    only checked: paper 002's law has no balance task. `terrain` is the map of the ground
+    (`pedi_drake.terrain.terrain_table`; no rows: flat): each held contact's friction pyramid
+    stands on the normal of the terrain under it."""
     tp, s = tick_params[0], snapshot[0]
     base, q, qd, contact_set_in, body_in, has_body, leg_x, polygon_x, mu_x, trunk_wrench = inputs
     nv, nc = tp.nv, tp.nc
@@ -373,10 +377,12 @@ def projected_impedance_tick(
             if i >= 4:
                 on_prongs = True
     held_idx = np.empty(num_held, dtype=np.int64)
+    normals = np.empty((num_held, 3))
     k = 0
     for i in range(nc):
         if held[i]:
             held_idx[k] = i
+            terrain_normal(terrain, s.p_contacts[i, 0], s.p_contacts[i, 1], normals[k])
             k += 1
     Jc = np.empty((3 * num_held, nv))
     Jcdot_v = np.empty(3 * num_held)
@@ -480,6 +486,7 @@ def projected_impedance_tick(
         tp.v_joints,
         held_ramp,
         friction,
+        normals,
         tp.f_min,
         tp.f_max,
         tp.torque_limit,

@@ -44,6 +44,7 @@ from pedi_drake.exceptions import ConfigError
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.runtime.jit import new_record
+from pedi_drake.terrain import terrain_map
 
 MAX_LEVELS = 5
 
@@ -75,7 +76,11 @@ def diagnostics_layout(num_contacts: int) -> dict[str, slice]:
 class WholeBodyController(LeafSystemWithoutWitnesses):
     """Hierarchical whole-body QP controller for the Go1 (and its prongs)."""
 
-    def __init__(self, config: WholeBodyControllerConfig, prongs: ProngDesign | None = None) -> None:
+    def __init__(
+        self, config: WholeBodyControllerConfig, prongs: ProngDesign | None = None, terrain: np.ndarray | None = None
+    ) -> None:
+        """`terrain`: the map of the ground (`pedi_drake.terrain.terrain_table`), under which each
+        contact's friction pyramid stands on the terrain's normal; None: flat ground."""
         super().__init__()
         if config.stack not in STACKS:
             raise ConfigError(f"whole_body.stack: must be one of {STACKS}, got {config.stack!r}")
@@ -105,6 +110,7 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
         self._no_safety_polygon = np.zeros(references.SAFETY_POLYGON_SIZE)
         self._default_friction = np.array([config.friction])
         self._no_trunk_wrench = np.zeros(6)
+        self.terrain = terrain_map(terrain)
 
         shared_states = declare_controller_ports(self, nc, config.failure_kd)
         self.diagnostics_state = self.DeclareDiscreteState(self.diag["contact_ramp"].stop)
@@ -162,6 +168,7 @@ class WholeBodyController(LeafSystemWithoutWitnesses):
             self.model.dynamics.model_record,
             self._snapshot,
             (base, q, qd, contact_set, body, has_body, leg_x, polygon_x, mu_x, trunk_wrench),
+            self.terrain,
             self._table,
             *state,
         )

@@ -39,6 +39,7 @@ from pedi_drake.control.tick_steps import (
 from pedi_drake.dynamics.go1_dynamics import add_trunk_external_wrench, go1_dynamics
 from pedi_drake.polygon import halfplanes_kernel
 from pedi_drake.runtime.jit import kernel, new_record
+from pedi_drake.terrain import terrain_normal
 
 _FOOT_MODE = 1
 
@@ -139,6 +140,7 @@ def whole_body_tick(
     dynamics_model: np.ndarray,
     snapshot: np.ndarray,
     inputs: tuple,
+    terrain: np.ndarray,
     table_record: np.ndarray,
     command: np.ndarray,
     reference: np.ndarray,
@@ -152,7 +154,9 @@ def whole_body_tick(
     timing entries are the caller's) and returns the tick's status. The records are one-element arrays:
     TICK_PARAMS_DTYPE, compiled_stack.STACK_PARAMS_DTYPE, go1_dynamics.model_record, and the
     workspaces `snapshot` (go1_dynamics.output_dtype: the dynamics terms this tick used) and
-    `table_record` (compiled_stack.table_dtype: the levels' rows)."""
+    `table_record` (compiled_stack.table_dtype: the levels' rows). `terrain` is the map of the
+    ground (`pedi_drake.terrain.terrain_table`; no rows: flat): each contact's friction pyramid
+    stands on the normal of the terrain under it."""
     tp, p, s, table = tick_params[0], stack_params[0], snapshot[0], table_record[0]
     base, q, qd, contact_set_in, body_in, has_body, leg_x, polygon_x, mu_x, trunk_wrench = inputs
     last_command, last_reference = command.copy(), reference.copy()
@@ -174,9 +178,11 @@ def whole_body_tick(
         s.Jdot_v_com[:] = 0.0
 
     no_motion = np.empty(nc, dtype=np.bool_)
+    normals = np.empty((nc, 3))
     num_loaded = 0
     ground = 0.0
     for i in range(nc):
+        terrain_normal(terrain, s.p_contacts[i, 0], s.p_contacts[i, 1], normals[i])
         no_motion[i] = contact_set[i] > 0.5 or new_ramp[i] > 0.0
         if contact_set[i] > 0.5:
             num_loaded += 1
@@ -211,12 +217,11 @@ def whole_body_tick(
     torque_map(p, s, T, t0)
     x = np.zeros(n)
     residuals = np.zeros(MAX_LEVELS)
-    status = STATUS_OK
-    num_levels = build_levels(
-        p, s, body, leg_x, new_ramp, no_motion, polygon_N[:rows], polygon_d[:rows], mu_x[0], ground, False, T, t0, table
-    )
-    solved = _solve(tp, p, table, num_levels, False, x, residuals)
-    if solved != compiled_hqp.STATUS_OK:
+    # The stack as it is; if that fails, again with the sliding contacts let brake (friction
+    # cannot stop them at once): their no-motion rows on a level of their own below the limits.
+    status = STATUS_QP_FAILED
+    num_levels = 0
+    for relaxed in (False, True):
         num_levels = build_levels(
             p,
             s,
@@ -227,20 +232,22 @@ def whole_body_tick(
             polygon_N[:rows],
             polygon_d[:rows],
             mu_x[0],
+            normals,
             ground,
-            True,
+            relaxed,
             T,
             t0,
             table,
         )
-        if num_levels > 0:
-            # Sliding contacts that friction cannot stop at once: let them brake.
-            solved = _solve(tp, p, table, num_levels, True, x, residuals)
-            status = STATUS_CONTACTS_RELAXED
-        if num_levels == 0 or solved != compiled_hqp.STATUS_OK:
-            ramp[:] = new_ramp
-            hold[:] = new_hold
-            return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, False, command, diag)
+        if num_levels == 0:
+            break  # no sliding contact: relaxing changes nothing
+        if _solve(tp, p, table, num_levels, relaxed, x, residuals) == compiled_hqp.STATUS_OK:
+            status = STATUS_CONTACTS_RELAXED if relaxed else STATUS_OK
+            break
+    if status == STATUS_QP_FAILED:
+        ramp[:] = new_ramp
+        hold[:] = new_hold
+        return fail(tp, STATUS_QP_FAILED, last_command, q, last_diag, ramp, False, command, diag)
 
     tau = T @ x + t0
     qdd = np.empty(12)

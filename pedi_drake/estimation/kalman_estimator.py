@@ -63,7 +63,7 @@ from pedi_drake.estimation.leg_odometry import foot_kinematics_kernel, leg_offse
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.runtime.jit import kernel
-from pedi_drake.terrain import TABLE_COLUMNS, terrain_height
+from pedi_drake.terrain import terrain_height, terrain_map
 from pedi_drake.vector3 import rotation_matrix_kernel
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # [m/s^2]
@@ -747,7 +747,7 @@ class FloatingBaseKalmanFilter:
         trunk resting on the ground; `terrain`: pedi_drake.terrain's table of the ground's terrain,
         whose height under each stance foot its height row takes (None: flat ground)."""
         self.config = config
-        self.terrain = np.zeros((0, TABLE_COLUMNS)) if terrain is None else np.array(terrain, dtype=float)
+        self.terrain = terrain_map(terrain)
         self.p_BI = np.array(p_BI, dtype=float)
         self.foot_radius = float(foot_radius)
         # Prong tip centres in the trunk frame (k, 3) [m]: a loaded tip pins the trunk like a foot.

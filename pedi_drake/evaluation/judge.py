@@ -21,7 +21,7 @@ from pedi_drake.evaluation.off_trunk import judge_off_trunk, off_trunk_trace
 from pedi_drake.evaluation.push_response import STANCE_FOOT_SLIDE_LIMIT, push_response
 from pedi_drake.evaluation.result_file import write_result
 from pedi_drake.evaluation.touches import judge_touches
-from pedi_drake.evaluation.walks import WALK_KINDS, judge_walks
+from pedi_drake.evaluation.walks import WALK_KIND_NAMES, WALK_KINDS, judge_walks
 from pedi_drake.fall import fell_during, first_fallen_sample
 from pedi_drake.go1_driver.hardware_station import hardware_link
 from pedi_drake.go1_driver.safety import driver_report
@@ -259,7 +259,7 @@ def judge_run(record) -> dict:
             walking = [
                 (row["t_start"], sim_time if row["t_end"] is None else row["t_end"])
                 for row in result.get("phases", [])
-                if row["kind"] in ("walk", "walk_velocity", "walk_teleop") and row["status"] != "skipped"
+                if row["kind"] in WALK_KIND_NAMES and row["status"] != "skipped"
             ]
             result["pushes"], slid = judge_pushes(plant, logs, simulated.pushes, walking)
             reason = "; ".join(filter(None, [reason, slid]))

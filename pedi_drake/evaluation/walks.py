@@ -22,7 +22,9 @@ STANCE_FORCE = 20.0
 # from the touchdown (the sphere rolls onto its contact as the load comes on).
 STANCE_SETTLE = 0.05
 SLIP_SAMPLE_PERIOD = 0.01  # [s] feet are sampled this often for the slip
-WALK_KINDS = (spec.Walk, spec.WalkVelocity, spec.WalkTeleop)
+WALK_KINDS = (spec.Walk, spec.WalkVelocity, spec.WalkTeleop)  # a walk_to is a walk
+# Their mission-file kinds, as a result's phase rows name them.
+WALK_KIND_NAMES = ("walk", "walk_to", "walk_velocity", "walk_teleop")
 DRIFT_DISTANCE = 0.2  # [m] the least displacement the estimate's drift is given as a share of
 
 
@@ -117,6 +119,8 @@ def judge_walks(
             walk[key] = counted.get(key)
         errors = counted.get("foothold_errors_m") or [0.0]
         walk["foothold_error_max_m"] = float(max(errors))
+        if "stop" in counted:
+            walk["stop"] = counted["stop"]
         # The mean speed while walking: from the phase's start to its stop (a cycle at rest and the
         # trunk's centring, which are not walking).
         t_stop = counted.get("walked_until_s")
@@ -138,8 +142,10 @@ def judge_walks(
                 speed = np.array([forward @ moved, left @ moved]) / (t_state[k_cmd] - t_state[first])
                 walk["mean_velocity_m_s"] = speed.tolist()
         if isinstance(phase, spec.Walk):
-            error = float(np.linalg.norm(positions[:2, last] - np.asarray(phase.position, float)))
-            yaw_error = abs(_wrap(phase.yaw - end_pose[2]))
+            # A walk_to's goal is the stop it chose (its record's `stop`), a walk's its position.
+            goal = counted.get("stop", {}).get("taken_W", [*phase.position, phase.yaw])
+            error = float(np.linalg.norm(positions[:2, last] - np.asarray(goal[:2], float)))
+            yaw_error = abs(_wrap(goal[2] - end_pose[2]))
             walk.update(goal_error_m=error, goal_yaw_error_rad=yaw_error)
             if error > phase.tolerance or yaw_error > phase.yaw_tolerance:
                 problems.append(

@@ -105,9 +105,11 @@ _IDENTITY_POSE = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
 
 
 def needs_posture_planner(mission: spec.MissionSpec) -> bool:
-    """Whether the mission can ask for an optimal posture (a phase's or the semi-autonomous mode's)."""
+    """Whether the mission can ask for an optimal posture (a phase's or the semi-autonomous mode's)
+    or a stop chosen by the SUF (a walk_to's)."""
     optimal = any(isinstance(p, spec.LegToPedipulation) and p.posture == "optimal" for p in mission.phases)
-    return optimal or mission.semi_autonomous is not None
+    chosen_stop = any(isinstance(p, spec.WalkTo) and p.stop == "suf" for p in mission.phases)
+    return optimal or chosen_stop or mission.semi_autonomous is not None
 
 
 def ik_legs_of(mission: spec.MissionSpec) -> tuple[str, ...]:

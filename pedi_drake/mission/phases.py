@@ -18,7 +18,7 @@ from pedi_drake import robot
 from pedi_drake.estimation.kalman_estimator import STILL_RATE
 from pedi_drake.exceptions import MissionFileError, UnreachableTarget
 from pedi_drake.ik.leg_ik_system import RETARGET_TOLERANCE
-from pedi_drake.leg_kinematics import leg_geometry
+from pedi_drake.leg_kinematics import leg_geometry, working_position_B
 from pedi_drake.locomotion.footholds import stance_pose
 from pedi_drake.locomotion.static_walk import FOOTHOLD_REACH
 from pedi_drake.mission import spec
@@ -52,7 +52,7 @@ from pedi_drake.mission.walk import RUNNERS as WALK_RUNNERS
 from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.suf.posture import Posture, PostureCase
-from pedi_drake.terrain import TABLE_COLUMNS, terrain_height
+from pedi_drake.terrain import terrain_height, terrain_map
 from pedi_drake.trajectory import (
     CircularPath,
     PiecewiseQuintic,
@@ -132,7 +132,7 @@ class MissionEnvironment:
         # operator changes it (MissionProgress.friction).
         self.friction = friction
         # The ground's terrain (pedi_drake.terrain's table; empty: flat ground).
-        self.terrain = np.zeros((0, TABLE_COLUMNS)) if terrain is None else np.asarray(terrain, dtype=float)
+        self.terrain = terrain_map(terrain)
 
     def ground_height(self, xy) -> float:
         """[m] the ground's height under the world point `xy` (x, y) [m]."""
@@ -439,13 +439,6 @@ class HoldFootPoseRunner(PhaseRunner):
 def _on_prongs(refs) -> bool:
     """True while the prongs are in the contact set (the trunk rests on them)."""
     return bool(np.any(np.asarray(refs.contacts[4:]) > 0.5))
-
-
-def working_position_B(leg: str, working_depth: float) -> np.ndarray:
-    """Where leg_to_pedipulation lifts the foot of `leg` [m], trunk frame: `working_depth` [m]
-    below the hip joint, beside it as the thigh offset puts it."""
-    geometry = leg_geometry(leg)
-    return geometry.p_BH + geometry.p_HT - np.array([0.0, 0.0, working_depth])
 
 
 def posture_request(
@@ -1300,7 +1293,8 @@ assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a
 
 
 def kind_name(phase) -> str:
-    return next(name for name, cls in spec.PHASE_KINDS.items() if isinstance(phase, cls))
+    """The mission-file kind of `phase` (its own class's: a walk_to is a walk too)."""
+    return next(name for name, cls in spec.PHASE_KINDS.items() if type(phase) is cls)
 
 
 def register_phase_kind(name: str, spec_class: type[spec.PhaseBase], runner: PhaseRunner) -> None:

@@ -1,4 +1,5 @@
-"""The posture optimiser (pedi_drake.suf.posture) run off the control loop, in a worker process.
+"""The posture optimiser (pedi_drake.suf.posture) and the stop chooser (pedi_drake.suf.stop) run
+off the control loop, in a worker process.
 
 An optimisation takes about a second of CPU: far too long for a mission update (the manager
 updates every 10 ms inside the controller's 2 ms ticks), and a thread would hold Python's lock
@@ -52,13 +53,17 @@ class PostureRequest:
     # Coordinates (of pedi_drake.suf.posture.COORDINATES) kept at the start's values.
     fixed: tuple[str, ...] = ()
 
+    def solve(self) -> PostureResult:
+        return optimise_posture(self.case, self.start, self.limits, self.method, fixed=self.fixed)
+
     def __deepcopy__(self, memo) -> "PostureRequest":
         return self  # a value
 
 
-def solve_request(request: PostureRequest) -> PostureResult:
-    """The optimiser's answer to `request` (what the worker runs)."""
-    return optimise_posture(request.case, request.start, request.limits, request.method, fixed=request.fixed)
+def solve_request(request):
+    """The answer to `request` (what the worker runs): a PostureRequest's optimal posture, or a
+    pedi_drake.suf.stop.StopRequest's stop."""
+    return request.solve()
 
 
 def _start_worker() -> None:
@@ -83,13 +88,13 @@ class PosturePlanner:
         # The worker starts with its first task: start it now, not in a mission update.
         self._pool.submit(int).result()
 
-    def ask(self, request: PostureRequest) -> None:
+    def ask(self, request) -> None:
         """Starts solving `request` unless it is solved or being solved (returns at once)."""
         with self._lock:
             if request not in self._futures:
                 self._futures[request] = self._pool.submit(solve_request, request)
 
-    def answer(self, request: PostureRequest, *, wait: bool) -> PostureResult | None:
+    def answer(self, request, *, wait: bool):
         """The answer to `request` (asked before), None while it is being solved (unless `wait`:
         then it blocks until the answer is in). Re-raises the optimiser's error."""
         self.ask(request)

@@ -50,6 +50,9 @@ TROT_RAMP_LIMIT = 0.03
 # the centroid of the other supports at the current height and attitude; "optimal" takes the
 # posture of largest SUF at the foot's targets (pedi_drake.suf.posture).
 POSTURES = ("fixed", "optimal")
+STOPS = ("suf", "fixed")  # how a walk_to chooses its stop
+# Phase fields the loader derives from the phases that follow, refused in a mission file.
+LOADER_FIELDS = {"leg_to_pedipulation": ("goal",), "walk_to": ("goal", "working_depth")}
 # What the trunk-frame targets of the reaches after a lift with posture: optimal stay fixed to:
 # "world": the world point each names with the trunk in the fixed posture (a thing in the scene,
 # such as a hand: the optimal posture then takes the foot to the same point); "trunk": the trunk
@@ -235,6 +238,25 @@ class Walk(PhaseBase):
     tolerance: float = 0.03  # [m]
     yaw_tolerance: float = 0.05  # [rad]
     timeout: float = 120.0
+
+
+@dataclasses.dataclass
+class WalkTo(Walk):
+    """A walk that chooses where to stop for the work of `leg` that follows: its `position` and
+    `yaw` are the fixed stop (where a `walk` would end), and it stops instead at the stance whose
+    SUF at the targets of the leg's reaches (up to its leg_to_support) is largest, within `search`
+    of the fixed stop (pedi_drake.suf.stop), chosen as the phase starts. The lift of `leg` must
+    follow before any other walk. `stop: fixed` walks to the fixed stop (for comparison). Succeeds
+    when the estimated trunk is within `tolerance` and `yaw_tolerance` of the stop taken."""
+
+    leg: str = "FR"
+    stop: str = "suf"  # "suf" or "fixed"
+    # The box about the fixed stop: the largest move along the world's x and y [m], and turn [rad].
+    search: list[float] = dataclasses.field(default_factory=lambda: [0.1, 0.3])
+    # Set by the loader from the phases that follow (not mission file fields): the lift's goal
+    # and its working depth [m].
+    goal: PostureGoal | None = None
+    working_depth: float = 0.15
 
 
 @dataclasses.dataclass
@@ -524,6 +546,7 @@ PHASE_KINDS: dict[str, type[PhaseBase]] = {
     "set_friction": SetFriction,
     "walk_velocity": WalkVelocity,
     "walk": Walk,
+    "walk_to": WalkTo,
     "walk_teleop": WalkTeleop,
 }
 
@@ -811,8 +834,11 @@ def _load_mission_file(path: Path, resolved: Path, mtime_ns: int, size: int) -> 
                 f"{where}: {field}.kind: unknown phase kind {kind!r}; kinds: {', '.join(PHASE_KINDS)}"
             )
         body = {key: value for key, value in raw_phase.items() if key != "kind"}
-        if "goal" in body and kind == "leg_to_pedipulation":
-            raise MissionFileError(f"{where}: {field}.goal: set by the loader from the phases that follow, not a field")
+        for derived in LOADER_FIELDS.get(kind, ()):
+            if derived in body:
+                raise MissionFileError(
+                    f"{where}: {field}.{derived}: set by the loader from the phases that follow, not a field"
+                )
         phase = _object(body, PHASE_KINDS[kind], field, where)
         phase.name = phase.name or f"{i}_{kind}"
         _check_phase_values(phase, f"{where}: {field}")
@@ -986,6 +1012,13 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
             f"{phase.yaw_rate} rad/s: must be in [0, {limits.yaw_rate}] rad/s, the gait's limit ({phase.gait})",
         )
         need(phase.tolerance > 0, "tolerance", f"must be > 0 m, got {phase.tolerance}")
+    if isinstance(phase, WalkTo):
+        need(phase.stop in STOPS, "stop", f"must be one of {STOPS}, got {phase.stop!r}")
+        need(
+            len(phase.search) == 2 and all(math.isfinite(v) and v >= 0.0 for v in phase.search),
+            "search",
+            f"expected [largest move m, largest turn rad], each finite and >= 0, got {phase.search}",
+        )
     if isinstance(phase, LegToSupport):
         need(phase.frame in FRAMES, "frame", f"must be one of {FRAMES}, got {phase.frame!r}")
         need(len(phase.foothold) in (0, 2), "foothold", f"expected [] or [x, y] in metres, got {phase.foothold}")
@@ -1120,53 +1153,85 @@ def _check_phase_values(phase: PhaseBase, where: str) -> None:
 
 
 def _attach_posture_goals(phases: list[PhaseBase], where: str) -> None:
-    """Gives every leg_to_pedipulation with posture: optimal its PostureGoal: the targets of the
-    leg's reach phases up to its leg_to_support (and the points it must pass on the way), with
-    the attitude of a body_rotate among them. Raises MissionFileError for what the optimiser
-    cannot serve: no reach, two legs moving, the trunk on its prongs, frames mixed."""
+    """Gives every leg_to_pedipulation with posture: optimal its PostureGoal (`reach_goal`), and
+    every walk_to the goal of the lift of its leg that follows it. Raises MissionFileError for
+    what the optimiser cannot serve: no reach, two legs moving, the trunk on its prongs, frames
+    mixed; a walk_to with no lift of its leg after it, or with targets on the trunk."""
     on_prongs = False
     for i, phase in enumerate(phases):
         if isinstance(phase, LeanOnProngs):
             on_prongs = True
         elif isinstance(phase, LeaveProngs):
             on_prongs = False
+        if isinstance(phase, WalkTo):
+            _attach_stop_goal(phases, i, where)
         if not (isinstance(phase, LegToPedipulation) and phase.posture == "optimal"):
             continue
         field = f"{where}: phases[{i}].posture"
         if on_prongs:
             raise MissionFileError(f"{field}: optimal: the trunk rests on its prongs here, which pin it")
-        goal = PostureGoal(leg=phase.leg)
-        frames, last_target = set(), None
-        for later in phases[i + 1 :]:
-            if isinstance(later, LegToSupport) and later.leg == phase.leg:
-                break
-            if isinstance(later, Reach) and later.leg == phase.leg:
-                if later.together:
-                    raise MissionFileError(f"{field}: optimal: {later.name} moves further legs (together)")
-                frames.add(later.frame)
-                goal.targets.append(list(later.target))
-                goal.reach_only.extend(list(p) for p in later.via_points)
-                if later.approach_offset:
-                    goal.reach_only.append([a + b for a, b in zip(later.target, later.approach_offset, strict=True)])
-                last_target = later.target
-            elif isinstance(later, Press) and later.leg == phase.leg and last_target is not None:
-                norm = math.sqrt(sum(v * v for v in later.direction))
-                goal.reach_only.append(
-                    [t + later.max_displacement * d / norm for t, d in zip(last_target, later.direction, strict=True)]
-                )
-            elif isinstance(later, BodyRotate) and not later.pivot and goal.attitude is None:
-                goal.attitude = list(later.rpy)
-            elif isinstance(later, LegToPedipulation | MoveFeet | BodyMove | BodyPath | LeanOnProngs):
+        phase.goal = reach_goal(phases, i, f"{field}: optimal")
+
+
+def _attach_stop_goal(phases: list[PhaseBase], i: int, where: str) -> None:
+    """The walk_to phases[i]'s goal: that of the next leg_to_pedipulation of its leg, which must
+    follow before any other walk, its targets in the world (targets on the trunk move with it:
+    no stop serves them better); and that lift's working depth."""
+    phase = phases[i]
+    field = f"{where}: phases[{i}].leg"
+    for j in range(i + 1, len(phases)):
+        later = phases[j]
+        if isinstance(later, LegToPedipulation) and later.leg == phase.leg:
+            goal = reach_goal(phases, j, f"{field}: walk_to")
+            if goal.frame != "world":
                 raise MissionFileError(
-                    f"{field}: optimal: {later.name} ({type(later).__name__}) changes the stance or trunk "
-                    "before the leg is back on the ground; the optimiser chooses one posture for one lifted leg"
+                    f"{field}: walk_to: the reaches of {phase.leg} after it name trunk-frame targets, which move "
+                    "with the trunk wherever it stops; give them in the world frame"
                 )
-        if not goal.targets:
-            raise MissionFileError(f"{field}: optimal: no reach of {phase.leg} follows before its leg_to_support")
-        if len(frames) > 1:
-            raise MissionFileError(f"{field}: optimal: the reaches of {phase.leg} mix frames {sorted(frames)}")
-        goal.frame = frames.pop()
-        phase.goal = goal
+            phase.goal, phase.working_depth = goal, later.working_depth
+            return
+        if isinstance(later, Walk | WalkVelocity | WalkTeleop):
+            break
+    raise MissionFileError(f"{field}: walk_to: no leg_to_pedipulation of {phase.leg} follows before the next walk")
+
+
+def reach_goal(phases: list[PhaseBase], i: int, field: str) -> PostureGoal:
+    """The PostureGoal of the leg lifted by phases[i]: the targets of the leg's reach phases up to
+    its leg_to_support (and the points it must pass on the way), with the attitude of a
+    body_rotate among them. `field` names the phase's field in the errors."""
+    phase = phases[i]
+    goal = PostureGoal(leg=phase.leg)
+    frames, last_target = set(), None
+    for later in phases[i + 1 :]:
+        if isinstance(later, LegToSupport) and later.leg == phase.leg:
+            break
+        if isinstance(later, Reach) and later.leg == phase.leg:
+            if later.together:
+                raise MissionFileError(f"{field}: {later.name} moves further legs (together)")
+            frames.add(later.frame)
+            goal.targets.append(list(later.target))
+            goal.reach_only.extend(list(p) for p in later.via_points)
+            if later.approach_offset:
+                goal.reach_only.append([a + b for a, b in zip(later.target, later.approach_offset, strict=True)])
+            last_target = later.target
+        elif isinstance(later, Press) and later.leg == phase.leg and last_target is not None:
+            norm = math.sqrt(sum(v * v for v in later.direction))
+            goal.reach_only.append(
+                [t + later.max_displacement * d / norm for t, d in zip(last_target, later.direction, strict=True)]
+            )
+        elif isinstance(later, BodyRotate) and not later.pivot and goal.attitude is None:
+            goal.attitude = list(later.rpy)
+        elif isinstance(later, LegToPedipulation | MoveFeet | BodyMove | BodyPath | LeanOnProngs):
+            raise MissionFileError(
+                f"{field}: {later.name} ({type(later).__name__}) changes the stance or trunk "
+                "before the leg is back on the ground; the optimiser chooses one posture for one lifted leg"
+            )
+    if not goal.targets:
+        raise MissionFileError(f"{field}: no reach of {phase.leg} follows before its leg_to_support")
+    if len(frames) > 1:
+        raise MissionFileError(f"{field}: the reaches of {phase.leg} mix frames {sorted(frames)}")
+    goal.frame = frames.pop()
+    return goal
 
 
 def _check_semi_autonomous(block: SemiAutonomousMode, where: str) -> None:

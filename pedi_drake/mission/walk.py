@@ -1,4 +1,4 @@
-"""The walking phases, `walk`, `walk_velocity` and `walk_teleop`: the static walk of
+"""The walking phases, `walk`, `walk_to`, `walk_velocity` and `walk_teleop`: the static walk of
 pedi_drake.locomotion run through the whole-body controller's references (`gait: trot` runs
 pedi_drake.mission.trot_steps instead).
 
@@ -27,6 +27,7 @@ from pydrake.math import RollPitchYaw, RotationMatrix
 
 from pedi_drake import robot
 from pedi_drake.exceptions import PediError, UnreachableTarget
+from pedi_drake.leg_kinematics import working_position_B
 from pedi_drake.locomotion.footholds import NOMINAL_FEET_B, PlanarPose
 from pedi_drake.locomotion.gait import (
     CYCLE_LENGTH,
@@ -38,10 +39,12 @@ from pedi_drake.locomotion.gait import (
 )
 from pedi_drake.locomotion.static_walk import SlotPlan, choose_cycle, replan_slot
 from pedi_drake.mission import spec, trot_steps
+from pedi_drake.mission.posture_planner import PLAN_LATENCY, PLAN_WAIT_LIMIT
 from pedi_drake.mission.progress import FAILED, LEG_MODE_FOOT, RUNNING, SUCCEEDED, LegTrajectory, MissionProgress
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.touchdown import PLACE_DEPTH, swing_foot_down
 from pedi_drake.operator.command import KIND_TWIST, OperatorCommand
+from pedi_drake.suf.stop import StopCase, StopLimits, StopRequest
 from pedi_drake.trajectory import PiecewiseQuintic, QuinticOrientationSegment, QuinticSegment, RampSegment
 
 LATE_TOUCHDOWN = 0.4  # [s] after its swing's end a foot that has felt no ground fails the phase
@@ -391,6 +394,89 @@ class WalkToRunner(WalkRunnerBase):
         return FAILED
 
 
+class WalkToStopRunner(WalkToRunner):
+    """walk_to: the stop of largest SUF for the work that follows (pedi_drake.suf.stop), chosen by
+    the posture planner's worker as the phase starts (the robot stands meanwhile, as a lift
+    waiting for its posture does), then walked to as `walk` walks to its goal; `stop: fixed` walks
+    to the fixed stop at once."""
+
+    def start(self, phase, progress, view, env):
+        request = stop_request(phase, view, env)
+        progress.memo["stop_request"] = request
+        if phase.stop == "fixed":
+            self._walk_to(phase, progress, view, env, request.fixed, None)
+            return
+        if env.planner is None:
+            raise UnreachableTarget(f"{phase.name}: stop: suf needs the posture planner")
+        env.planner.ask(request)
+        progress.memo["stop_due"] = view.time + PLAN_LATENCY
+
+    def step(self, phase, progress, view, env):
+        walk = progress.memo.get("walk_phase")
+        if walk is not None:
+            return super().step(walk, progress, view, env)
+        t, due, request = view.time, progress.memo["stop_due"], progress.memo["stop_request"]
+        result = env.planner.answer(request, wait=env.wait_for_plans) if t >= due else None
+        if result is None:
+            if t >= due:
+                # Late: the robot stands, which the phase's timeout does not count.
+                progress.plan_wait = t - due
+                if progress.plan_wait > PLAN_WAIT_LIMIT:
+                    progress.reason = f"{phase.name}: no stop chosen {PLAN_WAIT_LIMIT:.0f} s after it was due"
+                    return FAILED
+            return RUNNING
+        if not result.best.posture.feasible:
+            progress.reason = (
+                f"{phase.name}: no stop within {phase.search} of the fixed stop lets {phase.leg} reach its targets "
+                f"({result.best.posture.reason})"
+            )
+            return FAILED
+        self._walk_to(phase, progress, view, env, result.best.stop, result)
+        return RUNNING
+
+    def _walk_to(self, phase, progress, view, env, stop, result) -> None:
+        """Starts the walk to `stop` (x, y [m], yaw [rad]) and records the stop's choice."""
+        walk = dataclasses.replace(phase, position=[float(stop[0]), float(stop[1])], yaw=float(stop[2]))
+        progress.memo["walk_phase"] = walk
+        request = progress.memo["stop_request"]
+        record = {"chosen_by": phase.stop, "fixed_W": list(request.fixed), "taken_W": [float(v) for v in stop]}
+        if result is not None:
+            record.update(
+                fixed_suf_n=result.fixed.posture.suf,
+                fixed_feasible=result.fixed.posture.feasible,
+                taken_suf_n=result.best.posture.suf,
+                evaluations=result.evaluations,
+                plan_wait_s=progress.plan_wait,
+            )
+        progress.records[-1].metrics.update(leg=phase.leg, stop=record)
+        super().start(walk, progress, view, env)
+
+
+def stop_request(phase, view: RobotView, env) -> StopRequest:
+    """The stop to choose for the walk_to `phase`: its lift's targets, the stance the walk leaves
+    (the feet under the hips), the trunk at the height it stands at now above the ground."""
+    goal = phase.goal
+    fixed = (float(phase.position[0]), float(phase.position[1]), float(phase.yaw))
+    ground = env.ground_height(np.array(fixed[:2]))
+    feet = view.feet_W_array()
+    height = float(view.base.p_WB[2]) - _ground_under(env, feet[:, :2])
+
+    def points(given) -> tuple[tuple[float, float, float], ...]:
+        return tuple(tuple(float(v) for v in p) for p in given)
+
+    case = StopCase(
+        leg=phase.leg,
+        targets=points(goal.targets),
+        reach_only=points(goal.reach_only),
+        lift_B=tuple(float(v) for v in working_position_B(phase.leg, phase.working_depth)),
+        feet_B=points(NOMINAL_FEET_B),
+        height=height,
+        ground=ground,
+        prongs_key=robot.design_key(env.prongs),
+    )
+    return StopRequest(case, fixed, StopLimits(shift=float(phase.search[0]), turn=float(phase.search[1])))
+
+
 def _wrap(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
@@ -421,4 +507,9 @@ def operator_twist(command: OperatorCommand | None, limits: GaitLimits) -> np.nd
     return np.clip(value, -bounds, bounds)
 
 
-RUNNERS = {spec.WalkVelocity: WalkVelocityRunner(), spec.Walk: WalkToRunner(), spec.WalkTeleop: WalkTeleopRunner()}
+RUNNERS = {
+    spec.WalkVelocity: WalkVelocityRunner(),
+    spec.Walk: WalkToRunner(),
+    spec.WalkTo: WalkToStopRunner(),
+    spec.WalkTeleop: WalkTeleopRunner(),
+}

@@ -319,6 +319,15 @@ def evaluate_posture(
     return PostureEvaluation(posture, True, float(min(sufs)), tuple(sufs), "", com_margin)
 
 
+def balanced_evaluation(
+    case: PostureCase, start: Posture, limits: PostureLimits = PostureLimits(), method: str = "affine"
+) -> PostureEvaluation:
+    """`start` evaluated as a fixed lift would take it: its trunk first shifted (x, y, within the
+    box of `limits` about it) until the centre of mass is `com_margin` inside the stance polygon."""
+    lower, upper = posture_box(start, limits)
+    return evaluate_posture(case, _onto_balance(case, start.vector(), limits, lower, upper), limits, method)
+
+
 def posture_box(start: Posture, limits: PostureLimits) -> tuple[np.ndarray, np.ndarray]:
     """(lower, upper) posture vectors of the search box around `start`."""
     x, y, _ = start.p_WB
