@@ -59,8 +59,11 @@ def test_the_support_margin_is_the_distance_inside():
     assert support_margin(square[::-1], [1.3, 0.5]) == pytest.approx(-0.3)
 
 
+# The extreme twists within the limits: each component at its limit or zero, the yaw rate held to
+# what the sideways speed leaves it.
 CORNERS = [
-    np.array(c) * [LIMITS.forward, LIMITS.sideways, LIMITS.yaw_rate] for c in itertools.product((-1, 0, 1), repeat=3)
+    LIMITS.held(np.array(c) * [LIMITS.forward, LIMITS.sideways, LIMITS.yaw_rate])
+    for c in itertools.product((-1, 0, 1), repeat=3)
 ]
 
 
@@ -83,10 +86,26 @@ def test_straight_sideways_and_turning_walks_run_at_the_full_twist(twist):
     assert np.all(scales == 1.0)
 
 
+@pytest.mark.parametrize("twist", CORNERS, ids=lambda t: f"{t[0]:+.2f},{t[1]:+.2f},{t[2]:+.3f}")
+def test_every_twist_within_the_limits_lands_each_foot_on_its_own_side(twist):
+    # Seen from the trunk at touchdown a swing foot lands on its own side of the centre line: a
+    # sideways step and a turn at their limits together put a front foot 4 cm across it.
+    line = PlanarPose(0.0, 0.0, 0.0)
+    cycle, scale = choose_cycle(line, line.xy, NOMINAL_FEET_B, twist, TIMING)
+    for plan in plan_cycle(cycle, 0.0, line, line.xy, NOMINAL_FEET_B, scale * twist, TIMING):
+        if plan.foothold_xy is not None:
+            k = robot.LEG_NAMES.index(plan.slot.leg)
+            across = plan.line_end.rotation().T @ (plan.foothold_xy - plan.line_end.xy)
+            assert math.copysign(1.0, NOMINAL_FEET_B[k][1]) * across[1] > 0.0, (plan.slot.leg, across)
+
+
 def test_a_twist_past_the_limits_is_refused_not_clipped():
     assert LIMITS.problem([0.1, 0.0, 0.0]) is None
     assert "forward" in LIMITS.problem([0.25, 0.0, 0.0])
     assert "yaw rate" in LIMITS.problem([0.0, 0.0, -0.35])
+    # Sideways and turning share one budget.
+    assert LIMITS.problem([0.0, 0.055, 0.15]) is None
+    assert "share one budget" in LIMITS.problem([0.0, 0.1, 0.2])
 
 
 def test_walking_forward_starts_with_the_right_hind_leg_and_its_slots_chain():

@@ -54,6 +54,11 @@ def _mission(tmp_path, text: str) -> Path:
             "{kind: walk_velocity, twist: [0.1, 0.0, 0.9]}",
             "phases[1].twist",
         ),
+        (
+            "{kind: walk, position: [0.3, 0.1], yaw: 0.2, speed: 0.15}",
+            "{kind: walk_velocity, twist: [0.0, 0.1, 0.2]}",
+            "phases[1].twist",
+        ),
     ],
 )
 def test_a_bad_walk_is_refused_naming_its_field(tmp_path, old, new, field):
@@ -113,8 +118,11 @@ def test_the_remote_sticks_become_a_twist_in_the_walk_these_ways_layout():
 
 def test_an_operator_twist_is_held_to_the_gait_and_a_stale_one_is_none():
     limits = GAITS["static_walk"]
-    fresh = OperatorCommand(kind=KIND_TWIST, value=np.array([0.5, -0.05, -1.0]), age=0.05)
-    np.testing.assert_allclose(operator_twist(fresh, limits), [limits.forward, -0.05, -limits.yaw_rate])
+    fresh = OperatorCommand(kind=KIND_TWIST, value=np.array([0.5, 0.0, -1.0]), age=0.05)
+    np.testing.assert_allclose(operator_twist(fresh, limits), [limits.forward, 0.0, -limits.yaw_rate])
+    # Sideways and turning share one budget: at 0.055 m/s sideways (half its limit), half the yaw rate.
+    both = OperatorCommand(kind=KIND_TWIST, value=np.array([0.0, -0.055, -1.0]), age=0.05)
+    np.testing.assert_allclose(operator_twist(both, limits), [0.0, -0.055, -0.5 * limits.yaw_rate])
     stale = OperatorCommand(kind=KIND_TWIST, value=np.array([0.1, 0.0, 0.0]), age=1.0)
     foot = OperatorCommand(kind=KIND_VELOCITY, value=np.array([0.1, 0.0, 0.0]), age=0.05)
     assert not operator_twist(stale, limits).any() and not operator_twist(foot, limits).any()

@@ -22,6 +22,8 @@ stride over the cycle's duration.
 import dataclasses
 import math
 
+import numpy as np
+
 from pedi_drake.exceptions import PediError
 
 SWING, SHIFT = "swing", "shift"
@@ -122,6 +124,17 @@ class GaitLimits:
     forward: float
     sideways: float
     yaw_rate: float
+    # Whether the sideways speed and the yaw rate share one budget, |sideways| / sideways +
+    # |yaw rate| / yaw_rate <= 1 (`turn_limit`). In the static walk a sideways step and a turn move
+    # the same swing feet toward the trunk's centre line: each alone at its limit leaves them 1 cm
+    # on their own side at touchdown, both together put them 4 cm across it, under the other feet.
+    sideways_turn_shared: bool = False
+
+    def turn_limit(self, sideways: float) -> float:
+        """The largest yaw rate [rad/s] at the sideways speed `sideways` [m/s]."""
+        if not self.sideways_turn_shared:
+            return self.yaw_rate
+        return self.yaw_rate * max(0.0, 1.0 - abs(sideways) / self.sideways)
 
     def problem(self, twist) -> str | None:
         """Why `twist` (forward, sideways, yaw rate) is past these limits, or None."""
@@ -129,7 +142,23 @@ class GaitLimits:
         for value, limit, what in zip(twist, limits, ("forward", "sideways", "yaw rate"), strict=True):
             if not abs(value) <= limit:
                 return f"{what} {value} is beyond the gait's limit {limit}"
+        turn = self.turn_limit(twist[1])
+        if not abs(twist[2]) <= turn + 1e-12:
+            return (
+                f"yaw rate {twist[2]} with sideways speed {twist[1]} is beyond the gait's limit {turn:.3g} "
+                f"(sideways speed and yaw rate share one budget: |sideways| / {self.sideways} + |yaw rate| / "
+                f"{self.yaw_rate} <= 1)"
+            )
         return None
+
+    def held(self, twist) -> np.ndarray:
+        """`twist` (forward, sideways, yaw rate) held to these limits: each component saturated,
+        then the yaw rate to `turn_limit` of the sideways speed."""
+        bounds = np.array([self.forward, self.sideways, self.yaw_rate])
+        held = np.clip(np.asarray(twist, float), -bounds, bounds)
+        turn = self.turn_limit(held[1])
+        held[2] = float(np.clip(held[2], -turn, turn))
+        return held
 
 
 # The gaits a walk may take, and their limits. The static walk's come from its plan on paper
@@ -140,6 +169,6 @@ class GaitLimits:
 # HQP (pedi_drake.benchmarks.walking --trot-speeds); its sideways and yaw limits are not yet
 # measured by a benchmark.
 GAITS = {
-    "static_walk": GaitLimits(forward=0.2, sideways=0.11, yaw_rate=0.3),
+    "static_walk": GaitLimits(forward=0.2, sideways=0.11, yaw_rate=0.3, sideways_turn_shared=True),
     "trot": GaitLimits(forward=0.8, sideways=0.2, yaw_rate=0.5),
 }

@@ -363,8 +363,22 @@ class WalkToRunner(WalkRunnerBase):
         cycle = TROT_STEER_TIME if phase.gait == "trot" else StaticWalkTiming().cycle
         top_yaw_rate = phase.yaw_rate or limits.yaw_rate
         yaw_rate = float(np.clip(yaw_error / cycle, -top_yaw_rate, top_yaw_rate))
-        # The speed whose arc at that yaw rate ends the cycle on the goal (PlanarPose.moved inverted),
-        # scaled down as a whole (its direction kept) to the phase's and the gait's limits.
+        bounds = np.array([min(phase.speed, limits.forward), min(phase.speed, limits.sideways)])
+        velocity = self._velocity(error_L, yaw_rate, cycle, bounds)
+        # Where the sideways speed leaves the turn less (limits.turn_limit), the yaw rate gives way
+        # and the speed is solved again for it: the position is closed first, the heading after.
+        turn = limits.turn_limit(velocity[1])
+        if abs(yaw_rate) > turn:
+            yaw_rate = math.copysign(turn, yaw_rate)
+            velocity = self._velocity(error_L, yaw_rate, cycle, bounds)
+            yaw_rate = float(np.clip(yaw_rate, -limits.turn_limit(velocity[1]), limits.turn_limit(velocity[1])))
+        return np.array([velocity[0], velocity[1], yaw_rate])
+
+    @staticmethod
+    def _velocity(error_L: np.ndarray, yaw_rate: float, cycle: float, bounds: np.ndarray) -> np.ndarray:
+        """The speed (forward, sideways) [m/s] whose arc at `yaw_rate` [rad/s] ends `cycle` [s] on
+        the goal `error_L` [m] ahead in the line's frame (PlanarPose.moved inverted), scaled down as
+        a whole (its direction kept) to `bounds`."""
         angle = yaw_rate * cycle
         if abs(angle) < 1e-9:
             velocity = error_L / cycle
@@ -372,9 +386,7 @@ class WalkToRunner(WalkRunnerBase):
             s, c = math.sin(angle), math.cos(angle)
             arc = np.array([[s, -(1.0 - c)], [1.0 - c, s]]) / yaw_rate
             velocity = np.linalg.solve(arc, error_L)
-        bounds = np.array([min(phase.speed, limits.forward), min(phase.speed, limits.sideways)])
-        velocity *= min(1.0, *(bounds / np.maximum(np.abs(velocity), 1e-12)))
-        return np.array([velocity[0], velocity[1], yaw_rate])
+        return velocity * min(1.0, *(bounds / np.maximum(np.abs(velocity), 1e-12)))
 
     @staticmethod
     def _goal_line(phase, state: WalkState) -> PlanarPose:
@@ -496,15 +508,15 @@ class WalkTeleopRunner(WalkRunnerBase):
 
 
 def operator_twist(command: OperatorCommand | None, limits: GaitLimits) -> np.ndarray:
-    """The operator's twist held to `limits` (each component saturated: a stick at full deflection
-    asks for the most there is); zero without a fresh KIND_TWIST command."""
+    """The operator's twist held to `limits` (`GaitLimits.held`: each component saturated, a stick at
+    full deflection asks for the most there is, and the turn within what the sideways speed leaves);
+    zero without a fresh KIND_TWIST command."""
     if command is None or command.kind != KIND_TWIST or not command.age < OPERATOR_TWIST_STALE:
         return np.zeros(3)
     value = np.asarray(command.value, float)
     if not np.all(np.isfinite(value)):
         return np.zeros(3)
-    bounds = np.array([limits.forward, limits.sideways, limits.yaw_rate])
-    return np.clip(value, -bounds, bounds)
+    return limits.held(value)
 
 
 RUNNERS = {
