@@ -10,6 +10,7 @@ import daqp
 import numpy as np
 from scipy.linalg import lapack
 
+from pedi_drake.control.compiled_projected_dynamics import RELAXED_BALANCE_WEIGHT
 from pedi_drake.exceptions import QpInfeasible
 from pedi_drake.friction import UP, write_pyramid_faces
 
@@ -258,10 +259,13 @@ class ContactForceSolution:
     tau: np.ndarray  # (12,) [N m]
     equality_residual: float  # |Jc,u^T lam - r_u| [N, N m]
     solve_time: float  # [s]
+    relaxed: bool = False  # the balance held only as nearly as the limits allow
 
 
 def solve_contact_forces(problem: ContactForceProblem) -> ContactForceSolution:
-    """Eq. 7 by elimination of the wrench balance and DAQP; raises QpInfeasible."""
+    """Eq. 7 by elimination of the wrench balance and DAQP; where no forces within the limits hold
+    the balance, the nearest balance they allow (`relaxed`); raises QpInfeasible where there are
+    none at all."""
     start = time.perf_counter()
     p = problem
     n = p.Jc.shape[0]
@@ -288,13 +292,13 @@ def solve_contact_forces(problem: ContactForceProblem) -> ContactForceSolution:
     g[1::6] = p.f_max * p.ramp
     G_all = np.vstack([G, T, -T])
     g_all = np.concatenate([g, p.torque_limit - r_a, p.torque_limit + r_a])
+    H_lam = p.torque_weight * (T.T @ T) + p.force_weight * np.eye(n)
+    f_lam = p.torque_weight * (T.T @ r_a) - p.force_weight * p.force_share
+    lam = None
     if Z.shape[1] == 0:
-        lam = lam_0
-        if np.any(G_all @ lam > g_all + 1e-6):
-            raise QpInfeasible("the contact forces fixed by the wrench balance violate the friction or torque limits")
+        if not np.any(G_all @ lam_0 > g_all + 1e-6):
+            lam = lam_0
     else:
-        H_lam = p.torque_weight * (T.T @ T) + p.force_weight * np.eye(n)
-        f_lam = p.torque_weight * (T.T @ r_a) - p.force_weight * p.force_share
         H = Z.T @ H_lam @ Z
         f = Z.T @ (H_lam @ lam_0 + f_lam)
         C = G_all @ Z
@@ -306,11 +310,24 @@ def solve_contact_forces(problem: ContactForceProblem) -> ContactForceSolution:
             np.ascontiguousarray(upper),
             np.full(len(upper), -_INFINITY),
         )
-        if exitflag not in _DAQP_OK or not np.isfinite(z).all():
-            raise QpInfeasible(f"contact-force QP: DAQP exit flag {exitflag}")
-        lam = lam_0 + Z @ np.asarray(z)
+        if exitflag in _DAQP_OK and np.isfinite(z).all():
+            lam = lam_0 + Z @ np.asarray(z)
+    relaxed = lam is None
+    if relaxed:
+        # No forces within the limits hold the balance: the nearest balance they allow.
+        weight = RELAXED_BALANCE_WEIGHT
+        lam, _, exitflag, _ = daqp.solve(
+            np.ascontiguousarray(H_lam + weight * B.T @ B),
+            np.ascontiguousarray(f_lam - weight * B.T @ r_u),
+            np.ascontiguousarray(G_all),
+            np.ascontiguousarray(g_all),
+            np.full(len(g_all), -_INFINITY),
+        )
+        if exitflag not in _DAQP_OK or not np.isfinite(lam).all():
+            raise QpInfeasible(f"contact-force QP, relaxed: DAQP exit flag {exitflag}")
+        lam = np.asarray(lam)
     residual = float(np.linalg.norm(B @ lam - r_u))
-    return ContactForceSolution(lam, r_a + T @ lam, residual, time.perf_counter() - start)
+    return ContactForceSolution(lam, r_a + T @ lam, residual, time.perf_counter() - start, relaxed)
 
 
 def impedance_force_estimate(

@@ -18,7 +18,7 @@ from pedi_drake import robot
 from pedi_drake.control import references
 from pedi_drake.control.projected_impedance_controller import ProjectedImpedanceController
 from pedi_drake.control.robot_model import RobotSnapshot
-from pedi_drake.control.tick_steps import STATUS_BAD_INPUT, STATUS_OK, STATUS_QP_FAILED
+from pedi_drake.control.tick_steps import STATUS_BAD_INPUT, STATUS_CONTACTS_RELAXED, STATUS_OK, STATUS_QP_FAILED
 from pedi_drake.dynamics.go1_dynamics import add_trunk_external_wrench
 from pedi_drake.exceptions import QpInfeasible
 from pedi_drake.friction import pyramid_slope
@@ -333,7 +333,7 @@ class ReferenceTick:
         ground = float(s.p_contacts[held_idx, 2].mean()) - robot.FOOT_RADIUS if len(held_idx) else 0.0
         forces = np.zeros((self.num_contacts, 3))
         forces[held_idx] = solution.lam.reshape(-1, 3)
-        diag[self.diag["status"]] = STATUS_OK
+        diag[self.diag["status"]] = STATUS_CONTACTS_RELAXED if solution.relaxed else STATUS_OK
         diag[self.diag["solve_time"]] = solution.solve_time
         diag[self.diag["consecutive_failures"]] = 0.0
         diag[self.diag["capture_point"]] = self.balance.capture_point(s, ground)[0]

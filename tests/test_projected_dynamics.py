@@ -181,9 +181,11 @@ def test_contact_force_qp_reports_an_impossible_minimum_force(go1_model, rng):
         actuated=v_index,
         ramp=np.ones(4),
         friction=0.4,
-        f_min=200.0,  # four times 200 N cannot balance a 13 kg robot's weight
+        # Four times 200 N cannot balance a 13 kg robot's weight, and a tenth of the effort limits
+        # cannot press the feet that hard: no forces at all, not even a relaxed balance.
+        f_min=200.0,
         f_max=250.0,
-        torque_limit=0.9 * robot.EFFORT_LIMIT,
+        torque_limit=0.1 * robot.EFFORT_LIMIT,
         force_share=np.zeros(12),
     )
     with pytest.raises(QpInfeasible):

@@ -288,8 +288,9 @@ def test_zero_quaternion_fails_without_nan_on_both_paths(standing):
 
 
 def test_infeasible_contact_qp_fails_and_recovers_alike_on_both_paths():
-    # 200 N minimum per loaded foot: four feet cannot balance a 13 kg robot.
-    config = ProjectedImpedanceConfig(min_normal_force=200.0, contact_ramp_time=0.02)
+    # 200 N minimum per loaded foot: four feet cannot balance a 13 kg robot, and a tenth of the
+    # effort limits cannot press them that hard (no relaxed balance either).
+    config = ProjectedImpedanceConfig(min_normal_force=200.0, torque_limit_scale=0.1, contact_ramp_time=0.02)
     controller, context = standing_controller(config)
     controller.contact_set_port.FixValue(context, np.zeros(4))
     statuses = []
@@ -614,7 +615,7 @@ def test_contact_forces_kernel_solves_the_reference_qp(standing):
     controller = standing
     oracle = ReferenceTick(controller)
     rng = np.random.default_rng(RNG_SEED)
-    solved = 0
+    outcomes = {cpd.CONTACT_FORCES_OK: 0, cpd.CONTACT_FORCES_RELAXED: 0}
     for _ in range(30):
         inputs, _ = random_tick_inputs(controller, rng)
         s = controller.model.update(inputs[0], inputs[1], inputs[2])
@@ -664,10 +665,13 @@ def test_contact_forces_kernel_solves_the_reference_qp(standing):
             tau,
             residual,
         )
-        assert (status == cpd.CONTACT_FORCES_OK) == (expected is not None)
-        if expected is not None:
-            solved += 1
-            np.testing.assert_allclose(lam, expected.lam, rtol=RTOL, atol=ATOL)
-            np.testing.assert_allclose(tau, expected.tau, rtol=RTOL, atol=ATOL)
-            assert residual[0] == pytest.approx(expected.equality_residual, abs=1e-9)
-    assert solved > 5
+        if expected is None:
+            assert status == cpd.CONTACT_FORCES_INFEASIBLE
+            continue
+        assert status == (cpd.CONTACT_FORCES_RELAXED if expected.relaxed else cpd.CONTACT_FORCES_OK)
+        outcomes[status] += 1
+        np.testing.assert_allclose(lam, expected.lam, rtol=RTOL, atol=ATOL)
+        np.testing.assert_allclose(tau, expected.tau, rtol=RTOL, atol=ATOL)
+        assert residual[0] == pytest.approx(expected.equality_residual, abs=1e-6 if expected.relaxed else 1e-9)
+    # Both the exact balance and the relaxed one met, several times each.
+    assert outcomes[cpd.CONTACT_FORCES_OK] > 5 and outcomes[cpd.CONTACT_FORCES_RELAXED] > 2, outcomes

@@ -95,8 +95,13 @@ from pedi_drake.friction import write_contact_force_rows
 from pedi_drake.numerics import daqp_kernel
 from pedi_drake.runtime.jit import kernel
 
-# Status of `contact_forces`.
-CONTACT_FORCES_OK, CONTACT_FORCES_INFEASIBLE = 0, 1
+# Status of `contact_forces`: the planned acceleration's wrench balance held exactly; held as
+# nearly as the limits allow (the balance weighted, `RELAXED_BALANCE_WEIGHT`); no forces at all.
+CONTACT_FORCES_OK, CONTACT_FORCES_INFEASIBLE, CONTACT_FORCES_RELAXED = 0, 1, 2
+# [1 / N^2, in the units of the torque weight] the wrench balance's weight when it cannot hold
+# exactly within the friction pyramids and the torque limits: 1 N of imbalance costs what 100 N m
+# of torque does, so the forces come as near to the plan as the limits let them.
+RELAXED_BALANCE_WEIGHT = 1e4
 # A scale below zero tells symmetric_pseudo_inverse to take the largest eigenvalue as its scale.
 _LARGEST = -1.0
 # The forces fixed by the wrench balance alone may exceed their bounds by this much [N, N m]
@@ -543,9 +548,10 @@ def contact_forces(
     M vdot + h, ramp (k,), force_share (3k,), normals (k, 3): the unit normal (world) of the
     ground under each, the axis of its friction pyramid of slope `friction` and of its force
     bounds): the forces lam (3k,) [N], the torques tau (12,)
-    [N m] and |Jc,u^T lam - r_u| in equality_residual[0]; returns CONTACT_FORCES_OK or
-    CONTACT_FORCES_INFEASIBLE (lam and tau then meaningless). The QP goes to
-    DAQP (`daqp_kernel.solve_qp`) with `proximal_weight` [units of its Hessian]."""
+    [N m] and |Jc,u^T lam - r_u| in equality_residual[0]; returns CONTACT_FORCES_OK,
+    CONTACT_FORCES_RELAXED (no forces within the limits hold the balance: the nearest that do,
+    `_relaxed_contact_forces`) or CONTACT_FORCES_INFEASIBLE (lam and tau then meaningless). The
+    QPs go to DAQP (`daqp_kernel.solve_qp`) with `proximal_weight` [units of its Hessian]."""
     n = Jc.shape[0]
     k = n // 3
     na = actuated.shape[0]
@@ -609,6 +615,18 @@ def contact_forces(
             G[6 * k + na + i, j] = -T[i, j]
         g[6 * k + i] = torque_limit[i] - r_a[i]
         g[6 * k + na + i] = torque_limit[i] + r_a[i]
+    # The objective over lam: torques and the forces' distance from their share.
+    H_lam = np.empty((n, n))
+    _transposed_multiply(T, T, H_lam)
+    for i in range(n):
+        for j in range(n):
+            H_lam[i, j] *= torque_weight
+        H_lam[i, i] += force_weight
+    f_lam = np.empty(n)
+    _transposed_times(T, r_a, f_lam)
+    for i in range(n):
+        f_lam[i] = torque_weight * f_lam[i] - force_weight * force_share[i]
+    exact = True
     if nz == 0:
         for j in range(n):
             lam[j] = lam_0[j]
@@ -616,22 +634,12 @@ def contact_forces(
         _times(G, lam, values)
         for i in range(rows):
             if not values[i] <= g[i] + _FIXED_FORCE_SLACK:
-                return CONTACT_FORCES_INFEASIBLE
+                exact = False
     else:
         Z = np.empty((n, nz))  # the eigenvectors of the dropped eigenvalues, as columns
         for i in range(nz):
             for j in range(n):
                 Z[j, i] = W[i, j]
-        H_lam = np.empty((n, n))
-        _transposed_multiply(T, T, H_lam)
-        for i in range(n):
-            for j in range(n):
-                H_lam[i, j] *= torque_weight
-            H_lam[i, i] += force_weight
-        f_lam = np.empty(n)
-        _transposed_times(T, r_a, f_lam)
-        for i in range(n):
-            f_lam[i] = torque_weight * f_lam[i] - force_weight * force_share[i]
         HZ = np.empty((n, nz))
         multiply(H_lam, Z, HZ)
         H = np.empty((nz, nz))
@@ -654,14 +662,21 @@ def contact_forces(
         exit_flag = daqp_kernel.solve_qp(
             H, f, C, upper, lower, sense, proximal_weight, daqp_kernel.QP_FIXED_POINT, 0.0, z, np.empty(rows)
         )
-        if not daqp_kernel.solved(exit_flag):
-            return CONTACT_FORCES_INFEASIBLE
+        exact = daqp_kernel.solved(exit_flag)
         for i in range(nz):
-            if not math.isfinite(z[i]):
-                return CONTACT_FORCES_INFEASIBLE
-        _times(Z, z, lam)
-        for j in range(n):
-            lam[j] += lam_0[j]
+            exact = exact and math.isfinite(z[i])
+        if exact:
+            _times(Z, z, lam)
+            for j in range(n):
+                lam[j] += lam_0[j]
+    status = CONTACT_FORCES_OK
+    if not exact:
+        # No forces within the limits give the planned acceleration (a swing's reaction the three
+        # stance feet cannot hold, say): the nearest balance the limits allow, the trunk then
+        # accelerating a little off its plan, rather than no command at all.
+        if not _relaxed_contact_forces(B, r_u, H_lam, f_lam, G, g, proximal_weight, lam):
+            return CONTACT_FORCES_INFEASIBLE
+        status = CONTACT_FORCES_RELAXED
     balance = np.empty(nu)
     _times(B, lam, balance)
     for i in range(nu):
@@ -670,7 +685,34 @@ def contact_forces(
     _times(T, lam, tau)
     for i in range(na):
         tau[i] += r_a[i]
-    return CONTACT_FORCES_OK
+    return status
+
+
+@kernel
+def _relaxed_contact_forces(B, r_u, H_lam, f_lam, G, g, proximal_weight: float, lam) -> bool:
+    """Writes into lam the forces that minimise the contact QP's objective plus
+    RELAXED_BALANCE_WEIGHT ||B lam - r_u||^2 within G lam <= g; False if DAQP finds none."""
+    n, rows = lam.shape[0], g.shape[0]
+    H = np.empty((n, n))
+    _transposed_multiply(B, B, H)
+    f = np.empty(n)
+    _transposed_times(B, r_u, f)
+    for i in range(n):
+        for j in range(n):
+            H[i, j] = H_lam[i, j] + RELAXED_BALANCE_WEIGHT * H[i, j]
+        f[i] = f_lam[i] - RELAXED_BALANCE_WEIGHT * f[i]
+    lam[:] = 0.0
+    lower = np.full(rows, -daqp_kernel.INFINITE_BOUND)
+    sense = np.zeros(rows, np.int32)
+    exit_flag = daqp_kernel.solve_qp(
+        H, f, G, g.copy(), lower, sense, proximal_weight, daqp_kernel.QP_FIXED_POINT, 0.0, lam, np.empty(rows)
+    )
+    if not daqp_kernel.solved(exit_flag):
+        return False
+    for j in range(n):
+        if not math.isfinite(lam[j]):
+            return False
+    return True
 
 
 @kernel

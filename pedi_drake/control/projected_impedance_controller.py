@@ -24,7 +24,10 @@ Tasks at one instant (world frame):
     prongs the order turns round: a prong tip pins the trunk's position, and its attitude (the
     turn about the tip) is what is left to control;
     last priority: the joint posture, in the null space of all the above;
-    constrained space: the contact-force QP (Eq. 7), tau = tau_m + tau_c (Eq. 8).
+    constrained space: the contact-force QP (Eq. 7), tau = tau_m + tau_c (Eq. 8). Where no forces
+    within the friction pyramids and torque limits give the planned acceleration's wrench balance
+    (a swing's reaction on three stance feet), the nearest balance they allow is taken and the
+    tick reports status 3 (contacts relaxed), as the HQP does for its own fallback.
 The `safety_polygon` input is read for the capture-point diagnostic only: paper 002's law has
 no balance task, the mission keeps the centre of mass over the support.
 
@@ -49,7 +52,7 @@ from pedi_drake.control import projected_impedance_tick, references
 from pedi_drake.control.config import ProjectedImpedanceConfig
 from pedi_drake.control.controller_ports import declare_controller_ports
 from pedi_drake.control.robot_model import ControllerModel
-from pedi_drake.control.tick_steps import STATUS_OK
+from pedi_drake.control.tick_steps import STATUS_CONTACTS_RELAXED, STATUS_OK
 from pedi_drake.control.whole_body_controller import diagnostics_layout
 from pedi_drake.exceptions import ConfigError
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
@@ -178,6 +181,6 @@ class ProjectedImpedanceController(LeafSystemWithoutWitnesses):
         )
         diag = outputs[-1]
         now = time.perf_counter()
-        if status == STATUS_OK:
+        if status in (STATUS_OK, STATUS_CONTACTS_RELAXED):
             diag[self._solve_time_entry] = now - solve_start
         diag[self._tick_time_entry] = now - start

@@ -499,8 +499,9 @@ def projected_impedance_tick(
         tau,
         equality_residual,
     )
-    if solved != cpd.CONTACT_FORCES_OK or not tick_steps.all_finite(tau):
+    if solved == cpd.CONTACT_FORCES_INFEASIBLE or not tick_steps.all_finite(tau):
         return tick_steps.fail(tp, tick_steps.STATUS_QP_FAILED, last_command, q, last_diag, ramp, True, command, diag)
+    status = tick_steps.STATUS_CONTACTS_RELAXED if solved == cpd.CONTACT_FORCES_RELAXED else tick_steps.STATUS_OK
 
     qdd = np.empty(12)
     for k in range(12):
@@ -547,7 +548,7 @@ def projected_impedance_tick(
         for a in range(num_held):
             ground += s.p_contacts[held_idx[a], 2]
         ground = ground / num_held - robot.FOOT_RADIUS
-    tick_steps.write_diagnostics(tp, s, tick_steps.STATUS_OK, ground, body, tau, new_ramp, last_diag, diag)
+    tick_steps.write_diagnostics(tp, s, status, ground, body, tau, new_ramp, last_diag, diag)
     for i in range(4):
         row = foot_row[i]
         diag[d[tick_steps.FOOT_ERRORS] + i] = _norm3(error, row) if row >= 0 else 0.0
@@ -567,7 +568,7 @@ def projected_impedance_tick(
     diag[d[_RANK]] = rank
     reference[:12] = q_ref
     reference[12:] = qd_ref
-    return tick_steps.STATUS_OK
+    return status
 
 
 @kernel
