@@ -172,10 +172,17 @@ def _missions(d: dict) -> str:
     return text
 
 
+# How a row names the controllers when a benchmark ran both.
+CONTROLLER_LABELS = {"whole_body": "HQP", "projected_impedance": "paper 002"}
+
+
 def _walking(d: dict) -> str:
     parts = []
+    controllers = {key.split()[-1] for key in d["summary"] if len(key.split()) > 1}
     for key, row in d["summary"].items():
         mission = key.split()[0].rsplit("/", 1)[-1]
+        if len(controllers) > 1:
+            mission += f" ({CONTROLLER_LABELS.get(key.split()[-1], key.split()[-1])})"
         text = f"{mission} {row['succeeded']}/{row['runs']}"
         if row.get("fell"):
             text += f" ({row['fell']} fell)"
@@ -421,10 +428,10 @@ ROWS: tuple[Row, ...] = (
         summary=True,
     ),
     Row(
-        "Static walks and trots on the HQP, seed 0 and 5 noisy seeds, by ground truth",
+        "Static walks and trots on the HQP and on paper 002's controller, seed 0 and 5 noisy seeds, by ground truth",
         "walking.json",
         _walking,
-        "python -m pedi_drake.benchmarks.walking --controllers whole_body --trot-speeds 0.6,0.7,0.8",
+        "python -m pedi_drake.benchmarks.walking",
         summary=True,
     ),
     Row(
@@ -470,7 +477,8 @@ ROWS: tuple[Row, ...] = (
         "sil_walk_square.json",
         _sil_walk,
         "python -m pedi_drake.benchmarks.sil_floors --missions walking/walk_square --runs 3 "
-        "--scenario_text '{simulation_duration: 100.0}'",
+        "--scenario_text '{simulation_duration: 100.0}' --work out/sil_walk "
+        "--out benchmarks/results/sil_walk_square.json",
     ),
     Row(
         "Paper 002's field course at real time against the simulator bridge (apps.sil), the E-stop "
