@@ -126,8 +126,9 @@ class GaitLimits:
     yaw_rate: float
     # Whether the sideways speed and the yaw rate share one budget, |sideways| / sideways +
     # |yaw rate| / yaw_rate <= 1 (`turn_limit`). In the static walk a sideways step and a turn move
-    # the same swing feet toward the trunk's centre line: each alone at its limit leaves them 1 cm
-    # on their own side at touchdown, both together put them 4 cm across it, under the other feet.
+    # the same swing feet toward the trunk's centre line: each alone at its limit leaves them on
+    # their own side at touchdown, both together put a front foot across it, under the other feet
+    # (tests/test_static_walk_plan.py).
     sideways_turn_shared: bool = False
 
     def turn_limit(self, sideways: float) -> float:
