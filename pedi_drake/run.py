@@ -12,11 +12,13 @@ import dataclasses
 import shutil
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from pydrake.geometry import Meshcat, MeshcatAnimation
+from pydrake.lcm import DrakeLcm
 from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import Context, EventStatus
+from pydrake.systems.framework import Context, DiagramBuilder, EventStatus
 
 from pedi_drake.diagram import MakePedipulationDiagram, PedipulationDiagram, apply_mission
 from pedi_drake.evaluation.judge import judge_run, write_run
@@ -146,6 +148,43 @@ def simulate(
         wall_time=wall_time,
         replay_html=replay_html,
         interrupted=stop.reason,
+    )
+
+
+def simulate_with_operator(
+    scenario: Scenario, make_operator: Callable, name: str, *, end_with_mission: bool = False
+) -> RunRecord:
+    """A lock-step run of `scenario` (its operator.source: lcm) with an operator program in the same
+    diagram, on an in-process LCM bus: `make_operator(lcm)` returns the operator's system (a
+    ScriptedOperator, say). For benchmarks and tests that play an operator without a wall clock.
+    It runs to the scenario's simulation_duration or, with `end_with_mission`, until shortly after
+    the mission ends (as `simulate` does)."""
+    lcm = DrakeLcm("memq://")
+    built = MakePedipulationDiagram(scenario, operator_lcm=lcm)
+    builder = DiagramBuilder()
+    builder.AddSystem(built.diagram)
+    builder.AddSystem(make_operator(lcm))
+    diagram = builder.Build()
+    simulator = Simulator(diagram)
+    end = scenario.simulation_duration
+    built.reserve_logs(simulator.get_mutable_context(), end)
+    if end_with_mission and built.mission is not None:
+        manager = built.diagram.GetSubsystemByName("mission")
+        simulator.set_monitor(_MissionMonitor(diagram, manager, built.mission, end, True, StopRequest()))
+    simulator.Initialize()
+    start = time.perf_counter()
+    simulator.AdvanceTo(end)
+    context = simulator.get_context()
+    return RunRecord(
+        scenario=scenario,
+        name=name,
+        hardware=False,
+        built=built,
+        context=context,
+        logs=built.logs(context),
+        sim_time=float(context.get_time()),
+        wall_time=time.perf_counter() - start,
+        replay_html=None,
     )
 
 

@@ -23,18 +23,14 @@ import json
 from pathlib import Path
 
 import numpy as np
-from pydrake.lcm import DrakeLcm
-from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import DiagramBuilder
 
 from pedi_drake import robot
 from pedi_drake.benchmarks.machine import stamped
-from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.evaluation.judge import judge_run
 from pedi_drake.evaluation.mission_results import foot_positions_W
 from pedi_drake.operator.command import CONTROLLER_PROJECTED_IMPEDANCE, CONTROLLER_WHOLE_BODY
 from pedi_drake.operator.scripted_operator import ScriptedOperator, ScriptStep
-from pedi_drake.run import RunRecord
+from pedi_drake.run import RunRecord, simulate_with_operator
 from pedi_drake.scenario import load_scenario
 
 SCENARIO = "controller_switching"
@@ -77,32 +73,14 @@ def lifted_foot_stray(record: RunRecord, result: dict) -> float | None:
 
 def one_run(seed: int, switches: int) -> dict:
     """The judged run of `seed` with `switches` random operator requests."""
-    lcm = DrakeLcm("memq://")
     noise = "" if seed == 0 else f", random_seed: {seed}, sensor_noise: {{enabled: true}}"
     scenario = load_scenario(
         scenario_name=SCENARIO,
         scenario_text=f"{{simulation_duration: {END}, operator: {{source: lcm}}{noise}}}",
     )
-    built = MakePedipulationDiagram(scenario, operator_lcm=lcm)
-    builder = DiagramBuilder()
-    builder.AddSystem(built.diagram)
     times = request_times(seed, switches)
-    builder.AddSystem(ScriptedOperator(lcm, switch_script(times)))
-    simulator = Simulator(builder.Build())
-    built.reserve_logs(simulator.get_mutable_context(), END)
-    simulator.Initialize()
-    simulator.AdvanceTo(END)
-    context = simulator.get_context()
-    record = RunRecord(
-        scenario=scenario,
-        name=f"switches seed {seed}",
-        hardware=False,
-        built=built,
-        context=context,
-        logs=built.logs(context),
-        sim_time=END,
-        wall_time=0.0,
-        replay_html=None,
+    record = simulate_with_operator(
+        scenario, lambda lcm: ScriptedOperator(lcm, switch_script(times)), f"switches seed {seed}"
     )
     result = judge_run(record)
     summary = result["controller_switches"]

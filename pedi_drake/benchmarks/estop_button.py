@@ -15,21 +15,15 @@ estop_paper002). Seed 0 runs without sensor noise, the others with it.
 
 import argparse
 import json
-import time
 from pathlib import Path
-
-from pydrake.lcm import DrakeLcm
-from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import DiagramBuilder
 
 from pedi_drake.apps.teleop_lcm import parse_script
 from pedi_drake.benchmarks.machine import stamped
-from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.evaluation.judge import judge_run
 from pedi_drake.operator.command import FRAME_WORLD
 from pedi_drake.operator.scripted_operator import ScriptedOperator
 from pedi_drake.resources import missions_dir
-from pedi_drake.run import RunRecord
+from pedi_drake.run import simulate_with_operator
 from pedi_drake.scenario import load_scenario
 
 MISSION = "operator/press_estop_button"
@@ -44,31 +38,10 @@ def run_scripted_press(scenario_name: str, scenario_text: str, script: str, name
     """judge_run's result.json of the E-stop mission on the shipped scenario `scenario_name` (with
     `scenario_text` over it), a scripted operator playing `script` over an in-process LCM bus
     until END."""
-    lcm = DrakeLcm("memq://")
     text = f"{{mission: {MISSION}, simulation_duration: {END}, operator: {{source: lcm}}{scenario_text}}}"
     scenario = load_scenario(scenario_name=scenario_name, scenario_text=text)
-    built = MakePedipulationDiagram(scenario, operator_lcm=lcm)
-    builder = DiagramBuilder()
-    builder.AddSystem(built.diagram)
     steps = parse_script(script, name, frame=FRAME_WORLD)
-    builder.AddSystem(ScriptedOperator(lcm, steps, until=steps[-1].start))
-    simulator = Simulator(builder.Build())
-    built.reserve_logs(simulator.get_mutable_context(), END)
-    simulator.Initialize()
-    start = time.perf_counter()
-    simulator.AdvanceTo(END)
-    context = simulator.get_context()
-    record = RunRecord(
-        scenario=scenario,
-        name=name,
-        hardware=False,
-        built=built,
-        context=context,
-        logs=built.logs(context),
-        sim_time=END,
-        wall_time=time.perf_counter() - start,
-        replay_html=None,
-    )
+    record = simulate_with_operator(scenario, lambda lcm: ScriptedOperator(lcm, steps, until=steps[-1].start), name)
     return judge_run(record)
 
 

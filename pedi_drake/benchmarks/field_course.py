@@ -21,21 +21,14 @@ import concurrent.futures
 import json
 import math
 import os
-import time
 from pathlib import Path
 
-from pydrake.lcm import DrakeLcm
-from pydrake.systems.analysis import Simulator
-from pydrake.systems.framework import DiagramBuilder, EventStatus
-
 from pedi_drake.benchmarks.machine import stamped
-from pedi_drake.diagram import MakePedipulationDiagram
 from pedi_drake.evaluation.judge import judge_run
-from pedi_drake.mission.progress import FAILED, SUCCEEDED
 from pedi_drake.mission.spec import Walk, load_mission
 from pedi_drake.operator.button_search import ButtonSearch
 from pedi_drake.operator.scripted_operator import ScriptedOperator
-from pedi_drake.run import SETTLE_AFTER_MISSION, RunRecord
+from pedi_drake.run import simulate_with_operator
 from pedi_drake.scenario import load_scenario
 
 MISSION = "terrain/field_course"
@@ -49,48 +42,15 @@ WALKS = ("trot_to_box", "to_the_slope", "climb", "turn", "descend", "cross_the_b
 def run_course(seed: int) -> dict:
     """judge_run's result.json of the field course at `seed` (0: no sensor noise), the operator
     program on an in-process bus."""
-    lcm = DrakeLcm("memq://")
     noise = "" if seed == 0 else f", random_seed: {seed}, sensor_noise: {{enabled: true}}"
     text = f"{{mission: {MISSION}, simulation_duration: {LONGEST}, operator: {{source: lcm}}{noise}}}"
     scenario = load_scenario(scenario_text=text)
-    built = MakePedipulationDiagram(scenario, operator_lcm=lcm)
-    builder = DiagramBuilder()
-    builder.AddSystem(built.diagram)
-    builder.AddSystem(
-        ScriptedOperator(
-            lcm, program=ButtonSearch(HEADING), start_on_leg="FR", feedback_channel=scenario.operator.feedback_channel
-        )
-    )
-    diagram = builder.Build()
-    simulator = Simulator(diagram)
-    built.reserve_logs(simulator.get_mutable_context(), LONGEST)
-    manager = built.diagram.GetSubsystemByName("mission")
-    ended = []
 
-    def monitor(root_context) -> EventStatus:
-        context = manager.GetMyContextFromRoot(root_context)
-        if manager.progress(context).status in (SUCCEEDED, FAILED):
-            ended.append(root_context.get_time())
-            if root_context.get_time() >= ended[0] + SETTLE_AFTER_MISSION:
-                return EventStatus.ReachedTermination(diagram, "mission over")
-        return EventStatus.Succeeded()
+    def operator(lcm):
+        channel = scenario.operator.feedback_channel
+        return ScriptedOperator(lcm, program=ButtonSearch(HEADING), start_on_leg="FR", feedback_channel=channel)
 
-    simulator.set_monitor(monitor)
-    simulator.Initialize()
-    start = time.perf_counter()
-    simulator.AdvanceTo(LONGEST)
-    context = simulator.get_context()
-    record = RunRecord(
-        scenario=scenario,
-        name=f"field_course seed {seed}",
-        hardware=False,
-        built=built,
-        context=context,
-        logs=built.logs(context),
-        sim_time=context.get_time(),
-        wall_time=time.perf_counter() - start,
-        replay_html=None,
-    )
+    record = simulate_with_operator(scenario, operator, f"field_course seed {seed}", end_with_mission=True)
     return judge_run(record)
 
 
