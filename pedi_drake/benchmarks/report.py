@@ -477,7 +477,7 @@ ROWS: tuple[Row, ...] = (
         "sil_walk_square.json",
         _sil_walk,
         "python -m pedi_drake.benchmarks.sil_floors --missions walking/walk_square --runs 3 "
-        "--scenario_text '{simulation_duration: 100.0}' --work out/sil_walk "
+        "--scenario_text '{simulation_duration: 120.0}' --work out/sil_walk "
         "--out benchmarks/results/sil_walk_square.json",
     ),
     Row(
