@@ -464,6 +464,22 @@ class WalkToStopRunner(WalkToRunner):
         super().start(walk, progress, view, env)
 
 
+# The phase kinds that walk.
+WALKING_PHASES = (spec.Walk, spec.WalkVelocity, spec.WalkTeleop)
+
+
+def warm_up(env) -> None:
+    """Loads (or compiles) the kernels a walk's plans call from Python, outside any control tick:
+    the terrain under a foothold and the static walk's planner (a cycle chosen for a stance
+    under the hips). Otherwise the tick that starts a walk's first slot loads them, and is late
+    by as much on a hardware run."""
+    line = PlanarPose(0.0, 0.0, 0.0)
+    feet_xy = np.array([line.to_world(p) for p in NOMINAL_FEET_B])
+    for foot in feet_xy:
+        env.ground_height(foot)
+    choose_cycle(line, np.zeros(2), feet_xy, np.zeros(3), StaticWalkTiming())
+
+
 def stop_request(phase, view: RobotView, env) -> StopRequest:
     """The stop to choose for the walk_to `phase`: its lift's targets, the stance the walk leaves
     (the feet under the hips), the trunk at the height it stands at now above the ground."""
