@@ -5,7 +5,6 @@ The floors' walks (2 m each way, the square, 6 seeds) are the benchmark's:
 `python -m pedi_drake.benchmarks.walking`.
 """
 
-import json
 import subprocess
 import sys
 from pathlib import Path
@@ -25,7 +24,6 @@ from pedi_drake.operator.config import DEFAULT_FOOT_COMMAND_CHANNEL, RemoteMappi
 from pedi_drake.operator.messages import remote_command_vector
 from pedi_drake.operator.scripted_operator import ScriptStep, script_stream
 from pedi_drake.run import simulate
-from pedi_drake.runtime import jit
 from pedi_drake.scenario import load_scenario
 
 REPO = Path(__file__).resolve().parents[1]
@@ -142,60 +140,3 @@ def test_the_operator_steers_a_walk_over_lcm():
     # About 6 s at the twist (the cycles start when the command is read): 0.9 m along an arc.
     assert 0.5 < walk["displacement_m"] < 1.0 and 0.5 < yaw < 1.3
     assert max(walk["max_stance_slip_m"].values()) < 0.01
-
-
-# Run in a fresh process (a test before it in the same process may have loaded the kernels): builds
-# a static walk's and a trot's diagram, then simulates each and prints the kernels that gained an
-# argument signature (a load or a compile) during its ticks.
-NO_LOAD_IN_TICKS = """
-import json, sys
-import numba
-from pydrake.systems.analysis import Simulator
-from pedi_drake.diagram import MakePedipulationDiagram
-from pedi_drake.scenario import load_scenario
-
-def signatures():
-    counts = {}
-    for name, module in list(sys.modules.items()):
-        if name.startswith("pedi_drake"):
-            for value in vars(module).values():
-                if isinstance(value, numba.core.registry.CPUDispatcher):
-                    counts[value.py_func.__module__ + "." + value.py_func.__name__] = len(value.signatures)
-    return counts
-
-runs = []
-for mission, duration in zip(sys.argv[1::2], sys.argv[2::2]):
-    scenario = load_scenario(scenario_text="{robot: {initial_pose: standing}}")
-    scenario.mission = mission
-    simulator = Simulator(MakePedipulationDiagram(scenario).diagram)
-    simulator.Initialize()
-    runs.append((simulator, float(duration)))
-loaded = []
-for simulator, duration in runs:
-    before = signatures()
-    simulator.AdvanceTo(duration)
-    loaded.append(sorted(name for name, count in signatures().items() if count != before.get(name)))
-print(json.dumps(loaded))
-"""
-
-
-@pytest.mark.skipif(not jit.ENABLED, reason="PEDI_DRAKE_JIT=0")
-def test_no_kernel_is_loaded_inside_a_tick_of_a_walk(tmp_path):
-    # A kernel first called in a tick is loaded (or compiled) there: on a hardware run the tick
-    # that starts a walk's first slot would be late by the load. The systems load theirs as they
-    # are built (the walk's planner: MissionManager's constructor, pedi_drake.mission.walk.warm_up).
-    walks = {  # the trot first: the static walk calls what it calls, and more
-        "trot": (0.02, "{kind: walk_velocity, twist: [0.3, 0.0, 0.0], duration: 0.6, gait: trot}", 1.2),
-        "static": (0.06, "{kind: walk_velocity, twist: [0.1, 0.0, 0.0], duration: 1.0}", 2.5),
-    }
-    args = []
-    for name, (ramp, phase, duration) in walks.items():
-        path = tmp_path / f"{name}.yaml"
-        path.write_text(f"description: A walk from standing.\ncontact_ramp_time: {ramp}\nphases:\n  - {phase}\n")
-        args += [str(path), str(duration)]
-    run = subprocess.run(
-        [sys.executable, "-c", NO_LOAD_IN_TICKS, *args], cwd=REPO, capture_output=True, text=True, timeout=600
-    )
-    assert run.returncode == 0, run.stderr[-2000:]
-    loaded = json.loads(run.stdout.strip().splitlines()[-1])
-    assert dict(zip(walks, loaded, strict=True)) == {name: [] for name in walks}

@@ -64,6 +64,7 @@ from pedi_drake.mission.phases import (
     kind_name,
     receive_ik_answers,
 )
+from pedi_drake.mission.phases import warm_up as warm_up_phases
 from pedi_drake.mission.posture_planner import shared_planner
 from pedi_drake.mission.progress import (
     FAILED,
@@ -87,8 +88,6 @@ from pedi_drake.mission.reference_table import (
 )
 from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.stance_polygon import prong_tips_B, stance_safety_polygon
-from pedi_drake.mission.walk import WALKING_PHASES
-from pedi_drake.mission.walk import warm_up as warm_up_walk
 from pedi_drake.operator.command import (
     MODE_AUTONOMOUS,
     MODE_SEMI_AUTONOMOUS,
@@ -251,10 +250,9 @@ class MissionManager(LeafSystemWithoutWitnesses):
             self._prong_tips_B,
             self._safety_margin,
         )
-        # So are the feet's kinematics every RobotView computes, and a walk's planner.
+        # So are the feet's kinematics every RobotView computes, and what the phases call.
         foot_kinematics_B(robot.STANDING_Q)
-        if any(isinstance(phase, WALKING_PHASES) for phase in self._mission.phases):
-            warm_up_walk(self._env)
+        warm_up_phases(self._mission, self._env)
 
     @property
     def mission(self) -> spec.MissionSpec:

@@ -49,6 +49,8 @@ from pedi_drake.mission.robot_view import RobotView
 from pedi_drake.mission.teleop_foot import TeleopFootRunner
 from pedi_drake.mission.touchdown import CONTACT_FORCE_THRESHOLD, PLACE_DEPTH
 from pedi_drake.mission.walk import RUNNERS as WALK_RUNNERS
+from pedi_drake.mission.walk import WALKING_PHASES
+from pedi_drake.mission.walk import warm_up as warm_up_walk
 from pedi_drake.operator.command import CONTROLLER_NAMES
 from pedi_drake.prongs import ProngDesign
 from pedi_drake.suf.posture import Posture, PostureCase
@@ -1290,6 +1292,17 @@ RUNNERS: dict[type, PhaseRunner] = {
     **WALK_RUNNERS,
 }
 assert set(RUNNERS) == set(spec.PHASE_KINDS.values()), "every phase kind needs a runner"
+
+
+def warm_up(mission: spec.MissionSpec, env: MissionEnvironment) -> None:
+    """Loads (or compiles) the kernels the phases of `mission` call from Python, outside any control
+    tick (the MissionManager's constructor): each is otherwise loaded in the tick that first calls
+    it, and on a hardware run that tick is late by the load. A guarded touch's drive, a held
+    shank's rotation and a walk's planner (pedi_drake.mission.walk.warm_up)."""
+    smooth_start_kernel(0.0, 0.0, 1.0)
+    orientation_error_W(np.eye(3), np.eye(3))
+    if any(isinstance(phase, WALKING_PHASES) for phase in mission.phases):
+        warm_up_walk(env)
 
 
 def kind_name(phase) -> str:
