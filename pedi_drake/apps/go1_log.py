@@ -14,6 +14,7 @@ from pathlib import Path
 
 from pedi_drake.go1_driver.constants import DEFAULT_GO1_LCM_URL
 from pedi_drake.go1_driver.log import read_go1_log, record_log
+from pedi_drake.runtime.interrupt import ctrl_c_raises
 from pedi_drake.viz.log_plots import plot_go1_log
 
 
@@ -30,6 +31,7 @@ def main(argv: list[str] | None = None) -> int:
     plot.add_argument("--out", required=True, help="output folder for the PNG files")
     args = parser.parse_args(argv)
     if args.command == "record":
+        ctrl_c_raises()  # Ctrl-C ends the recording
         ready = threading.Event()
         threading.Thread(target=lambda: ready.wait() and print("recording", flush=True), daemon=True).start()
         try:

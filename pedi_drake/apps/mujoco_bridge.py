@@ -41,6 +41,7 @@ from pedi_drake.go1_driver import constants as c
 from pedi_drake.go1_driver.config import Go1BridgeConfig
 from pedi_drake.go1_driver.hardware_station import go1_lcm_url
 from pedi_drake.go1_driver.link import Inbox
+from pedi_drake.runtime.interrupt import ctrl_c_raises
 from pedi_drake.runtime.realtime_priority import realtime_priority
 
 # Longest the bridge sleeps between two looks at the socket [s], so a late command is taken
@@ -153,6 +154,7 @@ def main(argv: list[str] | None = None) -> int:
     bridge = MujocoBridge(robot, lcm, config, seed=scenario.random_seed)
     # SIGTERM ends the run like Ctrl-C, so a supervising test or script can stop the bridge cleanly.
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
+    ctrl_c_raises()
     try:
         with realtime_priority(config.realtime_priority, who="go1_mujoco_bridge") as scheduling:
             print(f"go1_mujoco_bridge: running on {lcm.get_lcm_url()} ({scheduling})", flush=True)

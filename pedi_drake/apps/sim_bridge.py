@@ -55,6 +55,7 @@ from pedi_drake.go1_driver.lcmtypes import leg_control_data_lcmt, state_estimato
 from pedi_drake.go1_driver.link import Inbox
 from pedi_drake.go1_driver.status_receiver import MakeLcmReceiver, ReceiverChannel
 from pedi_drake.leaf_system import LeafSystemWithoutWitnesses
+from pedi_drake.runtime.interrupt import ctrl_c_raises
 from pedi_drake.runtime.realtime_priority import realtime_priority
 from pedi_drake.runtime.wall_clock import WallClock
 from pedi_drake.scenario import Scenario
@@ -297,6 +298,7 @@ def main(argv: list[str] | None = None) -> int:
     simulator.set_target_realtime_rate(args.realtime_rate)
     # SIGTERM ends the run like Ctrl-C, so a supervising test or script can stop the bridge cleanly.
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(0))
+    ctrl_c_raises()
     simulator.Initialize()
     try:
         with realtime_priority(config.realtime_priority, who="go1_sim_bridge") as scheduling:

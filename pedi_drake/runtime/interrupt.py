@@ -16,6 +16,14 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 EXIT_INTERRUPTED = 130  # the shell's code for a program ended by Ctrl-C (128 + SIGINT)
 
 
+def ctrl_c_raises() -> None:
+    """Makes SIGINT (Ctrl-C) raise KeyboardInterrupt in this process, Python's own default, also
+    where the process was started with SIGINT ignored: a non-interactive shell ignores it in the
+    jobs it starts in the background, their children inherit that, and such a program (a bridge a
+    script supervises) would otherwise run on after Ctrl-C until it is killed."""
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 class StopRequest:
     """Why the run should stop (None: it should not). `install` makes SIGINT and SIGTERM set it."""
 
