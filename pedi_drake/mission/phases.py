@@ -1298,7 +1298,7 @@ def warm_up(mission: spec.MissionSpec, env: MissionEnvironment) -> None:
     """Loads (or compiles) the kernels the phases of `mission` call from Python, outside any control
     tick (the MissionManager's constructor): each is otherwise loaded in the tick that first calls
     it, and on a hardware run that tick is late by the load. A guarded touch's drive, a held
-    shank's rotation and a walk's planner (pedi_drake.mission.walk.warm_up)."""
+    calf's rotation and a walk's planner (pedi_drake.mission.walk.warm_up)."""
     smooth_start_kernel(0.0, 0.0, 1.0)
     orientation_error_W(np.eye(3), np.eye(3))
     if any(isinstance(phase, WALKING_PHASES) for phase in mission.phases):
